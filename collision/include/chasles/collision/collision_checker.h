@@ -1,0 +1,82 @@
+#pragma once
+/// \file
+/// CollisionChecker: self-collision under the allowed-collision matrix, robot vs scene,
+/// motion validation and clearance. Const and thread-safe: one instance serves all threads.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "chasles/collision/scene.h"
+#include "chasles/robot/robot_model.h"
+
+namespace chasles {
+
+/// Options fixed when the checker is built.
+struct CollisionOptions {
+  /// Distance added around every robot shape [m]; >= 0. Contact closer than this is a collision.
+  double padding = 0.0;
+  /// Force the generic FCL path even when the fast sphere path applies (tests, reference).
+  bool force_fcl = false;
+  /// \throws Error(kInvalidArgument) naming the field.
+  void Validate() const;
+};
+
+/// What a single check reports.
+struct CollisionResult {
+  bool in_collision = false;
+  bool self_collision = false;   ///< the first contact found is robot–robot
+  std::string link_a;            ///< first contact: a robot link
+  std::string other;             ///< the other link, or the scene object / occupancy map name
+};
+
+/// Per-caller counters (not shared between threads, so no contention).
+struct CheckCounters {
+  std::uint64_t state_checks = 0;
+};
+
+class CollisionChecker {
+ public:
+  CollisionChecker(std::shared_ptr<const RobotModel> robot, std::shared_ptr<const Scene> scene,
+                   CollisionOptions options = {});
+  ~CollisionChecker();
+  CollisionChecker(const CollisionChecker&) = delete;
+  CollisionChecker& operator=(const CollisionChecker&) = delete;
+
+  const RobotModel& robot() const { return *robot_; }
+  const Scene& scene() const { return *scene_; }
+  const std::shared_ptr<const RobotModel>& robot_ptr() const { return robot_; }
+
+  /// True when q is inside the joint limits and collision-free (self and scene).
+  /// Precondition: q.size() == robot().num_dofs().
+  bool IsValid(const Eigen::VectorXd& q, CheckCounters* counters = nullptr) const;
+
+  /// Like IsValid but reports the first contact found (limits are not checked).
+  CollisionResult Check(const Eigen::VectorXd& q) const;
+
+  /// Checks the straight joint-space segment a→b at states no more than `max_step`
+  /// (max-norm over joints, [rad] or [m]) apart, endpoints included, in bisection order so
+  /// a collision is found early. Returns true when every state is valid.
+  bool IsMotionValid(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double max_step,
+                     CheckCounters* counters = nullptr) const;
+
+  /// Smallest distance [m] between the robot and the scene at q (0 when in contact; +inf for
+  /// an empty scene). Self-distance is not included.
+  double Clearance(const Eigen::VectorXd& q) const;
+
+  /// True when the fast sphere path is used: every robot shape is a sphere and force_fcl is
+  /// off. Then self checks and robot–primitive checks bypass FCL's generic machinery (exact
+  /// sphere–primitive tests); meshes and occupancy maps always go through FCL.
+  bool uses_fast_path() const;
+
+ private:
+  struct Impl;
+  std::shared_ptr<const RobotModel> robot_;
+  std::shared_ptr<const Scene> scene_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace chasles

@@ -1,0 +1,22 @@
+#pragma once
+/// \file
+/// Mesh input (STL, OBJ) through assimp.
+
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "chasles/robot/geometry.h"
+
+namespace chasles {
+
+/// Parses STL (ASCII or binary) or OBJ bytes with assimp (aiProcess_Triangulate |
+/// aiProcess_JoinIdenticalVertices), applying `scale` per axis.
+/// `field` names the input in error messages, e.g. `scene.meshes[1].data`.
+/// \throws Error(kInvalidArgument) when assimp cannot read the bytes, the mesh holds no
+///         triangles, or a scale component is not finite and > 0.
+std::shared_ptr<const TriangleMesh> ParseMesh(const std::string& bytes, const Eigen::Vector3d& scale,
+                                              const std::string& field);
+
+}  // namespace chasles

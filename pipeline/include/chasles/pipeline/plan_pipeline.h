@@ -1,0 +1,84 @@
+#pragma once
+/// \file
+/// The planning pipeline: validate → plan → shortcut → time-parameterise → verify.
+/// The same code serves the gRPC server, the benchmarks and the tests.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "chasles/collision/collision_checker.h"
+#include "chasles/optimizers/time_parameterization.h"
+#include "chasles/optimizers/timed_trajectory.h"
+#include "chasles/optimizers/verification.h"
+#include "chasles/planners/planner.h"
+#include "chasles/planners/registry.h"
+#include "chasles/planners/termination.h"
+
+namespace chasles {
+
+/// One planning query in domain types. Defaults match the proto documentation.
+struct PlanQuery {
+  std::shared_ptr<const CollisionChecker> checker;  ///< robot + scene
+  Eigen::VectorXd start;
+  Eigen::VectorXd goal;
+  double goal_tolerance = 1e-3;       ///< [rad], in [0, 0.1]
+  std::string planner_id = "rrt_connect";
+  ParameterValues parameters;         ///< unresolved; validated against the planner's spec
+  std::uint64_t seed = 1;
+  double collision_resolution = 0.005;  ///< [rad], in [1e-4, 0.1]
+  Eigen::VectorXd max_velocity;       ///< empty = model limits; else > 0 and capped at the model's
+  Eigen::VectorXd max_acceleration;   ///< empty = 2 × velocity limits
+  double sample_period = 0.01;        ///< [s], in [1e-4, 1]
+  int shortcut_attempts = 100;        ///< -1 = off
+
+  /// \throws Error(kInvalidArgument/kNotFound) naming the field (proto field names), e.g.
+  /// `start.positions[2] = nan must be finite`, `goal.tolerance = 0.5 must be within [0, 0.1]`.
+  void Validate(const PlannerRegistry& registry) const;
+};
+
+/// Expected outcomes of a query (contract violations throw Error instead).
+enum class PlanOutcomeCode {
+  kSuccess,
+  kNoPathWithinBudget,
+  kStartInCollision,
+  kGoalInCollision,
+  kVerificationFailed,
+  kApproximateOnly,
+  kCancelled,
+  kDeadlineExceeded,
+};
+const char* ToString(PlanOutcomeCode code);
+
+struct StageSeconds {
+  double validate = 0, plan = 0, shortcut = 0, parameterize = 0, verify = 0, total = 0;
+};
+
+struct PlanOutcome {
+  PlanOutcomeCode code = PlanOutcomeCode::kNoPathWithinBudget;
+  std::string message;
+  JointPath raw_path;                  ///< as the planner returned it
+  JointPath path;                      ///< after shortcutting (start … goal, exact)
+  TimedTrajectory trajectory;          ///< empty unless kSuccess
+  std::vector<TrajectorySample> samples;  ///< at sample_period, last one at the end exactly
+  KinematicLimits limits;              ///< the limits the trajectory respects
+  VerificationReport verification;
+  StageSeconds seconds;
+  std::uint64_t graph_states = 0;
+  std::uint64_t state_checks = 0;      ///< all stages
+};
+
+class PlanningPipeline {
+ public:
+  explicit PlanningPipeline(const PlannerRegistry& registry) : registry_(registry) {}
+  /// Runs the query. \throws Error for invalid input (after query.Validate()).
+  PlanOutcome Plan(const PlanQuery& query, const Termination& termination) const;
+
+ private:
+  const PlannerRegistry& registry_;
+};
+
+}  // namespace chasles

@@ -1,0 +1,40 @@
+#pragma once
+/// \file
+/// PlannerRegistry: planners by id. Built in main and passed down; no singletons.
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "chasles/planners/planner.h"
+
+namespace chasles {
+
+class PlannerRegistry {
+ public:
+  using Factory = std::function<std::unique_ptr<Planner>()>;
+
+  /// \throws Error(kInvalidArgument) when the id is already registered.
+  void Register(PlannerSpec spec, Factory factory);
+  /// \throws Error(kNotFound): `planner 'foo' is unknown (known: prm, rrt, …)`.
+  std::unique_ptr<Planner> Create(const std::string& id) const;
+  /// \throws Error(kNotFound) like Create.
+  const PlannerSpec& Spec(const std::string& id) const;
+  std::vector<PlannerSpec> List() const;  ///< sorted by id
+  std::vector<std::string> Ids() const;
+
+ private:
+  struct Entry {
+    PlannerSpec spec;
+    Factory factory;
+  };
+  std::map<std::string, Entry> entries_;
+};
+
+/// Registers the OMPL planners: prm, prm_star, lazy_prm_star, rrt, rrt_star,
+/// informed_rrt_star, rrt_connect, bit_star.
+void RegisterDefaultPlanners(PlannerRegistry* registry);
+
+}  // namespace chasles

@@ -1,0 +1,35 @@
+#pragma once
+/// \file
+/// The one exception type the Chasles core throws for contract violations.
+
+#include <stdexcept>
+#include <string>
+
+namespace chasles {
+
+/// What kind of contract a caller broke. The server maps each to one gRPC status.
+enum class ErrorCode {
+  kInvalidArgument,     ///< malformed input: the message names field, index, value and rule
+  kNotFound,            ///< an unknown planner, robot, scene or link id
+  kFailedPrecondition,  ///< a capability that is not there for this input
+};
+
+/// Thrown for contract violations (never for expected outcomes such as "no path").
+/// `what()` is a complete human sentence, e.g.
+/// `start.positions[2] = nan must be finite`.
+class Error : public std::runtime_error {
+ public:
+  Error(ErrorCode code, const std::string& message)
+      : std::runtime_error(message), code_(code) {}
+  ErrorCode code() const { return code_; }
+
+ private:
+  ErrorCode code_;
+};
+
+/// Throws Error(kInvalidArgument, message).
+[[noreturn]] inline void ThrowInvalid(const std::string& message) {
+  throw Error(ErrorCode::kInvalidArgument, message);
+}
+
+}  // namespace chasles

@@ -1,0 +1,151 @@
+#pragma once
+/// \file
+/// RobotModel: a kinematic tree with joint limits, link collision geometry and inertia, and
+/// forward kinematics in product-of-exponentials form (Lynch & Park, Modern Robotics, ch. 4).
+/// Twists are (ω, v). SI units and radians throughout.
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "chasles/robot/geometry.h"
+
+namespace chasles {
+
+enum class JointType { kRevolute, kContinuous, kPrismatic, kFixed };
+
+/// Limits of one joint. Continuous joints get lower = -π, upper = π (the planner does not
+/// wrap around; documented in the API).
+struct JointLimits {
+  double lower = 0.0;     ///< [rad] or [m]
+  double upper = 0.0;     ///< [rad] or [m]
+  double velocity = 0.0;  ///< > 0 [rad/s] or [m/s]
+  double effort = 0.0;    ///< >= 0 [N·m] or [N]; 0 = unknown
+};
+
+struct Joint {
+  std::string name;
+  JointType type = JointType::kFixed;
+  int parent_link = -1;
+  int child_link = -1;
+  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  ///< child frame in parent frame at q = 0
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();             ///< unit, in the joint (child) frame
+  JointLimits limits;
+  int dof = -1;  ///< index into the configuration vector, -1 for fixed joints
+};
+
+/// Mass properties of a link, expressed in the link frame.
+struct Inertial {
+  double mass = 0.0;                                   ///< [kg]
+  Eigen::Vector3d com = Eigen::Vector3d::Zero();       ///< centre of mass [m]
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();   ///< about the com, link-frame axes [kg·m²]
+};
+
+struct Link {
+  std::string name;
+  int parent_joint = -1;          ///< -1 for the root link
+  std::vector<Shape> collision;   ///< poses in the link frame
+  std::optional<Inertial> inertial;
+};
+
+/// Pairs of links that may touch and are never collision-checked against each other.
+/// Symmetric. Thread-safe to read.
+class AllowedCollisionMatrix {
+ public:
+  AllowedCollisionMatrix() = default;
+  explicit AllowedCollisionMatrix(int num_links);
+  void Allow(int link_a, int link_b);
+  bool IsAllowed(int link_a, int link_b) const;
+  int num_links() const { return num_links_; }
+
+ private:
+  int num_links_ = 0;
+  std::vector<bool> allowed_;
+};
+
+/// An immutable robot. Thread-safe to read from many threads at once.
+class RobotModel {
+ public:
+  /// Builds a model from URDF text and optional SRDF text.
+  /// Mesh collision geometry is looked up in `meshes` by the URDF `filename` attribute
+  /// (already parsed, e.g. by ParseMesh); the URDF `scale` is applied on top.
+  /// Allowed collisions = SRDF `disable_collisions` pairs + every parent/child link pair.
+  /// \throws Error(kInvalidArgument) naming the element for malformed URDF/SRDF (unparsable XML,
+  ///         SRDF naming an unknown link, a mesh that is not in `meshes`, limits with
+  ///         lower > upper, velocity <= 0, non-finite numbers, planar/floating joints).
+  static std::shared_ptr<const RobotModel> FromUrdf(
+      std::string_view urdf, std::string_view srdf = {},
+      const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes = {});
+
+  const std::string& name() const { return name_; }
+  int num_dofs() const { return static_cast<int>(dof_joints_.size()); }
+  int num_links() const { return static_cast<int>(links_.size()); }
+  const std::vector<Link>& links() const { return links_; }
+  const std::vector<Joint>& joints() const { return joints_; }
+  /// Names of the active (non-fixed) joints in configuration-vector order (URDF document order).
+  const std::vector<std::string>& dof_names() const { return dof_names_; }
+  /// Index into joints() of the joint that drives configuration entry `dof`.
+  int dof_joint(int dof) const { return dof_joints_[dof]; }
+  const Eigen::VectorXd& lower_limits() const { return lower_; }
+  const Eigen::VectorXd& upper_limits() const { return upper_; }
+  const Eigen::VectorXd& velocity_limits() const { return velocity_; }
+  const Eigen::VectorXd& effort_limits() const { return effort_; }
+  const AllowedCollisionMatrix& allowed_collisions() const { return acm_; }
+  /// Index of a link by name, or -1.
+  int FindLink(std::string_view name) const;
+
+  /// Space screw axis S_dof = (ω, v) of configuration entry `dof`, at q = 0.
+  const Eigen::Matrix<double, 6, 1>& space_screw_axis(int dof) const { return screws_[dof]; }
+  /// Pose of `link` in the base (root link) frame at q = 0 (the PoE "M").
+  const Eigen::Isometry3d& home_pose(int link) const { return home_[link]; }
+  /// Configuration entries that move `link`, root to tip (the PoE product order).
+  const std::vector<int>& link_chain(int link) const { return chains_[link]; }
+
+  /// Forward kinematics of every link by PoE: T_link = e^[S_a]q_a ··· e^[S_k]q_k M_link.
+  /// `poses` is resized to num_links(). Precondition: q.size() == num_dofs().
+  void ForwardKinematics(const Eigen::VectorXd& q, std::vector<Eigen::Isometry3d>* poses) const;
+
+  /// Reference FK that chains the URDF joint transforms (origin · motion(axis, q)) link by link.
+  /// Slower; kept to cross-check the PoE form.
+  void ForwardKinematicsByChaining(const Eigen::VectorXd& q,
+                                   std::vector<Eigen::Isometry3d>* poses) const;
+
+  /// Validates a configuration supplied by a caller.
+  /// \throws Error(kInvalidArgument), e.g. `start.positions has 6 values, robot 'ur5' has 7 joints`,
+  ///         `start.positions[2] = nan must be finite`,
+  ///         `start.positions[1] = 3.5 must be within [-3.1416, 3.1416] (joint 'shoulder')`.
+  void ValidateConfiguration(const Eigen::VectorXd& q, const std::string& field) const;
+
+  /// Builds a model directly from links and joints (used by URDF/DH/PoE front ends and tests).
+  /// Joints must be in topological order (a joint's parent link is the root or the child of an
+  /// earlier joint). \throws Error(kInvalidArgument) when the tree is malformed.
+  static std::shared_ptr<const RobotModel> FromTree(std::string name, std::vector<Link> links,
+                                                    std::vector<Joint> joints,
+                                                    const std::vector<std::pair<std::string, std::string>>& allowed_pairs = {});
+
+ private:
+  RobotModel() = default;
+  void Finalize(const std::vector<std::pair<std::string, std::string>>& allowed_pairs);
+
+  std::string name_;
+  std::vector<Link> links_;
+  std::vector<Joint> joints_;
+  std::vector<int> dof_joints_;
+  std::vector<std::string> dof_names_;
+  Eigen::VectorXd lower_, upper_, velocity_, effort_;
+  AllowedCollisionMatrix acm_;
+  std::vector<Eigen::Matrix<double, 6, 1>> screws_;
+  std::vector<Eigen::Isometry3d> home_;
+  std::vector<std::vector<int>> chains_;
+  std::vector<int> parent_dof_of_link_;  ///< nearest moving ancestor dof, -1 if none
+  std::vector<int> parent_dof_of_dof_;   ///< nearest moving ancestor dof of each dof, -1 if none
+};
+
+}  // namespace chasles
