@@ -1,1 +1,188 @@
-// placeholder
+#include "chasles/pipeline/plan_pipeline.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "chasles/optimizers/shortcut.h"
+#include "chasles/robot/error.h"
+
+namespace chasles {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+std::string Num(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+void CheckRange(double value, double lo, double hi, const std::string& field) {
+  if (!std::isfinite(value) || value < lo || value > hi) {
+    ThrowInvalid(field + " = " + Num(value) + " must be within [" + Num(lo) + ", " + Num(hi) + "]");
+  }
+}
+
+/// The limits the trajectory must respect: overrides capped at the model's velocity limits,
+/// acceleration defaulting to 2 × the velocity limit per second.
+KinematicLimits ResolveLimits(const PlanQuery& query) {
+  const RobotModel& robot = query.checker->robot();
+  KinematicLimits limits;
+  limits.max_velocity = robot.velocity_limits();
+  if (query.max_velocity.size() > 0) {
+    limits.max_velocity = query.max_velocity.cwiseMin(robot.velocity_limits());
+  }
+  limits.max_acceleration =
+      query.max_acceleration.size() > 0 ? query.max_acceleration : Eigen::VectorXd(2.0 * limits.max_velocity);
+  return limits;
+}
+
+std::string DescribeContact(const CollisionResult& c) {
+  return c.self_collision ? "link '" + c.link_a + "' touches link '" + c.other + "'"
+                          : "link '" + c.link_a + "' touches '" + c.other + "'";
+}
+
+}  // namespace
+
+const char* ToString(PlanOutcomeCode code) {
+  switch (code) {
+    case PlanOutcomeCode::kSuccess: return "SUCCESS";
+    case PlanOutcomeCode::kNoPathWithinBudget: return "NO_PATH_WITHIN_BUDGET";
+    case PlanOutcomeCode::kStartInCollision: return "START_IN_COLLISION";
+    case PlanOutcomeCode::kGoalInCollision: return "GOAL_IN_COLLISION";
+    case PlanOutcomeCode::kVerificationFailed: return "VERIFICATION_FAILED";
+    case PlanOutcomeCode::kApproximateOnly: return "APPROXIMATE_ONLY";
+    case PlanOutcomeCode::kCancelled: return "CANCELLED";
+    case PlanOutcomeCode::kDeadlineExceeded: return "DEADLINE_EXCEEDED";
+  }
+  return "UNKNOWN";
+}
+
+void PlanQuery::Validate(const PlannerRegistry& registry) const {
+  if (!checker) ThrowInvalid("robot/scene: no collision checker was built for the query");
+  const RobotModel& robot = checker->robot();
+  const int n = robot.num_dofs();
+  robot.ValidateConfiguration(start, "start.positions");
+  robot.ValidateConfiguration(goal, "goal.positions");
+  CheckRange(goal_tolerance, 0.0, 0.1, "goal.tolerance");
+  ResolveParameters(registry.Spec(planner_id), parameters);  // throws NotFound / InvalidArgument
+  CheckRange(collision_resolution, 1e-4, 0.1, "collision_resolution");
+  CheckRange(sample_period, 1e-4, 1.0, "trajectory.sample_period");
+  if (shortcut_attempts < -1) {
+    ThrowInvalid("trajectory.shortcut_attempts = " + std::to_string(shortcut_attempts) + " must be >= -1");
+  }
+  const auto check_vector = [n](const Eigen::VectorXd& v, const std::string& field) {
+    if (v.size() == 0) return;
+    if (v.size() != n) {
+      ThrowInvalid("trajectory." + field + " has " + std::to_string(v.size()) + " values, the robot has " +
+                   std::to_string(n) + " joints");
+    }
+    for (int i = 0; i < n; ++i) {
+      if (!std::isfinite(v[i]) || v[i] <= 0) {
+        ThrowInvalid("trajectory." + field + "[" + std::to_string(i) + "] = " + Num(v[i]) + " must be finite and > 0");
+      }
+    }
+  };
+  check_vector(max_velocity, "max_velocity");
+  check_vector(max_acceleration, "max_acceleration");
+}
+
+PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& termination) const {
+  const auto t_start = Clock::now();
+  PlanOutcome out;
+  const auto finish = [&](PlanOutcomeCode code, std::string message) {
+    out.code = code;
+    out.message = std::move(message);
+    out.seconds.total = SecondsSince(t_start);
+    return out;
+  };
+
+  // 1. Validate: contract violations throw; a colliding start or goal is an outcome.
+  query.Validate(registry_);
+  const CollisionChecker& checker = *query.checker;
+  out.limits = ResolveLimits(query);
+  const CollisionResult start_contact = checker.Check(query.start);
+  const CollisionResult goal_contact = checker.Check(query.goal);
+  out.state_checks += 2;
+  out.seconds.validate = SecondsSince(t_start);
+  if (start_contact.in_collision) {
+    return finish(PlanOutcomeCode::kStartInCollision, "start is in collision: " + DescribeContact(start_contact));
+  }
+  if (goal_contact.in_collision) {
+    return finish(PlanOutcomeCode::kGoalInCollision, "goal is in collision: " + DescribeContact(goal_contact));
+  }
+
+  // 2. Plan a geometric path.
+  auto t = Clock::now();
+  std::unique_ptr<Planner> planner = registry_.Create(query.planner_id);
+  PlanningProblem problem;
+  problem.checker = query.checker;
+  problem.start = query.start;
+  problem.goal = query.goal;
+  problem.goal_tolerance = query.goal_tolerance;
+  problem.max_step = query.collision_resolution;
+  problem.seed = query.seed;
+  problem.parameters = query.parameters;
+  planner->Setup(problem);
+  const PlannerResult planned = planner->Solve(termination);
+  out.seconds.plan = SecondsSince(t);
+  out.graph_states = planned.graph_states;
+  out.state_checks += planned.state_checks;
+  out.raw_path = planned.path;
+  switch (planned.status) {
+    case PlanStatus::kExactSolution: break;
+    case PlanStatus::kApproximateSolution:
+      return finish(PlanOutcomeCode::kApproximateOnly, planned.message);
+    case PlanStatus::kCancelled: return finish(PlanOutcomeCode::kCancelled, planned.message);
+    case PlanStatus::kDeadlineExceeded: return finish(PlanOutcomeCode::kDeadlineExceeded, planned.message);
+    case PlanStatus::kInvalidStart: return finish(PlanOutcomeCode::kStartInCollision, planned.message);
+    case PlanStatus::kInvalidGoal: return finish(PlanOutcomeCode::kGoalInCollision, planned.message);
+    case PlanStatus::kNoSolution: return finish(PlanOutcomeCode::kNoPathWithinBudget, planned.message);
+  }
+
+  // 3. Shorten.
+  t = Clock::now();
+  if (query.shortcut_attempts >= 0) {
+    ShortcutOptions options;
+    options.max_attempts = query.shortcut_attempts;
+    options.max_step = query.collision_resolution;
+    options.seed = query.seed;
+    CheckCounters counters;
+    out.path = ShortcutPath(planned.path, checker, options, &counters);
+    out.state_checks += counters.state_checks;
+  } else {
+    out.path = planned.path;
+  }
+  out.seconds.shortcut = SecondsSince(t);
+
+  // 4. Time-parameterise: exact minimum-time rest-to-rest along each segment.
+  t = Clock::now();
+  out.trajectory = ParameterizeRestToRest(out.path, out.limits);
+  out.seconds.parameterize = SecondsSince(t);
+
+  // 5. Verify densely before anything leaves.
+  t = Clock::now();
+  VerificationOptions verify;
+  verify.max_joint_step = std::min(0.005, query.collision_resolution);
+  out.verification = VerifyTrajectory(out.trajectory, query.start, query.goal, checker, out.limits, verify);
+  out.state_checks += static_cast<std::uint64_t>(out.verification.states_checked);
+  out.seconds.verify = SecondsSince(t);
+  if (!out.verification.ok) {
+    out.trajectory = TimedTrajectory();
+    return finish(PlanOutcomeCode::kVerificationFailed,
+                  "the trajectory failed dense verification: " + out.verification.reason);
+  }
+  out.samples = out.trajectory.Sample(query.sample_period);
+  std::ostringstream message;
+  message << planned.message << "; " << out.path.size() << " waypoints after shortcutting, duration "
+          << out.trajectory.duration() << " s, verified at " << out.verification.states_checked << " states";
+  return finish(PlanOutcomeCode::kSuccess, message.str());
+}
+
+}  // namespace chasles

@@ -1,1 +1,66 @@
-// placeholder
+#include "chasles/planners/planner.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "chasles/robot/error.h"
+
+namespace chasles {
+
+const ParameterSpec* PlannerSpec::Find(const std::string& name) const {
+  for (const auto& p : parameters) {
+    if (p.name == name) return &p;
+  }
+  return nullptr;
+}
+
+namespace {
+
+std::string FormatNumber(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+}  // namespace
+
+ParameterValues ResolveParameters(const PlannerSpec& spec, const ParameterValues& values) {
+  ParameterValues resolved;
+  for (const auto& p : spec.parameters) resolved[p.name] = p.default_value;
+  for (const auto& [name, value] : values) {
+    const std::string field = "planner.parameters['" + name + "']";
+    const ParameterSpec* p = spec.Find(name);
+    if (p == nullptr) {
+      std::string known;
+      for (const auto& q : spec.parameters) known += (known.empty() ? "" : ", ") + q.name;
+      ThrowInvalid(field + " is not a parameter of planner '" + spec.id + "' (known: " +
+                   (known.empty() ? "none" : known) + ")");
+    }
+    if (!std::isfinite(value)) ThrowInvalid(field + " = " + FormatNumber(value) + " must be finite");
+    if (p->type != ParameterType::kDouble && value != std::floor(value)) {
+      ThrowInvalid(field + " = " + FormatNumber(value) + " must be " +
+                   (p->type == ParameterType::kBool ? "0 or 1 (bool)" : "an integer"));
+    }
+    if (value < p->min || value > p->max) {
+      ThrowInvalid(field + " = " + FormatNumber(value) + " must be within [" + FormatNumber(p->min) +
+                   ", " + FormatNumber(p->max) + "] (planner '" + spec.id + "')");
+    }
+    resolved[name] = value;
+  }
+  return resolved;
+}
+
+const char* ToString(PlanStatus status) {
+  switch (status) {
+    case PlanStatus::kExactSolution: return "exact solution";
+    case PlanStatus::kApproximateSolution: return "approximate solution";
+    case PlanStatus::kNoSolution: return "no solution";
+    case PlanStatus::kInvalidStart: return "invalid start";
+    case PlanStatus::kInvalidGoal: return "invalid goal";
+    case PlanStatus::kCancelled: return "cancelled";
+    case PlanStatus::kDeadlineExceeded: return "deadline exceeded";
+  }
+  return "unknown";
+}
+
+}  // namespace chasles
