@@ -1,1 +1,785 @@
-// placeholder
+#include "chasles/collision/collision_checker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+#include <fcl/fcl.h>
+#include <fcl/geometry/octree/octree.h>
+#include <octomap/OcTree.h>
+
+#include "chasles/robot/error.h"
+
+// Design notes
+// ------------
+// * Forward kinematics is done here by chaining the joint transforms into flat 3x4 frames on
+//   the stack (no allocation, no Eigen temporaries); tests cross-check it against
+//   RobotModel::ForwardKinematics.
+// * Fast path (every robot shape a sphere, force_fcl off): spheres are kept as flat arrays
+//   (link-frame centre, radius + padding), grouped per link with one bounding sphere per link.
+//   Scene primitives are kept as flat records with their world->local transform precomputed;
+//   tests are closed-form. Meshes and occupancy maps still go through FCL, with the robot
+//   spheres as fcl::Sphered.
+// * FCL path: shared, immutable fcl geometries; every query calls the geometry+transform
+//   overloads of fcl::collide / fcl::distance, which build their traversal state on the
+//   stack. Nothing is mutated in const methods, so one checker serves all threads.
+// * Contact semantics: shapes that touch (distance == 0 after padding) are in collision, as in
+//   FCL's sphere–box test. With padding > 0 the FCL path compares fcl::distance <= padding.
+
+namespace chasles {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// Rigid frame: row-major rotation and translation.
+struct Frame {
+  double r[9];
+  double p[3];
+};
+
+inline void Apply(const Frame& f, const double* x, double* y) {
+  y[0] = f.r[0] * x[0] + f.r[1] * x[1] + f.r[2] * x[2] + f.p[0];
+  y[1] = f.r[3] * x[0] + f.r[4] * x[1] + f.r[5] * x[2] + f.p[1];
+  y[2] = f.r[6] * x[0] + f.r[7] * x[1] + f.r[8] * x[2] + f.p[2];
+}
+
+inline void MulR(const double* a, const double* b, double* c) {
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      c[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+    }
+  }
+}
+
+void ToRowMajor(const Eigen::Matrix3d& m, double* r) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r[3 * i + j] = m(i, j);
+}
+
+Eigen::Isometry3d ToIsometry(const Frame& f) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) t.linear()(i, j) = f.r[3 * i + j];
+    t.translation()[i] = f.p[i];
+  }
+  return t;
+}
+
+/// Stack buffer with heap fallback for unusually large robots.
+template <typename T, std::size_t N>
+class Scratch {
+ public:
+  explicit Scratch(std::size_t n) {
+    if (n > N) {
+      heap_.resize(n);
+      data_ = heap_.data();
+    } else {
+      data_ = stack_;
+    }
+  }
+  T& operator[](std::size_t i) { return data_[i]; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
+
+ private:
+  T stack_[N];
+  std::vector<T> heap_;
+  T* data_;
+};
+
+/// One joint of the FK chain, with the origin rotation pre-multiplied into the axis terms:
+/// R0·Rot(a, q) = c·R0 + s·(R0[a]×) + (1 − c)·(R0 a) aᵀ.
+struct FkJoint {
+  int parent_link = -1;
+  int child_link = -1;
+  int dof = -1;
+  int kind = 0;  // 0 fixed, 1 revolute, 2 prismatic
+  double r0[9], p0[3];
+  double r0k[9], r0aa[9];
+  double r0a[3];
+};
+
+enum PrimKind { kPrimSphere = 0, kPrimBox = 1, kPrimCylinder = 2, kPrimCapsule = 3 };
+
+/// A scene primitive for the fast path, with its world->local transform precomputed.
+struct Prim {
+  int kind;
+  int object;      // index into scene.objects()
+  double rt[9];    // world->local rotation (Rᵀ), row-major
+  double p[3];     // world position of the centre
+  double a, b, c;  // box half extents; sphere/cylinder/capsule: a = radius, b = half length
+  double bound;    // bounding-sphere radius about p
+};
+
+/// Distance from a point (world) to a primitive, squared, with the primitive "grown" so that a
+/// sphere of radius r collides iff the returned value <= r² (sphere, capsule: distance to the
+/// core point/segment minus the core radius is handled by the caller via `grow`).
+inline void ToLocal(const Prim& o, const double* x, double* l) {
+  const double d0 = x[0] - o.p[0], d1 = x[1] - o.p[1], d2 = x[2] - o.p[2];
+  l[0] = o.rt[0] * d0 + o.rt[1] * d1 + o.rt[2] * d2;
+  l[1] = o.rt[3] * d0 + o.rt[4] * d1 + o.rt[5] * d2;
+  l[2] = o.rt[6] * d0 + o.rt[7] * d1 + o.rt[8] * d2;
+}
+
+/// True when a sphere (world centre x, radius r) touches or overlaps primitive o.
+inline bool SphereHits(const Prim& o, const double* x, double r) {
+  switch (o.kind) {
+    case kPrimSphere: {
+      const double d0 = x[0] - o.p[0], d1 = x[1] - o.p[1], d2 = x[2] - o.p[2];
+      const double rr = r + o.a;
+      return d0 * d0 + d1 * d1 + d2 * d2 <= rr * rr;
+    }
+    case kPrimBox: {
+      double l[3];
+      ToLocal(o, x, l);
+      const double e0 = std::max(std::abs(l[0]) - o.a, 0.0);
+      const double e1 = std::max(std::abs(l[1]) - o.b, 0.0);
+      const double e2 = std::max(std::abs(l[2]) - o.c, 0.0);
+      return e0 * e0 + e1 * e1 + e2 * e2 <= r * r;
+    }
+    case kPrimCylinder: {
+      double l[3];
+      ToLocal(o, x, l);
+      const double dz = std::max(std::abs(l[2]) - o.b, 0.0);
+      if (dz > r) return false;
+      const double rho2 = l[0] * l[0] + l[1] * l[1];
+      if (rho2 <= o.a * o.a) return true;  // dz <= r already
+      const double dr = std::sqrt(rho2) - o.a;
+      return dr * dr + dz * dz <= r * r;
+    }
+    default: {  // capsule
+      double l[3];
+      ToLocal(o, x, l);
+      const double dz = std::max(std::abs(l[2]) - o.b, 0.0);
+      const double rr = r + o.a;
+      return l[0] * l[0] + l[1] * l[1] + dz * dz <= rr * rr;
+    }
+  }
+}
+
+/// Distance from the surface of a sphere (centre x, radius r) to primitive o; <= 0 on contact.
+inline double SphereDistance(const Prim& o, const double* x, double r) {
+  switch (o.kind) {
+    case kPrimSphere: {
+      const double d0 = x[0] - o.p[0], d1 = x[1] - o.p[1], d2 = x[2] - o.p[2];
+      return std::sqrt(d0 * d0 + d1 * d1 + d2 * d2) - r - o.a;
+    }
+    case kPrimBox: {
+      double l[3];
+      ToLocal(o, x, l);
+      const double e0 = std::max(std::abs(l[0]) - o.a, 0.0);
+      const double e1 = std::max(std::abs(l[1]) - o.b, 0.0);
+      const double e2 = std::max(std::abs(l[2]) - o.c, 0.0);
+      return std::sqrt(e0 * e0 + e1 * e1 + e2 * e2) - r;
+    }
+    case kPrimCylinder: {
+      double l[3];
+      ToLocal(o, x, l);
+      const double dz = std::max(std::abs(l[2]) - o.b, 0.0);
+      const double dr = std::max(std::sqrt(l[0] * l[0] + l[1] * l[1]) - o.a, 0.0);
+      return std::sqrt(dr * dr + dz * dz) - r;
+    }
+    default: {
+      double l[3];
+      ToLocal(o, x, l);
+      const double dz = std::max(std::abs(l[2]) - o.b, 0.0);
+      return std::sqrt(l[0] * l[0] + l[1] * l[1] + dz * dz) - r - o.a;
+    }
+  }
+}
+
+/// A link that carries spheres (fast path).
+struct SphereLink {
+  int link;
+  int begin, end;    // range in the sphere arrays
+  double bc[3];      // bounding-sphere centre, link frame
+  double br;         // bounding-sphere radius (padding included)
+};
+
+/// An FCL collision geometry with its bounding sphere in its own frame.
+struct FclGeom {
+  std::shared_ptr<fcl::CollisionGeometryd> geom;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // bounding centre, own frame
+  double radius = 0.0;
+};
+
+struct RobotShape {  // FCL path: one link shape
+  int link;
+  FclGeom g;
+  Eigen::Isometry3d local;  // shape pose in the link frame
+};
+
+struct SceneGeom {  // an FCL scene object (world pose fixed)
+  std::string name;
+  FclGeom g;
+  Eigen::Isometry3d pose;
+  fcl::Transform3d tf;
+  Eigen::Vector3d center;  // bounding centre, world
+  double radius;
+  bool octree = false;
+};
+
+FclGeom MakeGeom(const Shape& s) {
+  FclGeom g;
+  switch (s.type) {
+    case ShapeType::kSphere:
+      g.geom = std::make_shared<fcl::Sphered>(s.radius);
+      break;
+    case ShapeType::kBox:
+      g.geom = std::make_shared<fcl::Boxd>(s.size.x(), s.size.y(), s.size.z());
+      break;
+    case ShapeType::kCylinder:
+      g.geom = std::make_shared<fcl::Cylinderd>(s.radius, s.length);
+      break;
+    case ShapeType::kCapsule:
+      g.geom = std::make_shared<fcl::Capsuled>(s.radius, s.length);
+      break;
+    case ShapeType::kMesh: {
+      auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
+      std::vector<fcl::Vector3d> vertices(s.mesh->vertices.begin(), s.mesh->vertices.end());
+      std::vector<fcl::Triangle> triangles;
+      triangles.reserve(s.mesh->triangles.size());
+      for (const Eigen::Vector3i& t : s.mesh->triangles) triangles.emplace_back(t[0], t[1], t[2]);
+      model->beginModel(static_cast<int>(triangles.size()), static_cast<int>(vertices.size()));
+      model->addSubModel(vertices, triangles);
+      model->endModel();
+      g.geom = model;
+      break;
+    }
+  }
+  g.geom->computeLocalAABB();
+  g.center = g.geom->aabb_center;
+  g.radius = g.geom->aabb_radius;
+  return g;
+}
+
+inline bool SpheresOverlap(const Eigen::Vector3d& c1, double r1, const Eigen::Vector3d& c2, double r2) {
+  const double r = r1 + r2;
+  return (c1 - c2).squaredNorm() <= r * r;
+}
+
+}  // namespace
+
+void CollisionOptions::Validate() const {
+  if (!std::isfinite(padding) || padding < 0.0) {
+    std::ostringstream os;
+    os << "collision.padding = " << padding << " must be finite and >= 0";
+    ThrowInvalid(os.str());
+  }
+}
+
+struct CollisionChecker::Impl {
+  const RobotModel* robot = nullptr;
+  const Scene* scene = nullptr;
+  CollisionOptions options;
+  int num_links = 0;
+  int root = 0;
+  std::vector<FkJoint> fk;
+  bool fast = false;
+
+  // Fast path.
+  std::vector<SphereLink> slinks;
+  std::vector<double> sx, sy, sz, sr;          // link-frame centres, radius + padding
+  std::vector<int> slink_of;                   // sphere -> index into slinks
+  std::vector<std::pair<int, int>> self_pairs;  // indices into slinks, not allowed by the ACM
+  std::vector<Prim> prims;
+  std::vector<std::shared_ptr<fcl::Sphered>> fcl_spheres;  // per sphere, radius + padding
+
+  // FCL path.
+  std::vector<RobotShape> shapes;
+  std::vector<std::pair<int, int>> shape_pairs;  // indices into shapes
+  // Scene objects that FCL handles: meshes and maps in the fast path, everything otherwise.
+  std::vector<SceneGeom> scene_geoms;
+
+  void BuildFk();
+  void ComputeFk(const Eigen::VectorXd& q, Frame* frames) const;
+  bool FastCollide(const Frame* frames, CollisionResult* report) const;
+  double FastClearance(const Frame* frames) const;
+  bool FclCollide(const Frame* frames, CollisionResult* report) const;
+  double FclClearance(const Frame* frames) const;
+  bool Collide(const Eigen::VectorXd& q, CollisionResult* report) const;
+};
+
+void CollisionChecker::Impl::BuildFk() {
+  num_links = robot->num_links();
+  root = -1;
+  for (int l = 0; l < num_links; ++l) {
+    if (robot->links()[l].parent_joint < 0) {
+      root = l;
+      break;
+    }
+  }
+  if (root < 0) ThrowInvalid("robot '" + robot->name() + "' has no root link");
+  // Topological order: repeatedly take joints whose parent link is placed.
+  std::vector<bool> placed(num_links, false), used(robot->joints().size(), false);
+  placed[root] = true;
+  bool progress = true;
+  while (progress) {
+    progress = false;
+    for (std::size_t j = 0; j < robot->joints().size(); ++j) {
+      const Joint& joint = robot->joints()[j];
+      if (used[j] || joint.parent_link < 0 || !placed[joint.parent_link]) continue;
+      used[j] = true;
+      placed[joint.child_link] = true;
+      progress = true;
+      FkJoint f;
+      f.parent_link = joint.parent_link;
+      f.child_link = joint.child_link;
+      f.dof = joint.dof;
+      f.kind = joint.type == JointType::kFixed ? 0 : joint.type == JointType::kPrismatic ? 2 : 1;
+      if (f.dof < 0) f.kind = 0;
+      const Eigen::Matrix3d r0 = joint.origin.linear();
+      const Eigen::Vector3d a = joint.axis.normalized();
+      Eigen::Matrix3d k;
+      k << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
+      ToRowMajor(r0, f.r0);
+      ToRowMajor(r0 * k, f.r0k);
+      ToRowMajor(r0 * a * a.transpose(), f.r0aa);
+      const Eigen::Vector3d r0a = r0 * a;
+      for (int i = 0; i < 3; ++i) {
+        f.p0[i] = joint.origin.translation()[i];
+        f.r0a[i] = r0a[i];
+      }
+      fk.push_back(f);
+    }
+  }
+}
+
+void CollisionChecker::Impl::ComputeFk(const Eigen::VectorXd& q, Frame* frames) const {
+  Frame& base = frames[root];
+  for (int i = 0; i < 9; ++i) base.r[i] = (i % 4 == 0) ? 1.0 : 0.0;
+  base.p[0] = base.p[1] = base.p[2] = 0.0;
+  for (const FkJoint& j : fk) {
+    const Frame& parent = frames[j.parent_link];
+    Frame& child = frames[j.child_link];
+    double local_p[3] = {j.p0[0], j.p0[1], j.p0[2]};
+    if (j.kind == 1) {
+      const double angle = q[j.dof];
+      const double s = std::sin(angle), c = std::cos(angle), v = 1.0 - c;
+      double m[9];
+      for (int i = 0; i < 9; ++i) m[i] = c * j.r0[i] + s * j.r0k[i] + v * j.r0aa[i];
+      MulR(parent.r, m, child.r);
+    } else {
+      if (j.kind == 2) {
+        const double d = q[j.dof];
+        for (int i = 0; i < 3; ++i) local_p[i] += j.r0a[i] * d;
+      }
+      MulR(parent.r, j.r0, child.r);
+    }
+    Apply(parent, local_p, child.p);
+  }
+}
+
+bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* report) const {
+  const std::size_t ns = sx.size();
+  const std::size_t nl = slinks.size();
+  Scratch<double, 1024> w(3 * ns);   // world sphere centres
+  Scratch<double, 256> lb(3 * nl);   // world link bounding centres
+  for (std::size_t li = 0; li < nl; ++li) {
+    const SphereLink& L = slinks[li];
+    const Frame& f = frames[L.link];
+    Apply(f, L.bc, &lb[3 * li]);
+    for (int k = L.begin; k < L.end; ++k) {
+      const double x[3] = {sx[k], sy[k], sz[k]};
+      Apply(f, x, &w[3 * k]);
+    }
+  }
+  const auto hit = [&](int link, const std::string& other, bool self) {
+    if (report != nullptr) {
+      report->in_collision = true;
+      report->self_collision = self;
+      report->link_a = robot->links()[link].name;
+      report->other = other;
+    }
+    return true;
+  };
+  // Robot vs scene primitives.
+  for (const Prim& o : prims) {
+    for (std::size_t li = 0; li < nl; ++li) {
+      const SphereLink& L = slinks[li];
+      const double* c = &lb[3 * li];
+      const double d0 = c[0] - o.p[0], d1 = c[1] - o.p[1], d2 = c[2] - o.p[2];
+      const double rr = L.br + o.bound;
+      if (d0 * d0 + d1 * d1 + d2 * d2 > rr * rr) continue;
+      if (!SphereHits(o, c, L.br)) continue;
+      for (int k = L.begin; k < L.end; ++k) {
+        if (SphereHits(o, &w[3 * k], sr[k])) return hit(L.link, scene->objects()[o.object].name, false);
+      }
+    }
+  }
+  // Self collision.
+  for (const auto& pr : self_pairs) {
+    const SphereLink& A = slinks[pr.first];
+    const SphereLink& B = slinks[pr.second];
+    const double* ca = &lb[3 * pr.first];
+    const double* cb = &lb[3 * pr.second];
+    const double d0 = ca[0] - cb[0], d1 = ca[1] - cb[1], d2 = ca[2] - cb[2];
+    const double rr = A.br + B.br;
+    if (d0 * d0 + d1 * d1 + d2 * d2 > rr * rr) continue;
+    for (int i = A.begin; i < A.end; ++i) {
+      const double* xi = &w[3 * i];
+      for (int k = B.begin; k < B.end; ++k) {
+        const double* xk = &w[3 * k];
+        const double e0 = xi[0] - xk[0], e1 = xi[1] - xk[1], e2 = xi[2] - xk[2];
+        const double r = sr[i] + sr[k];
+        if (e0 * e0 + e1 * e1 + e2 * e2 <= r * r) {
+          return hit(A.link, robot->links()[B.link].name, true);
+        }
+      }
+    }
+  }
+  // Meshes and occupancy maps through FCL, robot spheres as fcl::Sphered.
+  if (!scene_geoms.empty()) {
+    fcl::CollisionRequestd request;
+    for (const SceneGeom& g : scene_geoms) {
+      for (std::size_t li = 0; li < nl; ++li) {
+        const SphereLink& L = slinks[li];
+        const Eigen::Vector3d c(lb[3 * li], lb[3 * li + 1], lb[3 * li + 2]);
+        if (!SpheresOverlap(c, L.br, g.center, g.radius)) continue;
+        for (int k = L.begin; k < L.end; ++k) {
+          const Eigen::Vector3d x(w[3 * k], w[3 * k + 1], w[3 * k + 2]);
+          if (!SpheresOverlap(x, sr[k], g.center, g.radius)) continue;
+          fcl::Transform3d tf = fcl::Transform3d::Identity();
+          tf.translation() = x;
+          fcl::CollisionResultd result;
+          if (fcl::collide(fcl_spheres[k].get(), tf, g.g.geom.get(), g.tf, request, result) > 0) {
+            return hit(L.link, g.name, false);
+          }
+        }
+      }
+    }
+  }
+  return false;
+}
+
+double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
+  const std::size_t ns = sx.size();
+  Scratch<double, 1024> w(3 * ns);
+  for (const SphereLink& L : slinks) {
+    for (int k = L.begin; k < L.end; ++k) {
+      const double x[3] = {sx[k], sy[k], sz[k]};
+      Apply(frames[L.link], x, &w[3 * k]);
+    }
+  }
+  double best = kInf;
+  for (const Prim& o : prims) {
+    for (std::size_t k = 0; k < ns; ++k) best = std::min(best, SphereDistance(o, &w[3 * k], sr[k]));
+  }
+  if (!scene_geoms.empty()) {
+    fcl::DistanceRequestd request;
+    for (const SceneGeom& g : scene_geoms) {
+      for (std::size_t k = 0; k < ns; ++k) {
+        const Eigen::Vector3d x(w[3 * k], w[3 * k + 1], w[3 * k + 2]);
+        // Lower bound from the bounding spheres: skip when it cannot improve on `best`.
+        if ((x - g.center).norm() - sr[k] - g.radius >= best) continue;
+        fcl::Transform3d tf = fcl::Transform3d::Identity();
+        tf.translation() = x;
+        fcl::DistanceResultd result;
+        const double d = fcl::distance(fcl_spheres[k].get(), tf, g.g.geom.get(), g.tf, request, result);
+        best = std::min(best, d);
+      }
+    }
+  }
+  return best <= 0.0 ? 0.0 : best;
+}
+
+bool CollisionChecker::Impl::FclCollide(const Frame* frames, CollisionResult* report) const {
+  const std::size_t n = shapes.size();
+  Scratch<fcl::Transform3d, 128> tf(n);
+  Scratch<Eigen::Vector3d, 128> center(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    tf[i] = ToIsometry(frames[shapes[i].link]) * shapes[i].local;
+    center[i] = tf[i] * shapes[i].g.center;
+  }
+  const double pad = options.padding;
+  const auto pair_hits = [&](const fcl::CollisionGeometryd* a, const fcl::Transform3d& ta,
+                             const fcl::CollisionGeometryd* b, const fcl::Transform3d& tb) {
+    if (pad > 0.0) {
+      fcl::DistanceRequestd request;
+      fcl::DistanceResultd result;
+      return fcl::distance(a, ta, b, tb, request, result) <= pad;
+    }
+    fcl::CollisionRequestd request;
+    fcl::CollisionResultd result;
+    return fcl::collide(a, ta, b, tb, request, result) > 0;
+  };
+  const auto hit = [&](int link, const std::string& other, bool self) {
+    if (report != nullptr) {
+      report->in_collision = true;
+      report->self_collision = self;
+      report->link_a = robot->links()[link].name;
+      report->other = other;
+    }
+    return true;
+  };
+  for (const SceneGeom& g : scene_geoms) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!SpheresOverlap(center[i], shapes[i].g.radius + pad, g.center, g.radius)) continue;
+      if (pair_hits(shapes[i].g.geom.get(), tf[i], g.g.geom.get(), g.tf)) {
+        return hit(shapes[i].link, g.name, false);
+      }
+    }
+  }
+  for (const auto& pr : shape_pairs) {
+    const RobotShape& a = shapes[pr.first];
+    const RobotShape& b = shapes[pr.second];
+    if (!SpheresOverlap(center[pr.first], a.g.radius + pad, center[pr.second], b.g.radius + pad)) continue;
+    // Two padded shapes touch when their distance is <= 2·padding.
+    bool touching;
+    if (pad > 0.0) {
+      fcl::DistanceRequestd request;
+      fcl::DistanceResultd result;
+      touching = fcl::distance(a.g.geom.get(), tf[pr.first], b.g.geom.get(), tf[pr.second], request,
+                               result) <= 2.0 * pad;
+    } else {
+      touching = pair_hits(a.g.geom.get(), tf[pr.first], b.g.geom.get(), tf[pr.second]);
+    }
+    if (touching) return hit(a.link, robot->links()[b.link].name, true);
+  }
+  return false;
+}
+
+double CollisionChecker::Impl::FclClearance(const Frame* frames) const {
+  double best = kInf;
+  fcl::DistanceRequestd request;
+  for (const RobotShape& s : shapes) {
+    const fcl::Transform3d tf = ToIsometry(frames[s.link]) * s.local;
+    const Eigen::Vector3d c = tf * s.g.center;
+    for (const SceneGeom& g : scene_geoms) {
+      if ((c - g.center).norm() - s.g.radius - g.radius - options.padding >= best) continue;
+      fcl::DistanceResultd result;
+      const double d = fcl::distance(s.g.geom.get(), tf, g.g.geom.get(), g.tf, request, result);
+      best = std::min(best, d - options.padding);
+    }
+  }
+  return best <= 0.0 ? 0.0 : best;
+}
+
+bool CollisionChecker::Impl::Collide(const Eigen::VectorXd& q, CollisionResult* report) const {
+  Scratch<Frame, 64> frames(num_links);
+  ComputeFk(q, &frames[0]);
+  return fast ? FastCollide(&frames[0], report) : FclCollide(&frames[0], report);
+}
+
+CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std::shared_ptr<const Scene> scene,
+                                   CollisionOptions options)
+    : robot_(std::move(robot)), scene_(std::move(scene)), impl_(std::make_unique<Impl>()) {
+  if (!robot_) ThrowInvalid("collision checker: robot is null");
+  if (!scene_) scene_ = std::make_shared<Scene>();
+  options.Validate();
+  Impl& m = *impl_;
+  m.robot = robot_.get();
+  m.scene = scene_.get();
+  m.options = options;
+  m.BuildFk();
+  const double pad = options.padding;
+  const auto& links = robot_->links();
+  const AllowedCollisionMatrix& acm = robot_->allowed_collisions();
+  const auto allowed = [&](int a, int b) {
+    return a == b || (acm.num_links() == robot_->num_links() && acm.IsAllowed(a, b));
+  };
+
+  bool all_spheres = true;
+  for (const Link& l : links) {
+    for (const Shape& s : l.collision) all_spheres = all_spheres && s.type == ShapeType::kSphere;
+  }
+  m.fast = all_spheres && !options.force_fcl;
+
+  // Scene objects FCL handles.
+  for (const SceneObject& o : scene_->objects()) {
+    if (m.fast && o.shape.type != ShapeType::kMesh) {
+      const Shape& s = o.shape;
+      Prim p{};
+      p.object = static_cast<int>(&o - scene_->objects().data());
+      ToRowMajor(s.pose.linear().transpose(), p.rt);
+      for (int i = 0; i < 3; ++i) p.p[i] = s.pose.translation()[i];
+      switch (s.type) {
+        case ShapeType::kSphere:
+          p.kind = kPrimSphere;
+          p.a = s.radius;
+          p.bound = s.radius;
+          break;
+        case ShapeType::kBox:
+          p.kind = kPrimBox;
+          p.a = 0.5 * s.size.x();
+          p.b = 0.5 * s.size.y();
+          p.c = 0.5 * s.size.z();
+          p.bound = 0.5 * s.size.norm();
+          break;
+        case ShapeType::kCylinder:
+          p.kind = kPrimCylinder;
+          p.a = s.radius;
+          p.b = 0.5 * s.length;
+          p.bound = std::hypot(p.a, p.b);
+          break;
+        default:
+          p.kind = kPrimCapsule;
+          p.a = s.radius;
+          p.b = 0.5 * s.length;
+          p.bound = p.a + p.b;
+          break;
+      }
+      m.prims.push_back(p);
+      continue;
+    }
+    SceneGeom g;
+    g.name = o.name;
+    g.g = MakeGeom(o.shape);
+    g.pose = o.shape.pose;
+    g.tf = o.shape.pose;
+    g.center = g.pose * g.g.center;
+    g.radius = g.g.radius;
+    m.scene_geoms.push_back(std::move(g));
+  }
+  for (const OccupancyMap& map : scene_->occupancy_maps()) {
+    SceneGeom g;
+    g.name = map.name;
+    g.octree = true;
+    g.g.geom = std::make_shared<fcl::OcTreed>(map.tree);
+    // Bound only the occupied leaves (the tree's root box is far larger).
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = Eigen::Vector3d::Constant(-kInf);
+    for (auto it = map.tree->begin_leafs(), end = map.tree->end_leafs(); it != end; ++it) {
+      if (!map.tree->isNodeOccupied(*it)) continue;
+      const double h = 0.5 * it.getSize();
+      const Eigen::Vector3d c(it.getX(), it.getY(), it.getZ());
+      lo = lo.cwiseMin(c - Eigen::Vector3d::Constant(h));
+      hi = hi.cwiseMax(c + Eigen::Vector3d::Constant(h));
+    }
+    if (!(lo.array() <= hi.array()).all()) continue;  // nothing occupied: no obstacle
+    g.pose = map.pose;
+    g.tf = map.pose;
+    g.center = map.pose * (0.5 * (lo + hi));
+    g.radius = 0.5 * (hi - lo).norm();
+    m.scene_geoms.push_back(std::move(g));
+  }
+
+  if (m.fast) {
+    for (int l = 0; l < robot_->num_links(); ++l) {
+      const auto& shapes = links[l].collision;
+      if (shapes.empty()) continue;
+      SphereLink L;
+      L.link = l;
+      L.begin = static_cast<int>(m.sx.size());
+      Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = Eigen::Vector3d::Constant(-kInf);
+      for (const Shape& s : shapes) {
+        const Eigen::Vector3d c = s.pose.translation();
+        m.sx.push_back(c.x());
+        m.sy.push_back(c.y());
+        m.sz.push_back(c.z());
+        m.sr.push_back(s.radius + pad);
+        m.slink_of.push_back(static_cast<int>(m.slinks.size()));
+        m.fcl_spheres.push_back(std::make_shared<fcl::Sphered>(s.radius + pad));
+        lo = lo.cwiseMin(c);
+        hi = hi.cwiseMax(c);
+      }
+      L.end = static_cast<int>(m.sx.size());
+      const Eigen::Vector3d bc = 0.5 * (lo + hi);
+      double br = 0.0;
+      for (int k = L.begin; k < L.end; ++k) {
+        br = std::max(br, (Eigen::Vector3d(m.sx[k], m.sy[k], m.sz[k]) - bc).norm() + m.sr[k]);
+      }
+      for (int i = 0; i < 3; ++i) L.bc[i] = bc[i];
+      L.br = br;
+      m.slinks.push_back(L);
+    }
+    for (std::size_t a = 0; a < m.slinks.size(); ++a) {
+      for (std::size_t b = a + 1; b < m.slinks.size(); ++b) {
+        if (!allowed(m.slinks[a].link, m.slinks[b].link)) m.self_pairs.emplace_back(a, b);
+      }
+    }
+  } else {
+    for (int l = 0; l < robot_->num_links(); ++l) {
+      for (const Shape& s : links[l].collision) {
+        RobotShape r;
+        r.link = l;
+        r.g = MakeGeom(s);
+        r.local = s.pose;
+        m.shapes.push_back(std::move(r));
+      }
+    }
+    for (std::size_t a = 0; a < m.shapes.size(); ++a) {
+      for (std::size_t b = a + 1; b < m.shapes.size(); ++b) {
+        if (!allowed(m.shapes[a].link, m.shapes[b].link)) m.shape_pairs.emplace_back(a, b);
+      }
+    }
+  }
+}
+
+CollisionChecker::~CollisionChecker() = default;
+
+bool CollisionChecker::uses_fast_path() const { return impl_->fast; }
+
+namespace {
+void CheckSize(const RobotModel& robot, const Eigen::VectorXd& q, const char* field) {
+  if (q.size() != robot.num_dofs()) {
+    ThrowInvalid(std::string(field) + " has " + std::to_string(q.size()) + " values, robot '" +
+                 robot.name() + "' has " + std::to_string(robot.num_dofs()) + " joints");
+  }
+}
+
+bool WithinLimits(const RobotModel& robot, const Eigen::VectorXd& q) {
+  const Eigen::VectorXd& lo = robot.lower_limits();
+  const Eigen::VectorXd& hi = robot.upper_limits();
+  for (Eigen::Index i = 0; i < q.size(); ++i) {
+    if (!(q[i] >= lo[i] && q[i] <= hi[i])) return false;  // NaN fails too
+  }
+  return true;
+}
+}  // namespace
+
+bool CollisionChecker::IsValid(const Eigen::VectorXd& q, CheckCounters* counters) const {
+  CheckSize(*robot_, q, "q");
+  if (counters != nullptr) ++counters->state_checks;
+  if (!WithinLimits(*robot_, q)) return false;
+  return !impl_->Collide(q, nullptr);
+}
+
+CollisionResult CollisionChecker::Check(const Eigen::VectorXd& q) const {
+  CheckSize(*robot_, q, "q");
+  CollisionResult result;
+  impl_->Collide(q, &result);
+  return result;
+}
+
+bool CollisionChecker::IsMotionValid(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double max_step,
+                                     CheckCounters* counters) const {
+  CheckSize(*robot_, a, "a");
+  CheckSize(*robot_, b, "b");
+  if (!std::isfinite(max_step) || max_step <= 0.0) {
+    std::ostringstream os;
+    os << "max_step = " << max_step << " must be finite and > 0";
+    ThrowInvalid(os.str());
+  }
+  // Order: b, then a (both with joint limits), then the interior states (inside the limits
+  // because the joint-limit box is convex) coarse to fine: all odd multiples of the largest
+  // power-of-two stride first, then of half that stride, and so on — a bisection order that
+  // needs no queue.
+  if (!IsValid(b, counters) || !IsValid(a, counters)) return false;
+  const double span = (b - a).cwiseAbs().maxCoeff();
+  if (!std::isfinite(span)) return false;
+  const double steps = std::ceil(span / max_step);
+  if (steps > 1e9) ThrowInvalid("motion needs more than 1e9 checks at max_step; raise max_step");
+  const long n = std::max(1L, static_cast<long>(steps));
+  long stride = 1;
+  while (stride < n) stride <<= 1;
+  Eigen::VectorXd q(a.size());
+  for (stride >>= 1; stride >= 1; stride >>= 1) {
+    for (long i = stride; i < n; i += 2 * stride) {
+      const double t = static_cast<double>(i) / static_cast<double>(n);
+      q = a + t * (b - a);
+      if (counters != nullptr) ++counters->state_checks;
+      if (impl_->Collide(q, nullptr)) return false;
+    }
+  }
+  return true;
+}
+
+double CollisionChecker::Clearance(const Eigen::VectorXd& q) const {
+  CheckSize(*robot_, q, "q");
+  Scratch<Frame, 64> frames(impl_->num_links);
+  impl_->ComputeFk(q, &frames[0]);
+  return impl_->fast ? impl_->FastClearance(&frames[0]) : impl_->FclClearance(&frames[0]);
+}
+
+}  // namespace chasles
