@@ -1,0 +1,103 @@
+// chasles-server: the Chasles motion planning gRPC server.
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <thread>
+
+#include "chasles/server/planning_server.h"
+
+namespace {
+
+std::atomic<int> g_signal{0};
+
+extern "C" void OnSignal(int signal) { g_signal.store(signal); }
+
+void PrintUsage(std::FILE* out) {
+  std::fprintf(out,
+               "Usage: chasles-server [--listen ADDR] [--threads N] [--max-message-mb MB]\n"
+               "\n"
+               "Serves chasles.v1.Planning (Plan, ListPlanners, UploadRobot, UploadScene) and the\n"
+               "standard gRPC health service. Requests that name no robot/scene use the embedded\n"
+               "Franka Panda and table scene.\n"
+               "\n"
+               "  --listen ADDR         address:port to listen on (default 127.0.0.1:50051; port 0 = any)\n"
+               "  --threads N           planning worker threads (default: hardware threads)\n"
+               "  --max-message-mb MB   largest request/response message in MiB (default 64)\n"
+               "  --help                show this help\n"
+               "\n"
+               "SIGINT/SIGTERM shut the server down cleanly (running calls get 2 s to finish).\n");
+}
+
+bool ParseInt(const char* text, int* value) {
+  char* end = nullptr;
+  const long parsed = std::strtol(text, &end, 10);
+  if (end == text || *end != '\0' || parsed < -1000000 || parsed > 1000000) return false;
+  *value = static_cast<int>(parsed);
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  chasles::ServerOptions options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto next = [&](const char* name) -> const char* {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "chasles-server: %s needs a value (see --help)\n", name);
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (arg == "--help" || arg == "-h") {
+      PrintUsage(stdout);
+      return 0;
+    } else if (arg == "--listen") {
+      options.listen = next("--listen");
+    } else if (arg == "--threads") {
+      const char* value = next("--threads");
+      if (!ParseInt(value, &options.threads)) {
+        std::fprintf(stderr, "chasles-server: --threads '%s' is not an integer\n", value);
+        return 2;
+      }
+    } else if (arg == "--max-message-mb") {
+      const char* value = next("--max-message-mb");
+      if (!ParseInt(value, &options.max_message_mb)) {
+        std::fprintf(stderr, "chasles-server: --max-message-mb '%s' is not an integer\n", value);
+        return 2;
+      }
+    } else {
+      std::fprintf(stderr, "chasles-server: unknown argument '%s' (see --help)\n", arg.c_str());
+      return 2;
+    }
+  }
+
+  try {
+    chasles::PlanningServer server(options);
+    std::fprintf(stderr, "chasles-server: listening on %s (port %d), %s planning threads\n", options.listen.c_str(),
+                 server.port(), options.threads == 0 ? "hardware" : std::to_string(options.threads).c_str());
+    std::signal(SIGINT, OnSignal);
+    std::signal(SIGTERM, OnSignal);
+    std::atomic<bool> done{false};
+    std::thread watcher([&] {
+      while (!done.load() && g_signal.load() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      if (g_signal.load() != 0) {
+        std::fprintf(stderr, "chasles-server: signal %d, shutting down\n", g_signal.load());
+      }
+      server.Shutdown(std::chrono::milliseconds(2000));
+    });
+    server.Wait();
+    done.store(true);
+    watcher.join();
+    std::fprintf(stderr, "chasles-server: stopped\n");
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "chasles-server: %s\n", e.what());
+    return 1;
+  }
+}

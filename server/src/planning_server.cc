@@ -1,0 +1,351 @@
+#include "chasles/server/planning_server.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cinttypes>
+#include <cstdio>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include <google/protobuf/util/json_util.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+
+#include "chasles/pipeline/plan_pipeline.h"
+#include "chasles/planners/registry.h"
+#include "chasles/robot/error.h"
+#include "chasles/server/convert.h"
+#include "chasles/server/default_assets.h"
+#include "chasles/server/model_store.h"
+#include "chasles/server/status.h"
+#include "chasles/server/thread_pool.h"
+#include "chasles/v1/chasles.grpc.pb.h"
+
+namespace chasles {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// The gRPC deadline of a call on the steady clock (far future when the client set none).
+Clock::time_point SteadyDeadline(const grpc::CallbackServerContext& context) {
+  const auto system_now = std::chrono::system_clock::now();
+  const auto deadline = context.deadline();
+  const auto far = std::chrono::hours(24 * 365);
+  if (deadline >= system_now + far) return Clock::now() + far;
+  return Clock::now() + std::chrono::duration_cast<Clock::duration>(deadline - system_now);
+}
+
+v1::RobotModel DefaultRobotProto() {
+  v1::RobotModel robot;
+  robot.set_name("panda");
+  robot.mutable_urdf()->set_urdf(std::string(kDefaultRobotUrdf));
+  robot.mutable_urdf()->set_srdf(std::string(kDefaultRobotSrdf));
+  return robot;
+}
+
+v1::Scene DefaultSceneProto() {
+  v1::Scene scene;
+  const auto status = google::protobuf::util::JsonStringToMessage(std::string(kDefaultSceneJson), &scene);
+  if (!status.ok()) {
+    throw std::runtime_error("embedded default scene (examples/scenes/table.json) does not parse: " +
+                             status.ToString());
+  }
+  return scene;
+}
+
+std::string IdPrefix(const std::string& id) { return id.substr(0, 8); }
+
+/// A unary reactor whose work runs on the pool; cancellation (client cancel, deadline, server
+/// shutdown) reaches the Termination of the running job.
+class PoolReactor final : public grpc::ServerUnaryReactor {
+ public:
+  /// Creates the job's Termination; if the call was already cancelled, it is cancelled too.
+  Termination Start(Clock::time_point budget_end, Clock::time_point deadline) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    termination_.emplace(budget_end, deadline);
+    if (cancelled_) termination_->Cancel();
+    return *termination_;
+  }
+  bool cancelled() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return cancelled_;
+  }
+  void OnCancel() override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    cancelled_ = true;
+    if (termination_) termination_->Cancel();
+  }
+  void OnDone() override { delete this; }
+
+ private:
+  mutable std::mutex mutex_;
+  bool cancelled_ = false;
+  std::optional<Termination> termination_;
+};
+
+class PlanningService final : public v1::Planning::CallbackService {
+ public:
+  PlanningService(const PlannerRegistry& registry, ModelStore* store, ThreadPool* pool, bool log)
+      : registry_(registry), pipeline_(registry), store_(store), pool_(pool), log_(log) {}
+
+  grpc::ServerUnaryReactor* Plan(grpc::CallbackServerContext* context, const v1::PlanRequest* request,
+                                 v1::PlanResponse* response) override {
+    const Clock::time_point arrival = Clock::now();
+    const Clock::time_point deadline = SteadyDeadline(*context);
+    std::string request_id = request->request_id();
+    if (request_id.empty()) {
+      char buffer[32];
+      std::snprintf(buffer, sizeof(buffer), "req-%06" PRIu64, ++next_request_);
+      request_id = buffer;
+    }
+    auto* reactor = new PoolReactor();
+    const bool queued = pool_->Submit([=] { RunPlan(reactor, context, request, response, request_id, arrival, deadline); });
+    if (!queued) {
+      Log("plan request=%s status=RESOURCE_EXHAUSTED (planning queue full)", request_id.c_str());
+      reactor->Finish(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                   "the server's planning queue is full; retry later"));
+    }
+    return reactor;
+  }
+
+  grpc::ServerUnaryReactor* ListPlanners(grpc::CallbackServerContext* context, const v1::ListPlannersRequest*,
+                                         v1::ListPlannersResponse* response) override {
+    grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+    grpc::Status status;
+    try {
+      for (const PlannerSpec& spec : registry_.List()) PlannerSpecToProto(spec, response->add_planners());
+    } catch (...) {
+      status = StatusFromException(std::current_exception());
+    }
+    reactor->Finish(status);
+    return reactor;
+  }
+
+  grpc::ServerUnaryReactor* UploadRobot(grpc::CallbackServerContext* context, const v1::UploadRobotRequest* request,
+                                        v1::UploadRobotResponse* response) override {
+    return RunOnPool("upload-robot", [this, request, response] {
+      const Clock::time_point start = Clock::now();
+      StoredRobot robot = store_->AddRobot(request->robot(), "robot");
+      response->set_robot_id(robot.id);
+      const RobotModel& model = *robot.model;
+      for (int i = 0; i < model.num_dofs(); ++i) {
+        response->add_joint_names(model.dof_names()[i]);
+        response->add_lower_limits(model.lower_limits()[i]);
+        response->add_upper_limits(model.upper_limits()[i]);
+        response->add_velocity_limits(model.velocity_limits()[i]);
+      }
+      Log("upload-robot robot=%s name=%s dofs=%d status=OK ms=%.1f", IdPrefix(robot.id).c_str(),
+          model.name().c_str(), model.num_dofs(), 1e3 * SecondsSince(start));
+    });
+  }
+
+  grpc::ServerUnaryReactor* UploadScene(grpc::CallbackServerContext* context, const v1::UploadSceneRequest* request,
+                                        v1::UploadSceneResponse* response) override {
+    return RunOnPool("upload-scene", [this, request, response] {
+      const Clock::time_point start = Clock::now();
+      StoredScene scene = store_->AddScene(request->scene(), "scene");
+      response->set_scene_id(scene.id);
+      Log("upload-scene scene=%s objects=%zu maps=%zu status=OK ms=%.1f", IdPrefix(scene.id).c_str(),
+          scene.scene->objects().size(), scene.scene->occupancy_maps().size(), 1e3 * SecondsSince(start));
+    });
+  }
+
+ private:
+  /// Runs `work` on the pool and finishes the call with OK or the mapped exception.
+  grpc::ServerUnaryReactor* RunOnPool(const char* what, std::function<void()> work) {
+    auto* reactor = new PoolReactor();
+    const bool queued = pool_->Submit([this, reactor, what, work = std::move(work)] {
+      grpc::Status status;
+      if (reactor->cancelled()) {
+        status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled before it started");
+      } else {
+        try {
+          work();
+        } catch (...) {
+          status = StatusFromException(std::current_exception());
+          Log("%s status=%d message=%s", what, static_cast<int>(status.error_code()),
+              status.error_message().c_str());
+        }
+      }
+      reactor->Finish(status);
+    });
+    if (!queued) {
+      reactor->Finish(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, "the server's work queue is full; retry later"));
+    }
+    return reactor;
+  }
+
+  void RunPlan(PoolReactor* reactor, grpc::CallbackServerContext* context, const v1::PlanRequest* request,
+               v1::PlanResponse* response, const std::string& request_id, Clock::time_point arrival,
+               Clock::time_point deadline) {
+    grpc::Status status;
+    std::string robot_id, scene_id;
+    std::string planner = request->planner().planner_id().empty() ? "rrt_connect" : request->planner().planner_id();
+    std::string outcome_name = "-";
+    StageSeconds seconds;
+    if (reactor->cancelled() || context->IsCancelled()) {
+      status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled before planning started");
+    } else try {
+      // 1. Robot, scene and checker (parsed or cached).
+      StoredRobot robot;
+      switch (request->robot_source_case()) {
+        case v1::PlanRequest::kRobot: robot = store_->AddRobot(request->robot(), "robot"); break;
+        case v1::PlanRequest::kRobotId: robot = store_->FindRobot(request->robot_id()); break;
+        default: robot = store_->default_robot(); break;
+      }
+      robot_id = robot.id;
+      StoredScene scene;
+      switch (request->scene_source_case()) {
+        case v1::PlanRequest::kScene: scene = store_->AddScene(request->scene(), "scene"); break;
+        case v1::PlanRequest::kSceneId: scene = store_->FindScene(request->scene_id()); break;
+        default: scene = store_->default_scene(); break;
+      }
+      scene_id = scene.id;
+      std::shared_ptr<const CollisionChecker> checker = store_->Checker(robot, scene);
+
+      // 2. The query, with the proto's defaults.
+      RequestSettings settings;
+      PlanQuery query = PlanQueryFromProto(*request, checker, registry_, &settings);
+      const double prepare = SecondsSince(arrival);
+
+      // 3. Budget: the request's, cut short so a result can still travel back before the
+      //    gRPC deadline (which itself stops everything).
+      const Clock::time_point now = Clock::now();
+      Clock::time_point budget_end = now + std::chrono::duration_cast<Clock::duration>(
+                                               std::chrono::duration<double>(settings.time_budget));
+      const auto left = deadline - now;
+      const auto margin = std::min<Clock::duration>(std::chrono::milliseconds(200), left / 10);
+      budget_end = std::min(budget_end, deadline - margin);
+      Termination termination = reactor->Start(budget_end, deadline);
+
+      // 4. Plan.
+      PlanOutcome outcome = pipeline_.Plan(query, termination);
+      outcome.seconds.validate += prepare;
+      outcome.seconds.total = SecondsSince(arrival);
+      seconds = outcome.seconds;
+      outcome_name = ToString(outcome.code);
+      PlanOutcomeToProto(outcome, query, response);
+      status = StatusFromOutcome(outcome.code, outcome.message);
+      if (status.ok() && (reactor->cancelled() || termination.Reason() == StopReason::kCancelled) &&
+          outcome.code != PlanOutcomeCode::kSuccess) {
+        status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
+      }
+    } catch (...) {
+      status = StatusFromException(std::current_exception());
+    }
+    response->set_request_id(request_id);
+    response->set_robot_id(robot_id);
+    response->set_scene_id(scene_id);
+    if (!status.ok()) seconds.total = SecondsSince(arrival);
+    Log("plan request=%s robot=%s scene=%s planner=%s status=%s outcome=%s ms validate=%.1f plan=%.1f "
+        "shortcut=%.1f parameterize=%.1f verify=%.1f total=%.1f%s%s",
+        request_id.c_str(), robot_id.empty() ? "-" : IdPrefix(robot_id).c_str(),
+        scene_id.empty() ? "-" : IdPrefix(scene_id).c_str(), planner.c_str(), StatusName(status.error_code()),
+        outcome_name.c_str(), 1e3 * seconds.validate, 1e3 * seconds.plan, 1e3 * seconds.shortcut,
+        1e3 * seconds.parameterize, 1e3 * seconds.verify, 1e3 * seconds.total, status.ok() ? "" : " error=",
+        status.ok() ? "" : status.error_message().c_str());
+    reactor->Finish(status);
+  }
+
+  static const char* StatusName(grpc::StatusCode code) {
+    switch (code) {
+      case grpc::StatusCode::OK: return "OK";
+      case grpc::StatusCode::CANCELLED: return "CANCELLED";
+      case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
+      case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
+      case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
+      case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
+      case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
+      case grpc::StatusCode::INTERNAL: return "INTERNAL";
+      default: return "OTHER";
+    }
+  }
+
+  template <typename... Args>
+  void Log(const char* format, Args... args) const {
+    if (!log_) return;
+    char line[2048];
+    std::snprintf(line, sizeof(line), format, args...);
+    std::fprintf(stderr, "chasles-server: %s\n", line);
+  }
+
+  const PlannerRegistry& registry_;
+  const PlanningPipeline pipeline_;
+  ModelStore* store_;
+  ThreadPool* pool_;
+  const bool log_;
+  std::atomic<std::uint64_t> next_request_{0};
+};
+
+}  // namespace
+
+void ServerOptions::Validate() const {
+  if (listen.empty()) ThrowInvalid("--listen is empty: give ADDRESS:PORT, e.g. 127.0.0.1:50051");
+  if (threads < 0) ThrowInvalid("--threads = " + std::to_string(threads) + " must be >= 0 (0 = hardware threads)");
+  if (max_message_mb < 1 || max_message_mb > 2047) {
+    ThrowInvalid("--max-message-mb = " + std::to_string(max_message_mb) + " must be within [1, 2047]");
+  }
+  if (cache_capacity == 0) ThrowInvalid("cache_capacity = 0 must be >= 1");
+}
+
+struct PlanningServer::Impl {
+  PlannerRegistry registry;
+  std::unique_ptr<ModelStore> store;
+  std::unique_ptr<ThreadPool> pool;
+  std::unique_ptr<PlanningService> service;
+  std::unique_ptr<grpc::Server> server;
+  int port = 0;
+  std::once_flag shutdown_once;
+};
+
+PlanningServer::PlanningServer(const ServerOptions& options) : impl_(std::make_unique<Impl>()) {
+  options.Validate();
+  RegisterDefaultPlanners(&impl_->registry);
+  impl_->store = std::make_unique<ModelStore>(DefaultRobotProto(), DefaultSceneProto(), options.cache_capacity);
+  impl_->pool = std::make_unique<ThreadPool>(options.threads);
+  impl_->service = std::make_unique<PlanningService>(impl_->registry, impl_->store.get(), impl_->pool.get(),
+                                                     options.log_requests);
+
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(options.listen, grpc::InsecureServerCredentials(), &impl_->port);
+  const int max_bytes = options.max_message_mb * 1024 * 1024;
+  builder.SetMaxReceiveMessageSize(max_bytes);
+  builder.SetMaxSendMessageSize(max_bytes);
+  builder.RegisterService(impl_->service.get());
+  impl_->server = builder.BuildAndStart();
+  if (!impl_->server || impl_->port == 0) {
+    throw std::runtime_error("cannot listen on " + options.listen);
+  }
+  if (auto* health = impl_->server->GetHealthCheckService()) {
+    health->SetServingStatus(true);
+    health->SetServingStatus("chasles.v1.Planning", true);
+  }
+}
+
+PlanningServer::~PlanningServer() {
+  Shutdown();
+  impl_->server->Wait();
+  impl_->pool.reset();  // every call has finished; joins the idle workers
+}
+
+int PlanningServer::port() const { return impl_->port; }
+
+void PlanningServer::Shutdown(std::chrono::milliseconds grace) {
+  std::call_once(impl_->shutdown_once, [&] {
+    if (auto* health = impl_->server->GetHealthCheckService()) health->Shutdown();
+    impl_->server->Shutdown(std::chrono::system_clock::now() + grace);
+  });
+}
+
+void PlanningServer::Wait() { impl_->server->Wait(); }
+
+}  // namespace chasles
