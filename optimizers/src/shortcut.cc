@@ -1,1 +1,152 @@
-// placeholder
+#include "chasles/optimizers/shortcut.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+
+#include "chasles/robot/error.h"
+#include "internal.h"
+
+namespace chasles {
+namespace {
+
+using optimizers_internal::Num;
+
+/// Uniform double in [0, 1) from the top 53 bits: identical on every standard library.
+double Uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+
+/// Uniform integer in [0, n), n >= 1.
+int UniformIndex(std::mt19937_64& rng, int n) {
+  const int i = static_cast<int>(Uniform01(rng) * n);
+  return std::min(i, n - 1);
+}
+
+/// Copies the path without consecutive exact duplicates. The last waypoint is kept bit-exact
+/// (a trailing duplicate replaces the previous copy).
+JointPath RemoveDuplicates(const JointPath& path) {
+  JointPath out;
+  out.reserve(path.size());
+  for (const Eigen::VectorXd& q : path) {
+    if (!out.empty() && q == out.back()) continue;
+    out.push_back(q);
+  }
+  if (!out.empty()) out.back() = path.back();
+  if (out.size() == 1 && path.size() > 1) {  // all identical: start and goal both kept
+    out.push_back(path.back());
+    out.front() = path.front();
+  }
+  return out;
+}
+
+/// Greedy vertex reduction: from each kept waypoint, jump to the farthest later waypoint that
+/// the straight segment reaches validly (and not longer than the polyline it replaces).
+JointPath ReduceVertices(const JointPath& path, const CollisionChecker& checker, double max_step,
+                         CheckCounters* counters) {
+  const int n = static_cast<int>(path.size());
+  if (n < 3) return path;
+  // prefix[k] = polyline length from path[0] to path[k].
+  std::vector<double> prefix(n, 0.0);
+  for (int k = 1; k < n; ++k) prefix[k] = prefix[k - 1] + (path[k] - path[k - 1]).norm();
+  JointPath out;
+  out.push_back(path.front());
+  int i = 0;
+  while (i < n - 1) {
+    int next = i + 1;
+    for (int j = n - 1; j > i + 1; --j) {
+      const double direct = (path[j] - path[i]).norm();
+      if (direct > prefix[j] - prefix[i]) continue;  // rounding only; never lengthen
+      if (checker.IsMotionValid(path[i], path[j], max_step, counters)) {
+        next = j;
+        break;
+      }
+    }
+    out.push_back(path[next]);
+    i = next;
+  }
+  return out;
+}
+
+}  // namespace
+
+double PathLength(const JointPath& path) {
+  double length = 0.0;
+  for (std::size_t k = 1; k < path.size(); ++k) length += (path[k] - path[k - 1]).norm();
+  return length;
+}
+
+JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
+                       const ShortcutOptions& options, CheckCounters* counters) {
+  if (options.max_attempts < 0) {
+    ThrowInvalid("shortcut max_attempts = " + std::to_string(options.max_attempts) + " must be >= 0");
+  }
+  if (!std::isfinite(options.max_step)) {
+    ThrowInvalid("shortcut max_step = " + Num(options.max_step) + " must be finite");
+  }
+  if (!(options.max_step > 0.0)) {
+    ThrowInvalid("shortcut max_step = " + Num(options.max_step) + " must be > 0");
+  }
+  const int dofs = checker.robot().num_dofs();
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    if (path[k].size() != dofs) {
+      ThrowInvalid("path[" + std::to_string(k) + "] has " + std::to_string(path[k].size()) +
+                   " values, robot has " + std::to_string(dofs) + " joints");
+    }
+    for (int i = 0; i < dofs; ++i) {
+      if (!std::isfinite(path[k][i])) {
+        ThrowInvalid("path[" + std::to_string(k) + "][" + std::to_string(i) + "] = " + Num(path[k][i]) +
+                     " must be finite");
+      }
+    }
+  }
+  if (path.size() < 3) return path;
+
+  JointPath current = ReduceVertices(RemoveDuplicates(path), checker, options.max_step, counters);
+
+  std::mt19937_64 rng(options.seed);
+  bool changed = false;
+  for (int attempt = 0; attempt < options.max_attempts; ++attempt) {
+    const int segments = static_cast<int>(current.size()) - 1;
+    if (segments < 2) break;  // a single straight segment cannot get shorter
+    // Two different segments i < j, a point on each.
+    int i = UniformIndex(rng, segments);
+    int j = UniformIndex(rng, segments - 1);
+    if (j >= i) ++j;
+    if (j < i) std::swap(i, j);
+    const double ui = Uniform01(rng);
+    const double uj = Uniform01(rng);
+    const Eigen::VectorXd qa = current[i] + ui * (current[i + 1] - current[i]);
+    const Eigen::VectorXd qb = current[j] + uj * (current[j + 1] - current[j]);
+
+    // Length of the stretch qa → current[i+1] → … → current[j] → qb that the shortcut replaces.
+    double old_length = (current[i + 1] - qa).norm() + (qb - current[j]).norm();
+    for (int k = i + 1; k < j; ++k) old_length += (current[k + 1] - current[k]).norm();
+    const double new_length = (qb - qa).norm();
+    if (!(new_length < old_length * (1.0 - 1e-9))) continue;  // not meaningfully shorter
+
+    // qa and qb lie on valid segments, but their pieces are new segments and are re-checked
+    // at max_step so the result's every segment passes IsMotionValid.
+    const bool head_needed = !(qa == current[i]);
+    const bool tail_needed = !(qb == current[j + 1]);
+    if (!checker.IsMotionValid(qa, qb, options.max_step, counters)) continue;
+    if (head_needed && !checker.IsMotionValid(current[i], qa, options.max_step, counters)) continue;
+    if (tail_needed && !checker.IsMotionValid(qb, current[j + 1], options.max_step, counters)) continue;
+
+    JointPath next;
+    next.reserve(current.size() + 2);
+    next.insert(next.end(), current.begin(), current.begin() + i + 1);
+    if (head_needed) next.push_back(qa);
+    if (tail_needed && !(head_needed && qb == qa)) next.push_back(qb);
+    next.insert(next.end(), current.begin() + j + 1, current.end());
+    current = std::move(next);
+    changed = true;
+  }
+  // Shortcut points may have made further waypoints redundant.
+  if (changed) current = ReduceVertices(current, checker, options.max_step, counters);
+  // Endpoints are never replaced above; assert that the contract holds bit for bit.
+  current.front() = path.front();
+  current.back() = path.back();
+  return current;
+}
+
+}  // namespace chasles

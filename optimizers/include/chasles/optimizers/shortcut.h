@@ -16,9 +16,17 @@ struct ShortcutOptions {
 };
 
 /// Removes redundant waypoints (greedy: connect each kept waypoint to the farthest valid one),
-/// then tries random shortcuts between points on two segments. Endpoints are kept exactly.
-/// The result is never longer (in joint-space Euclidean length) than the input and every new
-/// segment passes IsMotionValid at `max_step`. Collinear and duplicate waypoints are removed.
+/// then tries `max_attempts` random shortcuts between random points on two different segments
+/// (accepted when every new segment passes IsMotionValid at `max_step` and the path gets
+/// shorter), then, if any was accepted, reduces vertices once more. Endpoints are kept
+/// bit-exactly. The result is never longer (in joint-space Euclidean length) than the input
+/// and every new segment passes IsMotionValid at `max_step`; input segments that are kept are
+/// not re-checked. Duplicate waypoints are removed, and collinear ones whenever the joining
+/// segment is valid. Randomness: std::mt19937_64(seed) with uniform doubles from its top 53
+/// bits, so the output is identical on every platform for the same input and seed.
+/// Paths of fewer than 3 waypoints are returned unchanged.
+/// \throws Error(kInvalidArgument) for max_attempts < 0, max_step not finite and > 0, or a
+///         waypoint whose size is not robot().num_dofs() or that holds a non-finite value.
 JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
                        const ShortcutOptions& options, CheckCounters* counters = nullptr);
 

@@ -41,11 +41,24 @@ class TimedTrajectory {
   bool empty() const { return segments_.empty(); }
   int num_dofs() const { return segments_.empty() ? 0 : static_cast<int>(segments_.front().a.size()); }
 
-  /// Exact state at time t (clamped to [0, duration()]).
+  /// Exact state at time t [s], clamped to [0, duration()] (NaN counts as 0).
+  /// The robot is at rest outside (0, duration()): t <= 0 gives the first waypoint and
+  /// t >= duration() the last one, bit-exactly, with q̇ = q̈ = 0. At a phase or segment
+  /// boundary strictly inside, q̈ (which jumps there) is the value of the phase that STARTS at
+  /// t (the right limit); q and q̇ are continuous. Positions are a + s·(b − a) while
+  /// accelerating or cruising and b − (1 − s)·(b − a) while decelerating, so every segment
+  /// starts at its `a` and ends at its `b` exactly.
+  /// \throws Error(kFailedPrecondition) on an empty trajectory.
   TrajectorySample Evaluate(double t) const;
-  /// Samples at t = 0, period, 2·period, …, and always at duration() exactly.
-  /// Precondition: period > 0.
+  /// Samples at t = 0, period, 2·period, … strictly before duration() (a multiple of the
+  /// period within 1e-9·period of the end is skipped), then at duration() exactly. The first
+  /// and last samples are the first and last waypoints bit-exactly with q̇ = q̈ = 0. A
+  /// zero-duration trajectory gives one sample; an empty one gives none.
+  /// \throws Error(kInvalidArgument) when period is not finite and > 0 or would give more
+  ///         than 1e8 samples.
   std::vector<TrajectorySample> Sample(double period) const;
+  /// The segment endpoints in order: segments().front().a, then every segment's b.
+  JointPath Waypoints() const;
 
  private:
   std::vector<Segment> segments_;

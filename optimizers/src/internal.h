@@ -1,0 +1,44 @@
+#pragma once
+/// \file
+/// Internal helpers of the optimizers module (not installed, not part of the API):
+/// number formatting for messages and the piecewise-quadratic segment profile.
+
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "chasles/optimizers/timed_trajectory.h"
+
+namespace chasles {
+namespace optimizers_internal {
+
+/// Formats a number for an error message: shortest-ish, `nan`, `inf`, `-1`, `0.005`.
+inline std::string Num(double x) {
+  if (std::isnan(x)) return "nan";
+  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
+  std::ostringstream out;
+  out.precision(6);
+  out << x;
+  return out.str();
+}
+
+/// The three phases of a rest-to-rest segment profile.
+enum class Phase { kAccelerate, kCruise, kDecelerate };
+
+/// State of one segment at local time `tau` in [0, duration()], computed with the formulas of
+/// the given phase (so a phase boundary can be evaluated from either side). Positions are
+/// a + s·(b − a) in the acceleration and cruise phases and b − (1 − s)·(b − a) in the
+/// deceleration phase, so τ = 0 gives `a` and τ = duration() gives `b` bit-exactly.
+/// `sample.t` is set to seg.t0 + tau.
+TrajectorySample SegmentStateInPhase(const TimedTrajectory::Segment& seg, Phase phase, double tau);
+
+/// The phase that holds local time tau, taking the later phase at a boundary (right limit).
+Phase PhaseAt(const TimedTrajectory::Segment& seg, double tau);
+
+/// Duration [s] of a phase of the segment.
+double PhaseDuration(const TimedTrajectory::Segment& seg, Phase phase);
+/// Local start time [s] of a phase of the segment.
+double PhaseStart(const TimedTrajectory::Segment& seg, Phase phase);
+
+}  // namespace optimizers_internal
+}  // namespace chasles
