@@ -1,0 +1,341 @@
+// chasles-bench: collision-check throughput, planning time per planner and scene, and gRPC
+// overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
+// measured in the same run, because these machines are shared and noisy.
+//
+//   chasles-bench [--section checks|plan|grpc|all] [--queries N] [--seed S]
+//                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <google/protobuf/util/json_util.h>
+#include <grpcpp/grpcpp.h>
+
+#include "chasles/collision/collision_checker.h"
+#include "chasles/pipeline/plan_pipeline.h"
+#include "chasles/planners/registry.h"
+#include "chasles/robot/error.h"
+#include "chasles/server/convert.h"
+#include "chasles/server/planning_server.h"
+#include "chasles/v1/chasles.grpc.pb.h"
+
+namespace chasles {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Options {
+  std::string section = "all";
+  int queries = 50;
+  std::uint64_t seed = 1;
+  std::vector<std::string> planners;  // empty = all
+  std::vector<std::string> scenes = {"table", "shelf", "cage", "shelf_octomap"};
+  double budget = 1.0;          // non-optimizing planners [s]
+  double anytime_budget = 0.1;  // optimizing planners [s]
+  int grpc_requests = 200;
+};
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::vector<std::string> Split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const double pos = q * (v.size() - 1);
+  const auto lo = static_cast<size_t>(std::floor(pos));
+  const auto hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (pos - lo) * (v[hi] - v[lo]);
+}
+
+std::string examples_dir;
+
+std::shared_ptr<const RobotModel> LoadRobot(const std::string& name) {
+  return RobotModel::FromUrdf(ReadFile(examples_dir + "/robots/" + name + ".urdf"),
+                              ReadFile(examples_dir + "/robots/" + name + ".srdf"));
+}
+
+std::shared_ptr<const Scene> LoadScene(const std::string& name) {
+  v1::Scene scene;
+  const auto status =
+      google::protobuf::util::JsonStringToMessage(ReadFile(examples_dir + "/scenes/" + name + ".json"), &scene);
+  if (!status.ok()) throw std::runtime_error(name + ".json: " + status.ToString());
+  return SceneFromProto(scene);
+}
+
+Eigen::VectorXd RandomConfiguration(const RobotModel& robot, std::mt19937_64* rng) {
+  Eigen::VectorXd q(robot.num_dofs());
+  for (int i = 0; i < q.size(); ++i) {
+    const double u = static_cast<double>((*rng)() >> 11) * 0x1.0p-53;
+    q[i] = robot.lower_limits()[i] + u * (robot.upper_limits()[i] - robot.lower_limits()[i]);
+  }
+  return q;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Full-robot state checks per second.
+
+struct Rate {
+  double median_per_second = 0;
+  double valid_fraction = 0;
+};
+
+Rate MeasureChecks(const CollisionChecker& checker, const std::vector<Eigen::VectorXd>& configs, int repeats) {
+  std::vector<double> rates;
+  int valid = 0;
+  for (int r = 0; r < repeats; ++r) {
+    valid = 0;
+    const auto t0 = Clock::now();
+    for (const auto& q : configs) valid += checker.IsValid(q) ? 1 : 0;
+    const double s = std::chrono::duration<double>(Clock::now() - t0).count();
+    rates.push_back(configs.size() / s);
+  }
+  return {Quantile(rates, 0.5), static_cast<double>(valid) / configs.size()};
+}
+
+void BenchChecks(const Options& options) {
+  std::printf("\n## Full-robot state checks (FK + self + scene), one thread\n\n");
+  std::printf("| robot | scene | checker path | configurations | valid | checks/s (median of 7) | µs/check | vs FCL path |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
+  struct Case {
+    std::string robot, scene;
+  };
+  const std::vector<Case> cases = {{"panda", "shelf"}, {"panda", "table"}, {"panda", "cage"},
+                                   {"panda", "shelf_octomap"}, {"ur5", "shelf"}};
+  for (const auto& c : cases) {
+    auto robot = LoadRobot(c.robot);
+    auto scene = LoadScene(c.scene);
+    CollisionOptions fcl_options;
+    fcl_options.force_fcl = true;
+    const CollisionChecker fast(robot, scene);
+    const CollisionChecker fcl(robot, scene, fcl_options);
+    std::mt19937_64 rng(options.seed);
+    std::vector<Eigen::VectorXd> random, free;
+    while (random.size() < 20000) random.push_back(RandomConfiguration(*robot, &rng));
+    for (const auto& q : random) {
+      if (fcl.IsValid(q)) free.push_back(q);
+    }
+    for (const auto* set : {&random, &free}) {
+      const char* label = set == &random ? "uniform random" : "collision-free only";
+      const Rate base = MeasureChecks(fcl, *set, 7);
+      const Rate ours = fast.uses_fast_path() ? MeasureChecks(fast, *set, 7) : base;
+      std::printf("| %s | %s | %s | %s (%zu) | %.0f%% | %.0f | %.2f | %.1f× |\n", c.robot.c_str(), c.scene.c_str(),
+                  fast.uses_fast_path() ? "fast spheres" : "FCL", label, set->size(), 100 * ours.valid_fraction,
+                  ours.median_per_second, 1e6 / ours.median_per_second,
+                  ours.median_per_second / base.median_per_second);
+      if (fast.uses_fast_path()) {
+        std::printf("| %s | %s | FCL (baseline) | %s (%zu) | %.0f%% | %.0f | %.2f | 1.0× |\n", c.robot.c_str(),
+                    c.scene.c_str(), label, set->size(), 100 * base.valid_fraction, base.median_per_second,
+                    1e6 / base.median_per_second);
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Planning time per planner and scene over seeded random queries.
+
+std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>> MakeQueries(const CollisionChecker& checker, int n,
+                                                                     std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>> out;
+  const auto valid = [&] {
+    for (;;) {
+      Eigen::VectorXd q = RandomConfiguration(checker.robot(), &rng);
+      if (checker.IsValid(q)) return q;
+    }
+  };
+  while (static_cast<int>(out.size()) < n) {
+    Eigen::VectorXd a = valid();
+    Eigen::VectorXd b = valid();
+    // Keep queries whose straight line collides: trivial ones say nothing about a planner.
+    if (!checker.IsMotionValid(a, b, 0.005)) out.emplace_back(std::move(a), std::move(b));
+  }
+  return out;
+}
+
+void BenchPlanning(const Options& options) {
+  PlannerRegistry registry;
+  RegisterDefaultPlanners(&registry);
+  const PlanningPipeline pipeline(registry);
+  std::vector<std::string> planners = options.planners.empty() ? registry.Ids() : options.planners;
+  // RRT-Connect first: it is the baseline every other figure is compared with.
+  std::stable_partition(planners.begin(), planners.end(), [](const std::string& id) { return id == "rrt_connect"; });
+  auto robot = LoadRobot("panda");
+  std::printf("\n## Planning (panda), %d seeded queries per scene whose straight line collides\n\n", options.queries);
+  std::printf("Non-optimizing planners get %.2g s per query; anytime planners %.2g s and are compared by path length.\n\n",
+              options.budget, options.anytime_budget);
+  std::printf("| scene | planner | solved | plan median [ms] | plan p95 [ms] | vs rrt_connect (median) | pipeline median [ms] | "
+              "raw length median [rad] | shortcut length median [rad] |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+  for (const auto& scene_name : options.scenes) {
+    auto checker = std::make_shared<const CollisionChecker>(robot, LoadScene(scene_name));
+    const auto queries = MakeQueries(*checker, options.queries, options.seed);
+    double baseline_median = std::nan("");
+    for (const auto& id : planners) {
+      const bool optimizing = registry.Spec(id).optimizing;
+      std::vector<double> plan_ms, total_ms, raw_length, length;
+      int solved = 0;
+      for (size_t k = 0; k < queries.size(); ++k) {
+        PlanQuery query;
+        query.checker = checker;
+        query.start = queries[k].first;
+        query.goal = queries[k].second;
+        query.planner_id = id;
+        query.seed = options.seed + k;
+        const PlanOutcome out = pipeline.Plan(
+            query, Termination::After(std::chrono::duration<double>(optimizing ? options.anytime_budget : options.budget)));
+        if (out.code != PlanOutcomeCode::kSuccess) continue;
+        ++solved;
+        plan_ms.push_back(1e3 * out.seconds.plan);
+        total_ms.push_back(1e3 * out.seconds.total);
+        double raw = 0, shortened = 0;
+        for (size_t i = 1; i < out.raw_path.size(); ++i) raw += (out.raw_path[i] - out.raw_path[i - 1]).norm();
+        for (size_t i = 1; i < out.path.size(); ++i) shortened += (out.path[i] - out.path[i - 1]).norm();
+        raw_length.push_back(raw);
+        length.push_back(shortened);
+      }
+      const double median = Quantile(plan_ms, 0.5);
+      if (id == "rrt_connect") baseline_median = median;
+      std::printf("| %s | %s | %d/%zu | %.2f | %.2f | %.2f× | %.2f | %.2f | %.2f |\n", scene_name.c_str(), id.c_str(),
+                  solved, queries.size(), median, Quantile(plan_ms, 0.95), median / baseline_median,
+                  Quantile(total_ms, 0.5), Quantile(raw_length, 0.5), Quantile(length, 0.5));
+      std::fflush(stdout);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// gRPC overhead: the same request over loopback and in-process.
+
+void BenchGrpc(const Options& options) {
+  ServerOptions server_options;
+  server_options.listen = "127.0.0.1:0";
+  server_options.threads = 1;
+  server_options.log_requests = false;
+  PlanningServer server(server_options);
+  auto channel = grpc::CreateChannel("127.0.0.1:" + std::to_string(server.port()), grpc::InsecureChannelCredentials());
+  auto stub = v1::Planning::NewStub(channel);
+
+  // Default robot (panda) and scene (table); a short free motion so planning is a small part.
+  v1::PlanRequest request;
+  const std::vector<double> start = {0, -0.785, 0, -2.356, 0, 1.571, 0.785};
+  const std::vector<double> goal = {0.3, -0.6, 0.1, -2.2, 0.1, 1.7, 0.9};
+  for (double v : start) request.mutable_start()->add_positions(v);
+  for (double v : goal) request.mutable_goal()->add_positions(v);
+  request.mutable_planner()->set_planner_id("rrt_connect");
+
+  PlannerRegistry registry;
+  RegisterDefaultPlanners(&registry);
+  const PlanningPipeline pipeline(registry);
+  auto robot = LoadRobot("panda");
+  auto checker = std::make_shared<const CollisionChecker>(robot, LoadScene("table"));
+
+  std::vector<double> remote_ms, local_ms, convert_ms;
+  std::size_t response_bytes = 0;
+  for (int i = 0; i < options.grpc_requests + 10; ++i) {
+    grpc::ClientContext context;
+    v1::PlanResponse response;
+    auto t0 = Clock::now();
+    const grpc::Status status = stub->Plan(&context, request, &response);
+    const double remote = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    if (!status.ok() || response.outcome() != v1::SUCCESS) {
+      std::fprintf(stderr, "grpc bench: request failed: %s %s\n", status.error_message().c_str(),
+                   response.message().c_str());
+      return;
+    }
+    response_bytes = response.ByteSizeLong();
+
+    t0 = Clock::now();
+    RequestSettings settings;
+    PlanQuery query = PlanQueryFromProto(request, checker, registry, &settings);
+    const PlanOutcome out = pipeline.Plan(query, Termination::After(std::chrono::duration<double>(settings.time_budget)));
+    const auto t1 = Clock::now();
+    v1::PlanResponse local;
+    PlanOutcomeToProto(out, query, &local);
+    const auto t2 = Clock::now();
+    if (i >= 10) {  // warm-up excluded
+      remote_ms.push_back(remote);
+      local_ms.push_back(std::chrono::duration<double, std::milli>(t2 - t0).count());
+      convert_ms.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
+    }
+  }
+  const double remote = Quantile(remote_ms, 0.5), local = Quantile(local_ms, 0.5);
+  std::printf("\n## Plan latency: loopback gRPC vs in-process (panda, table, rrt_connect, %d requests)\n\n",
+              options.grpc_requests);
+  std::printf("| path | median [ms] | p95 [ms] |\n|---|---|---|\n");
+  std::printf("| in-process: convert request + pipeline + convert response | %.3f | %.3f |\n", local,
+              Quantile(local_ms, 0.95));
+  std::printf("| loopback gRPC Plan (same work + transport, %zu-byte response) | %.3f | %.3f |\n", response_bytes,
+              remote, Quantile(remote_ms, 0.95));
+  std::printf("| of which response conversion (in-process) | %.3f | %.3f |\n", Quantile(convert_ms, 0.5),
+              Quantile(convert_ms, 0.95));
+  std::printf("\ngRPC overhead (difference of medians): %.3f ms; ratio %.2f×\n", remote - local, remote / local);
+}
+
+int Main(int argc, char** argv) {
+  Options options;
+  examples_dir = CHASLES_EXAMPLES_DIR;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::runtime_error(arg + " needs a value");
+      return argv[++i];
+    };
+    if (arg == "--section") options.section = value();
+    else if (arg == "--queries") options.queries = std::stoi(value());
+    else if (arg == "--seed") options.seed = std::stoull(value());
+    else if (arg == "--planners") options.planners = Split(value());
+    else if (arg == "--scenes") options.scenes = Split(value());
+    else if (arg == "--budget") options.budget = std::stod(value());
+    else if (arg == "--anytime-budget") options.anytime_budget = std::stod(value());
+    else if (arg == "--grpc-requests") options.grpc_requests = std::stoi(value());
+    else if (arg == "--examples") examples_dir = value();
+    else {
+      std::fprintf(stderr,
+                   "usage: chasles-bench [--section checks|plan|grpc|all] [--queries N] [--seed S]\n"
+                   "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
+                   "                     [--grpc-requests N] [--examples DIR]\n");
+      return arg == "--help" ? 0 : 2;
+    }
+  }
+  if (options.section == "checks" || options.section == "all") BenchChecks(options);
+  if (options.section == "plan" || options.section == "all") BenchPlanning(options);
+  if (options.section == "grpc" || options.section == "all") BenchGrpc(options);
+  return 0;
+}
+
+}  // namespace
+}  // namespace chasles
+
+int main(int argc, char** argv) {
+  try {
+    return chasles::Main(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "chasles-bench: %s\n", e.what());
+    return 1;
+  }
+}
