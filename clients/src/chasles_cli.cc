@@ -1,0 +1,359 @@
+// chasles: command-line client of the Chasles planning server.
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <future>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <google/protobuf/util/json_util.h>
+#include <grpcpp/generic/generic_stub.h>
+#include <grpcpp/grpcpp.h>
+
+#include "chasles/v1/chasles.grpc.pb.h"
+#include "trajectory_csv.h"
+
+namespace {
+
+namespace v1 = chasles::v1;
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailed = 1;  // RPC error, or no trajectory
+constexpr int kExitUsage = 2;   // bad arguments or unreadable input files
+
+const char kUsage[] =
+    "Usage: chasles [--server ADDR] [--timeout S] COMMAND [ARGS]\n"
+    "\n"
+    "Commands:\n"
+    "  health                          ask the server's gRPC health service (exit 0 when SERVING)\n"
+    "  planners                        list planners with their parameters, defaults and ranges\n"
+    "  plan REQUEST.json [--out F]     send a chasles.v1.PlanRequest (protobuf JSON); print a summary;\n"
+    "                                  --out F.json writes the response, --out F.csv the trajectory\n"
+    "                                  (columns t, q_<joint>..., qd_<joint>..., qdd_<joint>...);\n"
+    "                                  exit 0 only when a trajectory came back\n"
+    "  upload-robot FILE.urdf [--srdf FILE.srdf] [--mesh NAME=FILE]...\n"
+    "                                  store a robot on the server; prints its robot_id\n"
+    "  upload-scene SCENE.json         store a chasles.v1.Scene (protobuf JSON); prints its scene_id\n"
+    "\n"
+    "Options:\n"
+    "  --server ADDR   server address (default 127.0.0.1:50051)\n"
+    "  --timeout S     gRPC deadline in seconds (default: 10; plan: the request's budget + 30)\n"
+    "  --help          show this help\n";
+
+struct Options {
+  std::string server = "127.0.0.1:50051";
+  double timeout = 0.0;  // 0 = per command default
+  std::string out;
+  std::string srdf;
+  std::vector<std::string> meshes;  // NAME=FILE
+  std::vector<std::string> positional;
+};
+
+[[noreturn]] void UsageError(const std::string& message) {
+  std::cerr << "chasles: " << message << "\n(see chasles --help)\n";
+  std::exit(kExitUsage);
+}
+
+/// Reads a whole file or exits with a message naming it.
+std::string ReadFileOrExit(const std::string& path, const char* what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    std::cerr << "chasles: cannot read " << what << " '" << path << "': " << std::strerror(errno) << "\n";
+    std::exit(kExitUsage);
+  }
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+template <typename Message>
+Message ParseJsonFileOrExit(const std::string& path) {
+  Message message;
+  const std::string text = ReadFileOrExit(path, Message::descriptor()->full_name().c_str());
+  const auto status = google::protobuf::util::JsonStringToMessage(text, &message);
+  if (!status.ok()) {
+    std::cerr << "chasles: '" << path << "' is not a valid " << Message::descriptor()->full_name()
+              << " in protobuf JSON: " << status.ToString() << "\n";
+    std::exit(kExitUsage);
+  }
+  return message;
+}
+
+std::shared_ptr<grpc::Channel> MakeChannel(const Options& options) {
+  grpc::ChannelArguments args;
+  args.SetMaxReceiveMessageSize(-1);
+  args.SetMaxSendMessageSize(-1);
+  return grpc::CreateCustomChannel(options.server, grpc::InsecureChannelCredentials(), args);
+}
+
+void SetDeadline(grpc::ClientContext* context, double seconds) {
+  context->set_deadline(std::chrono::system_clock::now() +
+                        std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                            std::chrono::duration<double>(seconds)));
+}
+
+const char* CodeName(grpc::StatusCode code) {
+  switch (code) {
+    case grpc::StatusCode::OK: return "OK";
+    case grpc::StatusCode::CANCELLED: return "CANCELLED";
+    case grpc::StatusCode::UNKNOWN: return "UNKNOWN";
+    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
+    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
+    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
+    case grpc::StatusCode::ALREADY_EXISTS: return "ALREADY_EXISTS";
+    case grpc::StatusCode::PERMISSION_DENIED: return "PERMISSION_DENIED";
+    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
+    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
+    case grpc::StatusCode::ABORTED: return "ABORTED";
+    case grpc::StatusCode::OUT_OF_RANGE: return "OUT_OF_RANGE";
+    case grpc::StatusCode::UNIMPLEMENTED: return "UNIMPLEMENTED";
+    case grpc::StatusCode::INTERNAL: return "INTERNAL";
+    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
+    case grpc::StatusCode::DATA_LOSS: return "DATA_LOSS";
+    case grpc::StatusCode::UNAUTHENTICATED: return "UNAUTHENTICATED";
+    default: return "?";
+  }
+}
+
+int ReportRpcError(const char* rpc, const Options& options, const grpc::Status& status) {
+  std::cerr << "chasles: " << rpc << " on " << options.server << " failed: " << CodeName(status.error_code())
+            << ": " << status.error_message() << "\n";
+  return kExitFailed;
+}
+
+// --- health ------------------------------------------------------------------------------------
+
+int Health(const Options& options) {
+  // grpc.health.v1.Health/Check through the generic stub: the request (service "") is empty and
+  // the response is field 1 (enum ServingStatus, SERVING = 1) as a varint.
+  grpc::GenericStub stub(MakeChannel(options));
+  grpc::ClientContext context;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : 10.0);
+  grpc::ByteBuffer request;
+  grpc::ByteBuffer response;
+  std::promise<grpc::Status> done;
+  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
+                 [&done](grpc::Status status) { done.set_value(std::move(status)); });
+  const grpc::Status status = done.get_future().get();
+  if (!status.ok()) return ReportRpcError("health check", options, status);
+  std::vector<grpc::Slice> slices;
+  std::string bytes;
+  if (response.Dump(&slices).ok()) {
+    for (const grpc::Slice& slice : slices) bytes.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
+  }
+  int serving_status = 0;  // UNKNOWN
+  if (bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0x08) {
+    serving_status = static_cast<unsigned char>(bytes[1]) & 0x7f;
+  }
+  static const char* kNames[] = {"UNKNOWN", "SERVING", "NOT_SERVING", "SERVICE_UNKNOWN"};
+  const char* name = serving_status >= 0 && serving_status <= 3 ? kNames[serving_status] : "?";
+  std::cout << options.server << ": " << name << "\n";
+  return serving_status == 1 ? kExitOk : kExitFailed;
+}
+
+// --- planners ----------------------------------------------------------------------------------
+
+std::string FormatValue(double value, v1::ParameterDescription::Type type) {
+  std::ostringstream out;
+  if (type == v1::ParameterDescription::BOOL) {
+    out << (value != 0.0 ? "true" : "false");
+  } else {
+    out << value;
+  }
+  return out.str();
+}
+
+const char* TypeName(v1::ParameterDescription::Type type) {
+  switch (type) {
+    case v1::ParameterDescription::DOUBLE: return "double";
+    case v1::ParameterDescription::INT: return "int";
+    case v1::ParameterDescription::BOOL: return "bool";
+    default: return "?";
+  }
+}
+
+int Planners(const Options& options) {
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : 10.0);
+  v1::ListPlannersResponse response;
+  const grpc::Status status = stub->ListPlanners(&context, v1::ListPlannersRequest(), &response);
+  if (!status.ok()) return ReportRpcError("ListPlanners", options, status);
+  std::printf("%-20s %-10s %s\n", "ID", "OPTIMIZING", "DESCRIPTION");
+  for (const v1::PlannerDescription& planner : response.planners()) {
+    std::printf("%-20s %-10s %s\n", planner.id().c_str(), planner.optimizing() ? "yes" : "no",
+                planner.description().c_str());
+    for (const v1::ParameterDescription& p : planner.parameters()) {
+      const std::string range = p.type() == v1::ParameterDescription::BOOL
+                                    ? "true/false"
+                                    : "[" + FormatValue(p.min(), p.type()) + ", " + FormatValue(p.max(), p.type()) + "]";
+      std::printf("    %-22s %-6s default %-10s range %-18s %s\n", p.name().c_str(), TypeName(p.type()),
+                  FormatValue(p.default_value(), p.type()).c_str(), range.c_str(), p.description().c_str());
+    }
+  }
+  return kExitOk;
+}
+
+// --- plan --------------------------------------------------------------------------------------
+
+bool EndsWith(const std::string& text, const std::string& suffix) {
+  return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+int Plan(const Options& options) {
+  if (options.positional.size() != 2) UsageError("plan takes one REQUEST.json");
+  if (!options.out.empty() && !EndsWith(options.out, ".json") && !EndsWith(options.out, ".csv")) {
+    UsageError("--out '" + options.out + "' must end in .json or .csv");
+  }
+  const std::string& path = options.positional[1];
+  const v1::PlanRequest request = ParseJsonFileOrExit<v1::PlanRequest>(path);
+
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  const double budget = request.time_budget() > 0 ? request.time_budget() : 5.0;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : budget + 30.0);
+  v1::PlanResponse response;
+  const grpc::Status status = stub->Plan(&context, request, &response);
+  if (!status.ok()) return ReportRpcError("Plan", options, status);
+
+  const v1::StageTimings& t = response.timings();
+  const v1::Verification& v = response.verification();
+  std::printf("request     %s\n", response.request_id().c_str());
+  std::printf("outcome     %s\n", v1::PlanOutcome_Name(response.outcome()).c_str());
+  std::printf("message     %s\n", response.message().c_str());
+  std::printf("robot/scene %s / %s\n", response.robot_id().c_str(), response.scene_id().c_str());
+  std::printf("duration    %.4f s\n", response.duration());
+  std::printf("waypoints   %d (planner returned %u)\n", response.path_size(), response.statistics().raw_waypoints());
+  std::printf("samples     %d\n", response.trajectory().points_size());
+  std::printf("path length %.4f rad\n", response.statistics().path_length());
+  std::printf("timings ms  validate %.1f  plan %.1f  shortcut %.1f  parameterize %.1f  verify %.1f  total %.1f\n",
+              1e3 * t.validate(), 1e3 * t.plan(), 1e3 * t.shortcut(), 1e3 * t.parameterize(), 1e3 * t.verify(),
+              1e3 * t.total());
+  std::printf("verified    %u states at step %.4g rad, max |qd|/v %.3f, max |qdd|/a %.3f\n", v.states_checked(),
+              v.max_joint_step(), v.max_velocity_ratio(), v.max_acceleration_ratio());
+
+  if (!options.out.empty()) {
+    std::ofstream out(options.out, std::ios::binary);
+    if (!out) {
+      std::cerr << "chasles: cannot write '" << options.out << "': " << std::strerror(errno) << "\n";
+      return kExitFailed;
+    }
+    if (EndsWith(options.out, ".csv")) {
+      chasles::WriteTrajectoryCsv(response.trajectory(), out);
+    } else {
+      google::protobuf::util::JsonPrintOptions print;
+      print.add_whitespace = true;
+      print.preserve_proto_field_names = true;
+      std::string json;
+      google::protobuf::util::MessageToJsonString(response, &json, print);
+      out << json;
+    }
+    if (!out.good()) {
+      std::cerr << "chasles: writing '" << options.out << "' failed\n";
+      return kExitFailed;
+    }
+    std::printf("wrote       %s\n", options.out.c_str());
+  }
+  if (response.outcome() != v1::SUCCESS || response.trajectory().points_size() == 0) {
+    std::cerr << "chasles: no trajectory: " << v1::PlanOutcome_Name(response.outcome()) << ": " << response.message()
+              << "\n";
+    return kExitFailed;
+  }
+  return kExitOk;
+}
+
+// --- uploads -----------------------------------------------------------------------------------
+
+int UploadRobot(const Options& options) {
+  if (options.positional.size() != 2) UsageError("upload-robot takes one FILE.urdf");
+  v1::UploadRobotRequest request;
+  v1::UrdfRobot* urdf = request.mutable_robot()->mutable_urdf();
+  urdf->set_urdf(ReadFileOrExit(options.positional[1], "URDF"));
+  if (!options.srdf.empty()) urdf->set_srdf(ReadFileOrExit(options.srdf, "SRDF"));
+  for (const std::string& mesh : options.meshes) {
+    const auto eq = mesh.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == mesh.size()) {
+      UsageError("--mesh '" + mesh + "' must be NAME=FILE (NAME as in the URDF <mesh filename>)");
+    }
+    (*urdf->mutable_mesh_files())[mesh.substr(0, eq)] = ReadFileOrExit(mesh.substr(eq + 1), "mesh");
+  }
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : 30.0);
+  v1::UploadRobotResponse response;
+  const grpc::Status status = stub->UploadRobot(&context, request, &response);
+  if (!status.ok()) return ReportRpcError("UploadRobot", options, status);
+  std::printf("robot_id %s\n", response.robot_id().c_str());
+  for (int i = 0; i < response.joint_names_size(); ++i) {
+    std::printf("  %-24s [%.4f, %.4f]  v_max %.4f\n", response.joint_names(i).c_str(), response.lower_limits(i),
+                response.upper_limits(i), response.velocity_limits(i));
+  }
+  return kExitOk;
+}
+
+int UploadScene(const Options& options) {
+  if (options.positional.size() != 2) UsageError("upload-scene takes one SCENE.json");
+  v1::UploadSceneRequest request;
+  *request.mutable_scene() = ParseJsonFileOrExit<v1::Scene>(options.positional[1]);
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : 30.0);
+  v1::UploadSceneResponse response;
+  const grpc::Status status = stub->UploadScene(&context, request, &response);
+  if (!status.ok()) return ReportRpcError("UploadScene", options, status);
+  std::printf("scene_id %s\n", response.scene_id().c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) UsageError(arg + " needs a value");
+      return argv[++i];
+    };
+    if (arg == "--help" || arg == "-h") {
+      std::cout << kUsage;
+      return kExitOk;
+    } else if (arg == "--server") {
+      options.server = value();
+    } else if (arg == "--timeout") {
+      const std::string text = value();
+      char* end = nullptr;
+      options.timeout = std::strtod(text.c_str(), &end);
+      if (end == text.c_str() || *end != '\0' || !(options.timeout > 0)) {
+        UsageError("--timeout '" + text + "' must be a number of seconds > 0");
+      }
+    } else if (arg == "--out") {
+      options.out = value();
+    } else if (arg == "--srdf") {
+      options.srdf = value();
+    } else if (arg == "--mesh") {
+      options.meshes.push_back(value());
+    } else if (arg.size() > 1 && arg[0] == '-') {
+      UsageError("unknown option '" + arg + "'");
+    } else {
+      options.positional.push_back(arg);
+    }
+  }
+  if (options.positional.empty()) UsageError("missing COMMAND");
+  const std::string& command = options.positional[0];
+  if (command == "health" || command == "planners") {
+    if (options.positional.size() != 1) UsageError(command + " takes no arguments");
+    return command == "health" ? Health(options) : Planners(options);
+  }
+  if (command == "plan") return Plan(options);
+  if (command == "upload-robot") return UploadRobot(options);
+  if (command == "upload-scene") return UploadScene(options);
+  UsageError("unknown command '" + command + "'");
+}
