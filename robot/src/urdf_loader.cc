@@ -1,1 +1,284 @@
-// placeholder
+// RobotModel::FromUrdf: URDF via urdfdom, SRDF via tinyxml.
+
+#include <cmath>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <console_bridge/console.h>
+#include <tinyxml.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include "chasles/robot/error.h"
+#include "chasles/robot/robot_model.h"
+#include "format.h"
+
+namespace chasles {
+namespace {
+
+using robot_internal::FormatNumber;
+
+/// Collects the error messages urdfdom reports through console_bridge while it parses.
+class ErrorCollector : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) errors.push_back(text);
+  }
+  std::vector<std::string> errors;
+};
+
+/// Parses `text` with tinyxml; on failure throws with the row, column and tinyxml's reason.
+void ParseXmlOrThrow(const std::string& text, const char* what, TiXmlDocument* doc) {
+  doc->Parse(text.c_str(), nullptr, TIXML_ENCODING_UTF8);
+  if (doc->Error()) {
+    ThrowInvalid(std::string(what) + ": malformed XML at line " + std::to_string(doc->ErrorRow()) +
+                 ", column " + std::to_string(doc->ErrorCol()) + ": " + doc->ErrorDesc());
+  }
+}
+
+Eigen::Isometry3d ToIsometry(const urdf::Pose& pose) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() = Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z);
+  Eigen::Quaterniond quat(pose.rotation.w, pose.rotation.x, pose.rotation.y, pose.rotation.z);
+  if (quat.norm() > 0.0) t.linear() = quat.normalized().toRotationMatrix();
+  return t;
+}
+
+Eigen::Vector3d ToVector(const urdf::Vector3& v) { return Eigen::Vector3d(v.x, v.y, v.z); }
+
+void CheckPositive(double value, const std::string& what) {
+  if (!(value > 0.0) || !std::isfinite(value)) {
+    ThrowInvalid(what + " = " + FormatNumber(value) + " must be > 0 and finite");
+  }
+}
+
+Shape ConvertGeometry(const urdf::Collision& collision, const std::string& where,
+                      const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes) {
+  const Eigen::Isometry3d pose = ToIsometry(collision.origin);
+  if (!pose.matrix().allFinite()) ThrowInvalid(where + " origin must be finite");
+  if (!collision.geometry) ThrowInvalid(where + " has no geometry");
+  switch (collision.geometry->type) {
+    case urdf::Geometry::SPHERE: {
+      const auto& g = static_cast<const urdf::Sphere&>(*collision.geometry);
+      CheckPositive(g.radius, where + " sphere radius");
+      return Shape::Sphere(g.radius, pose);
+    }
+    case urdf::Geometry::BOX: {
+      const auto& g = static_cast<const urdf::Box&>(*collision.geometry);
+      CheckPositive(g.dim.x, where + " box size x");
+      CheckPositive(g.dim.y, where + " box size y");
+      CheckPositive(g.dim.z, where + " box size z");
+      return Shape::Box(ToVector(g.dim), pose);
+    }
+    case urdf::Geometry::CYLINDER: {
+      const auto& g = static_cast<const urdf::Cylinder&>(*collision.geometry);
+      CheckPositive(g.radius, where + " cylinder radius");
+      CheckPositive(g.length, where + " cylinder length");
+      return Shape::Cylinder(g.radius, g.length, pose);
+    }
+    case urdf::Geometry::MESH: {
+      const auto& g = static_cast<const urdf::Mesh&>(*collision.geometry);
+      const auto it = meshes.find(g.filename);
+      if (it == meshes.end() || !it->second) {
+        ThrowInvalid(where + " mesh filename '" + g.filename + "' is not in the supplied meshes");
+      }
+      const Eigen::Vector3d scale = ToVector(g.scale);
+      CheckPositive(scale.x(), where + " mesh scale x");
+      CheckPositive(scale.y(), where + " mesh scale y");
+      CheckPositive(scale.z(), where + " mesh scale z");
+      Shape shape;
+      shape.type = ShapeType::kMesh;
+      shape.pose = pose;
+      if (scale == Eigen::Vector3d::Ones()) {
+        shape.mesh = it->second;
+      } else {
+        auto scaled = std::make_shared<TriangleMesh>(*it->second);
+        for (Eigen::Vector3d& v : scaled->vertices) v = v.cwiseProduct(scale);
+        shape.mesh = std::move(scaled);
+      }
+      return shape;
+    }
+  }
+  ThrowInvalid(where + " has an unknown geometry type");
+}
+
+}  // namespace
+
+std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
+    std::string_view urdf_text, std::string_view srdf_text,
+    const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes) {
+  const std::string urdf_string(urdf_text);
+
+  // 1. Well-formed XML? tinyxml tells where it is not.
+  TiXmlDocument urdf_doc;
+  ParseXmlOrThrow(urdf_string, "urdf", &urdf_doc);
+
+  // 2. urdfdom builds the model; its own complaints go through console_bridge (a process-global
+  //    handler, hence the lock).
+  urdf::ModelInterfaceSharedPtr model;
+  {
+    static std::mutex console_mutex;
+    std::lock_guard<std::mutex> lock(console_mutex);
+    ErrorCollector collector;
+    console_bridge::useOutputHandler(&collector);
+    try {
+      model = urdf::parseURDF(urdf_string);
+    } catch (const std::exception& e) {
+      collector.errors.push_back(e.what());
+      model.reset();
+    }
+    console_bridge::restorePreviousOutputHandler();
+    if (!model) {
+      ThrowInvalid("urdf: " + (collector.errors.empty() ? std::string("urdfdom could not parse the model")
+                                                        : collector.errors.front()));
+    }
+  }
+  const std::string robot_name = model->getName();
+  if (!model->getRoot()) ThrowInvalid("urdf: robot '" + robot_name + "' has no root link");
+
+  // 3. Children of each link in document order (urdfdom keeps joints in a name-sorted map).
+  std::unordered_map<std::string, std::vector<urdf::JointConstSharedPtr>> child_joints;
+  const TiXmlElement* robot_element = urdf_doc.RootElement();
+  for (const TiXmlElement* e = robot_element->FirstChildElement("joint"); e != nullptr;
+       e = e->NextSiblingElement("joint")) {
+    const char* name = e->Attribute("name");
+    if (name == nullptr) continue;
+    urdf::JointConstSharedPtr joint = model->getJoint(name);
+    if (joint) child_joints[joint->parent_link_name].push_back(joint);
+  }
+
+  // 4. Depth-first traversal from the root: link i + 1 is the child of joint i.
+  std::vector<Link> links;
+  std::vector<Joint> joints;
+  std::unordered_map<std::string, int> link_index;
+
+  auto add_link = [&](const urdf::Link& ulink) {
+    Link link;
+    link.name = ulink.name;
+    for (size_t c = 0; c < ulink.collision_array.size(); ++c) {
+      const std::string where = "urdf: link '" + ulink.name + "' collision[" + std::to_string(c) + "]";
+      link.collision.push_back(ConvertGeometry(*ulink.collision_array[c], where, meshes));
+    }
+    if (ulink.inertial) {
+      const urdf::Inertial& in = *ulink.inertial;
+      const std::string where = "urdf: link '" + ulink.name + "' inertial";
+      if (!(in.mass >= 0.0) || !std::isfinite(in.mass)) {
+        ThrowInvalid(where + " mass = " + FormatNumber(in.mass) + " must be >= 0 and finite");
+      }
+      const Eigen::Isometry3d frame = ToIsometry(in.origin);
+      Eigen::Matrix3d inertia;
+      inertia << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+      if (!frame.matrix().allFinite() || !inertia.allFinite()) {
+        ThrowInvalid(where + " origin and inertia must be finite");
+      }
+      Inertial inertial;
+      inertial.mass = in.mass;
+      inertial.com = frame.translation();
+      inertial.inertia = frame.linear() * inertia * frame.linear().transpose();
+      link.inertial = inertial;
+    }
+    link_index[link.name] = static_cast<int>(links.size());
+    links.push_back(std::move(link));
+  };
+
+  std::function<void(const urdf::Link&)> visit = [&](const urdf::Link& parent) {
+    const auto it = child_joints.find(parent.name);
+    if (it == child_joints.end()) return;
+    for (const urdf::JointConstSharedPtr& ujoint : it->second) {
+      const std::string where = "urdf: joint '" + ujoint->name + "'";
+      Joint joint;
+      joint.name = ujoint->name;
+      switch (ujoint->type) {
+        case urdf::Joint::REVOLUTE: joint.type = JointType::kRevolute; break;
+        case urdf::Joint::CONTINUOUS: joint.type = JointType::kContinuous; break;
+        case urdf::Joint::PRISMATIC: joint.type = JointType::kPrismatic; break;
+        case urdf::Joint::FIXED: joint.type = JointType::kFixed; break;
+        case urdf::Joint::PLANAR:
+          ThrowInvalid(where + " has type planar; only revolute, continuous, prismatic and fixed joints are supported");
+        case urdf::Joint::FLOATING:
+          ThrowInvalid(where + " has type floating; only revolute, continuous, prismatic and fixed joints are supported");
+        default:
+          ThrowInvalid(where + " has an unknown type; only revolute, continuous, prismatic and fixed joints are supported");
+      }
+      joint.origin = ToIsometry(ujoint->parent_to_joint_origin_transform);
+      if (!joint.origin.matrix().allFinite()) ThrowInvalid(where + " origin must be finite");
+      joint.axis = ToVector(ujoint->axis);
+      if (joint.type != JointType::kFixed) {
+        if (!joint.axis.allFinite() || !(joint.axis.norm() > 1e-12)) {
+          ThrowInvalid(where + " axis = (" + FormatNumber(joint.axis.x()) + " " +
+                       FormatNumber(joint.axis.y()) + " " + FormatNumber(joint.axis.z()) +
+                       ") must be finite and non-zero");
+        }
+        joint.axis.normalize();
+        if (!ujoint->limits) {
+          ThrowInvalid(where + " has no <limit>; limit velocity must be > 0 and finite");
+        }
+        const urdf::JointLimits& ul = *ujoint->limits;
+        joint.limits.velocity = ul.velocity;
+        joint.limits.effort = ul.effort;
+        if (joint.type == JointType::kContinuous) {
+          joint.limits.lower = -M_PI;
+          joint.limits.upper = M_PI;
+        } else {
+          joint.limits.lower = ul.lower;
+          joint.limits.upper = ul.upper;
+          if (!std::isfinite(ul.lower)) ThrowInvalid(where + " limit lower = " + FormatNumber(ul.lower) + " must be finite");
+          if (!std::isfinite(ul.upper)) ThrowInvalid(where + " limit upper = " + FormatNumber(ul.upper) + " must be finite");
+          if (ul.lower > ul.upper) {
+            ThrowInvalid(where + " limit lower = " + FormatNumber(ul.lower) + " > upper = " +
+                         FormatNumber(ul.upper));
+          }
+        }
+        if (!(ul.velocity > 0.0) || !std::isfinite(ul.velocity)) {
+          ThrowInvalid(where + " limit velocity = " + FormatNumber(ul.velocity) + " must be > 0 and finite");
+        }
+        if (!(ul.effort >= 0.0) || !std::isfinite(ul.effort)) {
+          ThrowInvalid(where + " limit effort = " + FormatNumber(ul.effort) + " must be >= 0 and finite");
+        }
+      }
+      urdf::LinkConstSharedPtr child = model->getLink(ujoint->child_link_name);
+      if (!child) ThrowInvalid(where + " child = '" + ujoint->child_link_name + "' is not a link");
+      joint.parent_link = link_index.at(parent.name);
+      add_link(*child);
+      joint.child_link = link_index.at(child->name);
+      joints.push_back(std::move(joint));
+      visit(*child);
+    }
+  };
+  add_link(*model->getRoot());
+  visit(*model->getRoot());
+
+  // 5. SRDF: pairs of links whose collisions are never checked.
+  std::vector<std::pair<std::string, std::string>> allowed_pairs;
+  if (!srdf_text.empty()) {
+    TiXmlDocument srdf_doc;
+    ParseXmlOrThrow(std::string(srdf_text), "srdf", &srdf_doc);
+    const TiXmlElement* root = srdf_doc.RootElement();
+    if (root == nullptr || std::string(root->Value()) != "robot") {
+      ThrowInvalid(std::string("srdf: root element is <") + (root ? root->Value() : "") +
+                   ">, expected <robot>");
+    }
+    int index = 0;
+    for (const TiXmlElement* e = root->FirstChildElement("disable_collisions"); e != nullptr;
+         e = e->NextSiblingElement("disable_collisions"), ++index) {
+      std::string names[2];
+      for (int k = 0; k < 2; ++k) {
+        const std::string attribute = k == 0 ? "link1" : "link2";
+        const std::string where = "srdf: disable_collisions[" + std::to_string(index) + "] " + attribute;
+        const char* value = e->Attribute(attribute.c_str());
+        if (value == nullptr) ThrowInvalid(where + " is missing");
+        names[k] = value;
+        if (link_index.find(names[k]) == link_index.end()) {
+          ThrowInvalid(where + " = '" + names[k] + "' is not a link of robot '" + robot_name + "'");
+        }
+      }
+      allowed_pairs.emplace_back(names[0], names[1]);
+    }
+  }
+
+  return FromTree(robot_name, std::move(links), std::move(joints), allowed_pairs);
+}
+
+}  // namespace chasles

@@ -74,6 +74,9 @@ class AllowedCollisionMatrix {
 class RobotModel {
  public:
   /// Builds a model from URDF text and optional SRDF text.
+  /// Order: joints() are the URDF joints in depth-first order from the root link (children in
+  /// document order); links() are the root followed by the child link of each joint in that
+  /// order (link i + 1 is the child of joint i). Continuous joints get limits [-π, π].
   /// Mesh collision geometry is looked up in `meshes` by the URDF `filename` attribute
   /// (already parsed, e.g. by ParseMesh); the URDF `scale` is applied on top.
   /// Allowed collisions = SRDF `disable_collisions` pairs + every parent/child link pair.
@@ -89,7 +92,9 @@ class RobotModel {
   int num_links() const { return static_cast<int>(links_.size()); }
   const std::vector<Link>& links() const { return links_; }
   const std::vector<Joint>& joints() const { return joints_; }
-  /// Names of the active (non-fixed) joints in configuration-vector order (URDF document order).
+  /// Names of the active (non-fixed) joints in configuration-vector order: the order of joints().
+  /// For FromUrdf that is a depth-first traversal of the tree from the root link, the child
+  /// joints of a link visited in URDF document order (so for a serial arm: root to tip).
   const std::vector<std::string>& dof_names() const { return dof_names_; }
   /// Index into joints() of the joint that drives configuration entry `dof`.
   int dof_joint(int dof) const { return dof_joints_[dof]; }
@@ -98,6 +103,8 @@ class RobotModel {
   const Eigen::VectorXd& velocity_limits() const { return velocity_; }
   const Eigen::VectorXd& effort_limits() const { return effort_; }
   const AllowedCollisionMatrix& allowed_collisions() const { return acm_; }
+  /// Index of the root link (the base frame of every pose). FromUrdf puts it at 0.
+  int root_link() const { return root_; }
   /// Index of a link by name, or -1.
   int FindLink(std::string_view name) const;
 
@@ -146,6 +153,9 @@ class RobotModel {
   std::vector<std::vector<int>> chains_;
   std::vector<int> parent_dof_of_link_;  ///< nearest moving ancestor dof, -1 if none
   std::vector<int> parent_dof_of_dof_;   ///< nearest moving ancestor dof of each dof, -1 if none
+  std::vector<Eigen::Vector3d> screw_w_cross_v_;  ///< ω × v of each dof (FK hot path)
+  std::vector<char> dof_prismatic_;               ///< 1 for prismatic dofs
+  int root_ = 0;
 };
 
 }  // namespace chasles
