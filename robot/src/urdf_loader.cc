@@ -31,6 +31,9 @@ class ErrorCollector : public console_bridge::OutputHandler {
 
 /// Parses `text` with tinyxml; on failure throws with the row, column and tinyxml's reason.
 void ParseXmlOrThrow(const std::string& text, const char* what, TiXmlDocument* doc) {
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos) {
+    ThrowInvalid(std::string(what) + ": document is empty");
+  }
   doc->Parse(text.c_str(), nullptr, TIXML_ENCODING_UTF8);
   if (doc->Error()) {
     ThrowInvalid(std::string(what) + ": malformed XML at line " + std::to_string(doc->ErrorRow()) +
