@@ -1,0 +1,108 @@
+// End to end over loopback gRPC: every example request with rrt_connect, and every registered
+// planner (ids from ListPlanners) on two arm problems. Each returned trajectory must be verified,
+// start and end exactly at the request's start and goal, and respect the limits.
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "server_fixture.h"
+
+namespace chasles::testing {
+namespace {
+
+const std::vector<std::string> kRequests = {
+    "panda_table",     "panda_shelf",     "panda_cage",      "panda_shelf_octomap",
+    "ur5_table",       "ur5_shelf",       "ur5_cage",        "planar_2r_table",
+    "planar_2r_shelf", "planar_2r_cage",  "planar_2r_posts"};
+
+void ExpectVerifiedTrajectory(const v1::PlanRequest& request, const v1::PlanResponse& response) {
+  ASSERT_EQ(response.outcome(), v1::SUCCESS) << v1::PlanOutcome_Name(response.outcome()) << ": " << response.message();
+  const int dofs = request.start().positions_size();
+  const v1::JointTrajectory& trajectory = response.trajectory();
+  ASSERT_GT(trajectory.points_size(), 1);
+  ASSERT_EQ(trajectory.joint_names_size(), dofs);
+  const v1::TrajectoryPoint& first = trajectory.points(0);
+  const v1::TrajectoryPoint& last = trajectory.points(trajectory.points_size() - 1);
+  EXPECT_EQ(first.time_from_start(), 0.0);
+  EXPECT_NEAR(last.time_from_start(), response.duration(), 1e-9);
+  EXPECT_GT(response.duration(), 0.0);
+  for (int j = 0; j < dofs; ++j) {
+    ASSERT_EQ(first.positions_size(), dofs);
+    ASSERT_EQ(last.positions_size(), dofs);
+    EXPECT_NEAR(first.positions(j), request.start().positions(j), 1e-6) << "joint " << j;
+    EXPECT_NEAR(last.positions(j), request.goal().positions(j), 1e-6) << "joint " << j;
+  }
+  double previous = -1.0;
+  for (const v1::TrajectoryPoint& point : trajectory.points()) {
+    ASSERT_GT(point.time_from_start(), previous);
+    previous = point.time_from_start();
+    ASSERT_EQ(point.velocities_size(), dofs);
+    ASSERT_EQ(point.accelerations_size(), dofs);
+    for (int j = 0; j < dofs; ++j) ASSERT_TRUE(std::isfinite(point.positions(j)));
+  }
+  ASSERT_GE(response.path_size(), 2);
+  for (int j = 0; j < dofs; ++j) {
+    EXPECT_NEAR(response.path(0).positions(j), request.start().positions(j), 1e-6);
+    EXPECT_NEAR(response.path(response.path_size() - 1).positions(j), request.goal().positions(j), 1e-6);
+  }
+  EXPECT_GT(response.verification().states_checked(), 0u);
+  EXPECT_LE(response.verification().max_velocity_ratio(), 1.0 + 1e-9);
+  EXPECT_LE(response.verification().max_acceleration_ratio(), 1.0 + 1e-9);
+  EXPECT_GT(response.verification().max_velocity_ratio(), 0.0);
+  EXPECT_EQ(response.robot_id().size(), 32u);
+  EXPECT_EQ(response.scene_id().size(), 32u);
+  EXPECT_GT(response.statistics().collision_checks(), 0u);
+  EXPECT_GE(response.timings().total(), response.timings().plan());
+}
+
+class ExampleRequest : public ::testing::TestWithParam<std::string> {
+ protected:
+  static void SetUpTestSuite() { server_ = new LoopbackServer(); }
+  static void TearDownTestSuite() {
+    delete server_;
+    server_ = nullptr;
+  }
+  static LoopbackServer* server_;
+};
+LoopbackServer* ExampleRequest::server_ = nullptr;
+
+TEST_P(ExampleRequest, RrtConnectReturnsAVerifiedTrajectory) {
+  v1::PlanRequest request = LoadRequest(GetParam());
+  request.mutable_planner()->set_planner_id("rrt_connect");
+  v1::PlanResponse response;
+  const grpc::Status status = server_->Plan(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.request_id(), GetParam());
+  ExpectVerifiedTrajectory(request, response);
+}
+
+INSTANTIATE_TEST_SUITE_P(Examples, ExampleRequest, ::testing::ValuesIn(kRequests),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+
+TEST(EveryPlanner, SolvesTwoArmProblems) {
+  LoopbackServer server;
+  v1::ListPlannersResponse planners;
+  ASSERT_TRUE(server.ListPlanners(&planners).ok());
+  ASSERT_GE(planners.planners_size(), 1);
+  bool has_rrt_connect = false;
+  for (const v1::PlannerDescription& planner : planners.planners()) {
+    has_rrt_connect |= planner.id() == "rrt_connect";
+    for (const char* problem : {"panda_table", "ur5_shelf"}) {
+      SCOPED_TRACE(planner.id() + " on " + problem);
+      v1::PlanRequest request = LoadRequest(problem);
+      request.mutable_planner()->set_planner_id(planner.id());
+      // Anytime planners refine until the budget ends: keep it small.
+      request.set_time_budget(planner.optimizing() ? 0.5 : 5.0);
+      v1::PlanResponse response;
+      const grpc::Status status = server.Plan(request, &response);
+      ASSERT_TRUE(status.ok()) << status.error_message();
+      ExpectVerifiedTrajectory(request, response);
+    }
+  }
+  EXPECT_TRUE(has_rrt_connect);
+}
+
+}  // namespace
+}  // namespace chasles::testing

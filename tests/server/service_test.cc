@@ -1,0 +1,293 @@
+// The Planning service beyond single requests: uploads and ids, deadlines, cancellation,
+// determinism, concurrency, and the `chasles` CLI against an in-process server.
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <future>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "server_fixture.h"
+
+namespace chasles::testing {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+TEST(Upload, SameContentSameIdThenPlanById) {
+  LoopbackServer server;
+  const v1::PlanRequest inline_request = LoadRequest("ur5_shelf");
+
+  v1::UploadRobotRequest robot_upload;
+  *robot_upload.mutable_robot() = inline_request.robot();
+  v1::UploadRobotResponse robot_a, robot_b;
+  {
+    grpc::ClientContext context;
+    ASSERT_TRUE(server.stub().UploadRobot(&context, robot_upload, &robot_a).ok());
+  }
+  {
+    grpc::ClientContext context;
+    ASSERT_TRUE(server.stub().UploadRobot(&context, robot_upload, &robot_b).ok());
+  }
+  EXPECT_EQ(robot_a.robot_id().size(), 32u);
+  EXPECT_EQ(robot_a.robot_id(), robot_b.robot_id());
+  ASSERT_EQ(robot_a.joint_names_size(), 6);
+  EXPECT_EQ(robot_a.joint_names(0), "shoulder_pan_joint");
+  ASSERT_EQ(robot_a.velocity_limits_size(), 6);
+  EXPECT_GT(robot_a.velocity_limits(0), 0.0);
+  EXPECT_LT(robot_a.lower_limits(2), robot_a.upper_limits(2));
+
+  v1::UploadSceneRequest scene_upload;
+  *scene_upload.mutable_scene() = inline_request.scene();
+  v1::UploadSceneResponse scene_a, scene_b;
+  {
+    grpc::ClientContext context;
+    ASSERT_TRUE(server.stub().UploadScene(&context, scene_upload, &scene_a).ok());
+  }
+  {
+    grpc::ClientContext context;
+    ASSERT_TRUE(server.stub().UploadScene(&context, scene_upload, &scene_b).ok());
+  }
+  EXPECT_EQ(scene_a.scene_id(), scene_b.scene_id());
+  EXPECT_NE(scene_a.scene_id(), robot_a.robot_id());
+
+  // A different scene gets a different id.
+  v1::UploadSceneRequest other = scene_upload;
+  other.mutable_scene()->mutable_boxes(0)->mutable_size()->set_x(other.scene().boxes(0).size().x() + 0.01);
+  v1::UploadSceneResponse scene_c;
+  {
+    grpc::ClientContext context;
+    ASSERT_TRUE(server.stub().UploadScene(&context, other, &scene_c).ok());
+  }
+  EXPECT_NE(scene_c.scene_id(), scene_a.scene_id());
+
+  // Plan by id, then inline: the same ids come back and the same trajectory.
+  v1::PlanRequest by_id = inline_request;
+  by_id.set_robot_id(robot_a.robot_id());
+  by_id.set_scene_id(scene_a.scene_id());
+  v1::PlanResponse by_id_response, inline_response;
+  ASSERT_TRUE(server.Plan(by_id, &by_id_response).ok());
+  EXPECT_EQ(by_id_response.outcome(), v1::SUCCESS) << by_id_response.message();
+  EXPECT_EQ(by_id_response.robot_id(), robot_a.robot_id());
+  EXPECT_EQ(by_id_response.scene_id(), scene_a.scene_id());
+  ASSERT_TRUE(server.Plan(inline_request, &inline_response).ok());
+  EXPECT_EQ(inline_response.robot_id(), robot_a.robot_id());
+  EXPECT_EQ(inline_response.scene_id(), scene_a.scene_id());
+  EXPECT_EQ(inline_response.trajectory().points_size(), by_id_response.trajectory().points_size());
+}
+
+TEST(Defaults, RequestWithoutRobotOrSceneUsesTheEmbeddedPandaAndTable) {
+  LoopbackServer server;
+  v1::PlanRequest request = LoadRequest("panda_table");
+  ASSERT_EQ(request.robot_source_case(), v1::PlanRequest::ROBOT_SOURCE_NOT_SET);
+  ASSERT_EQ(request.scene_source_case(), v1::PlanRequest::SCENE_SOURCE_NOT_SET);
+  request.clear_request_id();
+  v1::PlanResponse response;
+  ASSERT_TRUE(server.Plan(request, &response).ok());
+  EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  EXPECT_FALSE(response.request_id().empty());  // generated
+  ASSERT_EQ(response.trajectory().joint_names_size(), 7);
+  EXPECT_EQ(response.trajectory().joint_names(0), "panda_joint1");
+
+  // The default scene's id is the id of examples/scenes/table.json uploaded.
+  v1::UploadSceneRequest upload;
+  *upload.mutable_scene() = LoadScene("table");
+  v1::UploadSceneResponse uploaded;
+  grpc::ClientContext context;
+  ASSERT_TRUE(server.stub().UploadScene(&context, upload, &uploaded).ok());
+  EXPECT_EQ(uploaded.scene_id(), response.scene_id());
+}
+
+TEST(Deadline, ShortDeadlineOnAnOptimizingPlannerReturnsPromptly) {
+  LoopbackServer server;
+  v1::PlanRequest request = LoadRequest("panda_shelf");
+  request.mutable_planner()->set_planner_id("rrt_star");
+  request.set_time_budget(60.0);
+  v1::PlanResponse response;
+  const auto start = Clock::now();
+  const grpc::Status status = server.Plan(request, &response, /*deadline_s=*/0.5);
+  const double elapsed = SecondsSince(start);
+  EXPECT_TRUE(status.ok() || status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED)
+      << status.error_code() << ": " << status.error_message();
+  if (status.ok()) {
+    EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  }
+  EXPECT_LT(elapsed, 0.5 + 2.0);  // liveness bound, not a timing claim
+
+  // The worker is free again: a normal request completes.
+  v1::PlanRequest quick = LoadRequest("panda_table");
+  v1::PlanResponse quick_response;
+  ASSERT_TRUE(server.Plan(quick, &quick_response, 20.0).ok());
+  EXPECT_EQ(quick_response.outcome(), v1::SUCCESS);
+}
+
+TEST(Cancellation, ClientCancelStopsThePlannerAndFreesTheWorker) {
+  LoopbackServer server(/*threads=*/1);
+  v1::PlanRequest request = LoadRequest("panda_shelf");
+  request.mutable_planner()->set_planner_id("rrt_star");
+  request.set_time_budget(60.0);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(120));
+  v1::PlanResponse response;
+  auto call = std::async(std::launch::async, [&] { return server.stub().Plan(&context, request, &response); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const auto cancelled_at = Clock::now();
+  context.TryCancel();
+  const grpc::Status status = call.get();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::CANCELLED) << status.error_message();
+
+  // With one worker, a follow-up request can only finish if the cancelled planner stopped
+  // (otherwise it would hold the worker for its 60 s budget).
+  v1::PlanRequest quick = LoadRequest("panda_table");
+  v1::PlanResponse quick_response;
+  const grpc::Status quick_status = server.Plan(quick, &quick_response, /*deadline_s=*/20.0);
+  ASSERT_TRUE(quick_status.ok()) << quick_status.error_message();
+  EXPECT_EQ(quick_response.outcome(), v1::SUCCESS);
+  EXPECT_LT(SecondsSince(cancelled_at), 20.0);
+}
+
+TEST(Determinism, SameSeededRequestGivesTheSameTrajectory) {
+  LoopbackServer server;
+  for (const char* name : {"ur5_shelf", "planar_2r_posts"}) {
+    SCOPED_TRACE(name);
+    const v1::PlanRequest request = LoadRequest(name);
+    v1::PlanResponse first, second;
+    ASSERT_TRUE(server.Plan(request, &first).ok());
+    ASSERT_TRUE(server.Plan(request, &second).ok());
+    ASSERT_EQ(first.outcome(), v1::SUCCESS) << first.message();
+    ASSERT_EQ(first.trajectory().points_size(), second.trajectory().points_size());
+    ASSERT_EQ(first.path_size(), second.path_size());
+    for (int i = 0; i < first.trajectory().points_size(); ++i) {
+      const v1::TrajectoryPoint& a = first.trajectory().points(i);
+      const v1::TrajectoryPoint& b = second.trajectory().points(i);
+      ASSERT_EQ(a.time_from_start(), b.time_from_start()) << "sample " << i;
+      for (int j = 0; j < a.positions_size(); ++j) ASSERT_EQ(a.positions(j), b.positions(j)) << "sample " << i;
+    }
+    EXPECT_EQ(first.statistics().raw_waypoints(), second.statistics().raw_waypoints());
+  }
+}
+
+TEST(Concurrency, ParallelRequestsAllSucceed) {
+  LoopbackServer server(/*threads=*/2);
+  std::vector<std::future<bool>> calls;
+  const std::vector<std::string> names = {"panda_table", "ur5_table", "planar_2r_table", "panda_cage",
+                                          "ur5_cage",    "planar_2r_cage"};
+  for (const std::string& name : names) {
+    calls.push_back(std::async(std::launch::async, [&server, name] {
+      v1::PlanResponse response;
+      return server.Plan(LoadRequest(name), &response).ok() && response.outcome() == v1::SUCCESS;
+    }));
+  }
+  for (size_t i = 0; i < calls.size(); ++i) EXPECT_TRUE(calls[i].get()) << names[i];
+}
+
+// --- CLI ---------------------------------------------------------------------------------------
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+CommandResult RunCli(const std::string& arguments) {
+  const std::string log = ::testing::TempDir() + "/chasles_cli_output.txt";
+  const std::string command = std::string(CHASLES_CLI) + " " + arguments + " > " + log + " 2>&1";
+  const int raw = std::system(command.c_str());
+  CommandResult result;
+  result.exit_code = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  result.output = ReadText(log);
+  return result;
+}
+
+TEST(Cli, HealthPlannersPlanAndUploads) {
+  LoopbackServer server;
+  const std::string at = "--server " + server.address() + " ";
+
+  CommandResult health = RunCli(at + "health");
+  EXPECT_EQ(health.exit_code, 0) << health.output;
+  EXPECT_NE(health.output.find("SERVING"), std::string::npos) << health.output;
+
+  CommandResult planners = RunCli(at + "planners");
+  EXPECT_EQ(planners.exit_code, 0) << planners.output;
+  EXPECT_NE(planners.output.find("rrt_connect"), std::string::npos) << planners.output;
+  EXPECT_NE(planners.output.find("default"), std::string::npos) << planners.output;
+
+  const std::string csv = ::testing::TempDir() + "/chasles_cli_panda_table.csv";
+  CommandResult plan = RunCli(at + "plan " + ExamplePath("requests/panda_table.json") + " --out " + csv);
+  EXPECT_EQ(plan.exit_code, 0) << plan.output;
+  EXPECT_NE(plan.output.find("SUCCESS"), std::string::npos) << plan.output;
+  const std::string table = ReadText(csv);
+  EXPECT_EQ(table.rfind("t,q_panda_joint1,", 0), 0u) << table.substr(0, 200);
+  EXPECT_NE(table.find(",qdd_panda_joint7\n"), std::string::npos);
+
+  const std::string json = ::testing::TempDir() + "/chasles_cli_ur5_table.json";
+  CommandResult plan_json = RunCli(at + "plan " + ExamplePath("requests/ur5_table.json") + " --out " + json);
+  EXPECT_EQ(plan_json.exit_code, 0) << plan_json.output;
+  v1::PlanResponse written;
+  EXPECT_TRUE(google::protobuf::util::JsonStringToMessage(ReadText(json), &written).ok());
+  EXPECT_EQ(written.outcome(), v1::SUCCESS);
+
+  // No trajectory (start in collision): non-zero, reason on stderr.
+  v1::PlanRequest colliding = LoadRequest("panda_table");
+  colliding.mutable_start()->clear_positions();
+  for (double q : {0.0, 1.2, 0.0, -0.5, 0.0, 1.5, 0.785}) colliding.mutable_start()->add_positions(q);
+  std::string colliding_json;
+  ASSERT_TRUE(google::protobuf::util::MessageToJsonString(colliding, &colliding_json).ok());
+  const std::string colliding_path = ::testing::TempDir() + "/chasles_cli_colliding.json";
+  std::ofstream(colliding_path) << colliding_json;
+  CommandResult no_path = RunCli(at + "plan " + colliding_path);
+  EXPECT_EQ(no_path.exit_code, 1) << no_path.output;
+  EXPECT_NE(no_path.output.find("START_IN_COLLISION"), std::string::npos) << no_path.output;
+
+  // Missing and unparsable request files name the file.
+  CommandResult missing = RunCli(at + "plan /no/such/request.json");
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("/no/such/request.json"), std::string::npos) << missing.output;
+  const std::string garbage = ::testing::TempDir() + "/chasles_cli_garbage.json";
+  std::ofstream(garbage) << "{\"start\": {\"positions\": [1, \"x\"]}}";
+  CommandResult unparsable = RunCli(at + "plan " + garbage);
+  EXPECT_EQ(unparsable.exit_code, 2) << unparsable.output;
+  EXPECT_NE(unparsable.output.find("chasles_cli_garbage.json"), std::string::npos) << unparsable.output;
+  EXPECT_NE(unparsable.output.find("start.positions"), std::string::npos) << unparsable.output;
+
+  // Invalid request: the server's INVALID_ARGUMENT message reaches stderr.
+  v1::PlanRequest invalid = LoadRequest("panda_table");
+  invalid.set_time_budget(-3);
+  std::string invalid_json;
+  ASSERT_TRUE(google::protobuf::util::MessageToJsonString(invalid, &invalid_json).ok());
+  const std::string invalid_path = ::testing::TempDir() + "/chasles_cli_invalid.json";
+  std::ofstream(invalid_path) << invalid_json;
+  CommandResult rejected = RunCli(at + "plan " + invalid_path);
+  EXPECT_EQ(rejected.exit_code, 1) << rejected.output;
+  EXPECT_NE(rejected.output.find("INVALID_ARGUMENT"), std::string::npos) << rejected.output;
+  EXPECT_NE(rejected.output.find("time_budget"), std::string::npos) << rejected.output;
+
+  CommandResult robot = RunCli(at + "upload-robot " + ExamplePath("robots/ur5.urdf") + " --srdf " +
+                               ExamplePath("robots/ur5.srdf"));
+  EXPECT_EQ(robot.exit_code, 0) << robot.output;
+  EXPECT_NE(robot.output.find("robot_id "), std::string::npos) << robot.output;
+  EXPECT_NE(robot.output.find("shoulder_pan_joint"), std::string::npos) << robot.output;
+
+  v1::UploadSceneRequest upload;
+  *upload.mutable_scene() = LoadScene("shelf");
+  v1::UploadSceneResponse uploaded;
+  grpc::ClientContext context;
+  ASSERT_TRUE(server.stub().UploadScene(&context, upload, &uploaded).ok());
+  CommandResult scene = RunCli(at + "upload-scene " + ExamplePath("scenes/shelf.json"));
+  EXPECT_EQ(scene.exit_code, 0) << scene.output;
+  EXPECT_NE(scene.output.find("scene_id " + uploaded.scene_id()), std::string::npos) << scene.output;
+
+  // Nothing listening: non-zero.
+  CommandResult down = RunCli("--server 127.0.0.1:1 --timeout 1 health");
+  EXPECT_NE(down.exit_code, 0) << down.output;
+}
+
+}  // namespace
+}  // namespace chasles::testing
