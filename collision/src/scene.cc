@@ -91,7 +91,10 @@ bool ParseHeader(const std::string& bytes, std::size_t pos, Header* h, std::stri
 
 // Binary (.bt) node: two bytes, two bits per child: 01 occupied leaf, 10 free leaf,
 // 11 inner node (its own record follows, depth first), 00 none.
-bool WalkBinary(const std::string& bytes, std::size_t* pos, int depth, std::uint64_t* leaves) {
+// `nodes` counts every node below the root (the root is counted by the caller); `leaves` the
+// occupied and free leaves.
+bool WalkBinary(const std::string& bytes, std::size_t* pos, int depth, std::uint64_t* nodes,
+                std::uint64_t* leaves) {
   if (*pos + 2 > bytes.size()) return false;
   const unsigned char b[2] = {static_cast<unsigned char>(bytes[*pos]),
                               static_cast<unsigned char>(bytes[*pos + 1])};
@@ -100,13 +103,14 @@ bool WalkBinary(const std::string& bytes, std::size_t* pos, int depth, std::uint
   for (int k = 0; k < 2; ++k) {
     for (int i = 0; i < 4; ++i) {
       const int code = (b[k] >> (2 * i)) & 3;
+      if (code != 0) ++*nodes;
       if (code == 3) ++inner;
       else if (code != 0) ++*leaves;
     }
   }
   if (inner > 0 && depth + 1 >= kTreeDepth) return false;  // children below the leaf level
   for (int i = 0; i < inner; ++i) {
-    if (!WalkBinary(bytes, pos, depth + 1, leaves)) return false;
+    if (!WalkBinary(bytes, pos, depth + 1, nodes, leaves)) return false;
   }
   return true;
 }
@@ -183,13 +187,21 @@ void Scene::AddOctoMap(const std::string& name, const std::string& bytes, const 
   if (h.res < 1e-4 || h.res > 1e3) fail("has resolution " + Num(h.res) + " m outside [1e-4, 1e3]");
 
   std::size_t pos = h.data_offset;
-  std::uint64_t count = 0;
-  const bool ok = binary ? WalkBinary(bytes, &pos, 0, &count) : WalkFull(bytes, &pos, 0, &count);
+  std::uint64_t nodes = 1, leaves = 0;  // the root
+  const bool ok = binary ? WalkBinary(bytes, &pos, 0, &nodes, &leaves) : WalkFull(bytes, &pos, 0, &nodes);
+  if (!binary) {
+    nodes -= 1;  // WalkFull counts the root itself
+    leaves = nodes > 1 ? nodes - 1 : 0;  // only "has any node below the root" matters
+  }
   if (!ok) {
     fail(std::string("is truncated or corrupt: its ") + (binary ? "binary" : "full") +
          " node data ends early, goes deeper than 16 levels or holds a non-finite value");
   }
-  if (count == 0) fail("holds an empty OctoMap (no leaves)");
+  if (leaves == 0) fail("holds an empty OctoMap (no leaves)");
+  if (nodes != static_cast<std::uint64_t>(h.size)) {
+    fail("is corrupt: its header says " + std::to_string(h.size) + " nodes but its data holds " +
+         std::to_string(nodes));
+  }
 
   std::shared_ptr<octomap::OcTree> tree;
   std::istringstream in(bytes);

@@ -1,0 +1,160 @@
+// The fast sphere path must give the same answers as the generic FCL path (force_fcl) and as an
+// independent brute-force reference built on RobotModel::ForwardKinematics.
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "chasles/collision/collision_checker.h"
+#include "test_util.h"
+
+namespace chasles {
+namespace {
+
+// Settable through the environment for longer runs.
+int NumSamples() {
+  const char* env = std::getenv("CHASLES_TEST_SAMPLES");
+  return env != nullptr ? std::atoi(env) : 5000;
+}
+
+class FastVsFcl : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(FastVsFcl, SameAnswersOnRandomPandaConfigurations) {
+  auto panda = test::LoadRobot("panda");
+  auto scene = test::LoadScene(std::string("scenes/") + GetParam() + ".json");
+  CollisionOptions fcl_options;
+  fcl_options.force_fcl = true;
+  const CollisionChecker fast(panda, scene);
+  const CollisionChecker fcl(panda, scene, fcl_options);
+  ASSERT_TRUE(fast.uses_fast_path());
+  ASSERT_FALSE(fcl.uses_fast_path());
+  std::mt19937_64 rng(2024);
+  const int n = NumSamples();
+  int valid = 0, near_contact = 0;
+  double worst_clearance_error = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
+    const bool a = fast.IsValid(q);
+    const bool b = fcl.IsValid(q);
+    const CollisionResult ca = fast.Check(q);
+    const CollisionResult cb = fcl.Check(q);
+    const double da = fast.Clearance(q);
+    const double db = fcl.Clearance(q);
+    worst_clearance_error = std::max(worst_clearance_error, std::abs(da - db));
+    EXPECT_NEAR(da, db, 1e-6) << "sample " << i;
+    if (a != b || ca.in_collision != cb.in_collision) {
+      // Allowed only within 1e-9 of an environment contact, where the two tests' rounding may
+      // fall on different sides of "touching".
+      ++near_contact;
+      EXPECT_LT(db, 1e-9) << "sample " << i << ": fast " << a << " fcl " << b << " (" << ca.link_a << "/"
+                          << ca.other << " vs " << cb.link_a << "/" << cb.other << ")";
+    }
+    EXPECT_EQ(a, !ca.in_collision) << "limits are respected by sampling, so IsValid == !Check";
+    valid += a;
+  }
+  // The scenes are meant to be neither empty nor full around the Panda.
+  EXPECT_GT(valid, n / 10);
+  EXPECT_LT(valid, n - n / 20);
+  EXPECT_LE(near_contact, 2);
+  RecordProperty("valid", valid);
+  std::cout << GetParam() << ": " << valid << "/" << n << " valid, worst clearance difference "
+            << worst_clearance_error << " m\n";
+}
+
+INSTANTIATE_TEST_SUITE_P(ExampleScenes, FastVsFcl, ::testing::Values("table", "shelf", "cage"));
+
+// Distance from a point to a scene primitive (0 inside), written independently of the checker.
+double PointDistance(const Shape& s, const Eigen::Vector3d& world) {
+  const Eigen::Vector3d l = s.pose.inverse() * world;
+  switch (s.type) {
+    case ShapeType::kBox:
+      return (l.cwiseAbs() - 0.5 * s.size).cwiseMax(0.0).norm();
+    case ShapeType::kSphere:
+      return std::max(l.norm() - s.radius, 0.0);
+    case ShapeType::kCylinder:
+      return std::hypot(std::max(std::hypot(l.x(), l.y()) - s.radius, 0.0),
+                        std::max(std::abs(l.z()) - 0.5 * s.length, 0.0));
+    case ShapeType::kCapsule: {
+      const Eigen::Vector3d axis_point(0, 0, std::clamp(l.z(), -0.5 * s.length, 0.5 * s.length));
+      return std::max((l - axis_point).norm() - s.radius, 0.0);
+    }
+    default:
+      ADD_FAILURE() << "no meshes in the example scenes";
+      return 0;
+  }
+}
+
+TEST(FastPath, MatchesABruteForceReferenceBuiltOnRobotFk) {
+  auto panda = test::LoadRobot("panda");
+  const AllowedCollisionMatrix& acm = panda->allowed_collisions();
+  std::mt19937_64 rng(77);
+  std::vector<Eigen::Isometry3d> poses;
+  for (const char* name : {"table", "shelf", "cage"}) {
+    auto scene = test::LoadScene(std::string("scenes/") + name + ".json");
+    const CollisionChecker checker(panda, scene);
+    int mismatches = 0;
+    for (int i = 0; i < 1000; ++i) {
+      const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
+      panda->ForwardKinematics(q, &poses);
+      double clearance = std::numeric_limits<double>::infinity();
+      bool self = false;
+      for (int l = 0; l < panda->num_links(); ++l) {
+        for (const Shape& s : panda->links()[l].collision) {
+          const Eigen::Vector3d c = poses[l] * s.pose.translation();
+          for (const SceneObject& o : scene->objects()) {
+            clearance = std::min(clearance, PointDistance(o.shape, c) - s.radius);
+          }
+          for (int m = l + 1; m < panda->num_links(); ++m) {
+            if (acm.IsAllowed(l, m)) continue;
+            for (const Shape& t : panda->links()[m].collision) {
+              const Eigen::Vector3d d = poses[m] * t.pose.translation();
+              self = self || (c - d).norm() <= s.radius + t.radius;
+            }
+          }
+        }
+      }
+      const double got = checker.Clearance(q);
+      EXPECT_NEAR(got, std::max(clearance, 0.0), 1e-9) << name << " sample " << i;
+      const bool reference_valid = clearance > 1e-12 && !self;
+      if (std::abs(clearance) > 1e-9 && checker.IsValid(q) != reference_valid) ++mismatches;
+    }
+    EXPECT_EQ(mismatches, 0) << name;
+  }
+}
+
+TEST(OctoMapScene, FastAndFclPathsAgreeAndTheMapIsConservative) {
+  auto panda = test::LoadRobot("panda");
+  auto octo = test::LoadScene("scenes/shelf_octomap.json");
+  auto shelf = test::LoadScene("scenes/shelf.json");
+  CollisionOptions fcl_options;
+  fcl_options.force_fcl = true;
+  const CollisionChecker fast(panda, octo);
+  const CollisionChecker fcl(panda, octo, fcl_options);
+  const CollisionChecker primitives(panda, shelf);
+  ASSERT_TRUE(fast.uses_fast_path());
+  std::mt19937_64 rng(31);
+  int both_valid = 0, only_primitives_valid = 0;
+  for (int i = 0; i < 1000; ++i) {
+    const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
+    const bool a = fast.IsValid(q);
+    EXPECT_EQ(a, fcl.IsValid(q)) << "sample " << i;
+    if (i % 10 == 0) {
+      EXPECT_NEAR(fast.Clearance(q), fcl.Clearance(q), 1e-6) << "sample " << i;
+    }
+    // The map covers every primitive, so a configuration valid against the map is valid
+    // against the primitives.
+    const bool p = primitives.IsValid(q);
+    if (a) {
+      EXPECT_TRUE(p) << "sample " << i;
+    }
+    both_valid += a && p;
+    only_primitives_valid += p && !a;
+  }
+  EXPECT_GT(both_valid, 100);
+  std::cout << "octomap: " << both_valid << " valid in both, " << only_primitives_valid
+            << " valid only against the primitives (the map is up to a voxel larger)\n";
+}
+
+}  // namespace
+}  // namespace chasles
