@@ -1,0 +1,137 @@
+// ShortcutPath and PathLength on a planar arm with one obstacle.
+
+#include "chasles/optimizers/shortcut.h"
+
+#include <cmath>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "chasles/robot/error.h"
+#include "planar_fixture.h"
+#include "test_util.h"
+
+namespace chasles {
+namespace {
+
+using test::BitEqual;
+
+constexpr double kStep = 0.005;
+
+void ExpectEverySegmentValid(const JointPath& path, const CollisionChecker& checker) {
+  for (std::size_t k = 0; k + 1 < path.size(); ++k) {
+    EXPECT_TRUE(checker.IsMotionValid(path[k], path[k + 1], kStep)) << "segment " << k;
+  }
+}
+
+bool SamePath(const JointPath& x, const JointPath& y) {
+  if (x.size() != y.size()) return false;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    if (!BitEqual(x[k], y[k])) return false;
+  }
+  return true;
+}
+
+TEST(PathLength, SumsEuclideanSegmentLengths) {
+  EXPECT_EQ(PathLength({}), 0.0);
+  EXPECT_EQ(PathLength({Eigen::Vector2d(1, 1)}), 0.0);
+  EXPECT_DOUBLE_EQ(PathLength({Eigen::Vector2d(0, 0), Eigen::Vector2d(3, 4), Eigen::Vector2d(3, 4),
+                               Eigen::Vector2d(3, 0)}),
+                   9.0);
+}
+
+TEST(Shortcut, ZigZagAroundAnObstacleGetsShorterAndStaysValid) {
+  const auto checker = test::PlanarCheckerWithPost();
+  const JointPath input = test::ZigZagAroundPost();
+  // The premise: the zig-zag is valid, the straight line is not.
+  ExpectEverySegmentValid(input, *checker);
+  ASSERT_FALSE(checker->IsMotionValid(input.front(), input.back(), kStep));
+
+  ShortcutOptions options;
+  options.max_attempts = 200;
+  options.seed = 7;
+  CheckCounters counters;
+  const JointPath out = ShortcutPath(input, *checker, options, &counters);
+  EXPECT_GT(counters.state_checks, 0u);
+  ASSERT_GE(out.size(), 3u);  // the obstacle forces a detour
+  EXPECT_TRUE(BitEqual(out.front(), input.front()));
+  EXPECT_TRUE(BitEqual(out.back(), input.back()));
+  EXPECT_LT(PathLength(out), 0.8 * PathLength(input));
+  ExpectEverySegmentValid(out, *checker);
+  for (std::size_t k = 0; k + 1 < out.size(); ++k) EXPECT_FALSE(out[k] == out[k + 1]) << "duplicate at " << k;
+
+  // Deterministic: the same seed gives the same path bit for bit.
+  EXPECT_TRUE(SamePath(ShortcutPath(input, *checker, options), out));
+  // Other seeds: also valid, exact at the ends and never longer.
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    options.seed = seed;
+    const JointPath other = ShortcutPath(input, *checker, options);
+    EXPECT_TRUE(BitEqual(other.front(), input.front()));
+    EXPECT_TRUE(BitEqual(other.back(), input.back()));
+    EXPECT_LE(PathLength(other), PathLength(input));
+    ExpectEverySegmentValid(other, *checker);
+  }
+}
+
+TEST(Shortcut, RandomShortcutsImproveOnVertexReductionAlone) {
+  const auto checker = test::PlanarCheckerWithPost();
+  const JointPath input = test::ZigZagAroundPost();
+  ShortcutOptions options;
+  options.max_attempts = 0;  // greedy vertex reduction only
+  const JointPath reduced = ShortcutPath(input, *checker, options);
+  EXPECT_LT(reduced.size(), input.size());
+  EXPECT_LE(PathLength(reduced), PathLength(input));
+  ExpectEverySegmentValid(reduced, *checker);
+  options.max_attempts = 200;
+  const JointPath shortened = ShortcutPath(input, *checker, options);
+  EXPECT_LE(PathLength(shortened), PathLength(reduced));
+}
+
+TEST(Shortcut, FreeSpaceCollapsesToOneSegmentAndDropsDuplicatesAndCollinearPoints) {
+  const auto checker = test::PlanarCheckerWithPost();
+  // Folded elbow: the whole region is free, so start and goal connect directly.
+  const JointPath input{Eigen::Vector2d(0.1, 2.5), Eigen::Vector2d(0.2, 2.5), Eigen::Vector2d(0.2, 2.5),
+                        Eigen::Vector2d(0.3, 2.5), Eigen::Vector2d(0.7, 2.6), Eigen::Vector2d(0.5, 2.5)};
+  const JointPath out = ShortcutPath(input, *checker, ShortcutOptions{});
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_TRUE(BitEqual(out[0], input.front()));
+  EXPECT_TRUE(BitEqual(out[1], input.back()));
+  // Two waypoints or fewer come back unchanged.
+  const JointPath two{Eigen::Vector2d(0.1, 2.5), Eigen::Vector2d(0.2, 2.5)};
+  EXPECT_TRUE(SamePath(ShortcutPath(two, *checker, ShortcutOptions{}), two));
+}
+
+template <typename F>
+std::string ErrorMessage(F&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    return e.what();
+  }
+  return "<no error>";
+}
+
+TEST(Shortcut, OptionAndPathValidation) {
+  const auto checker = test::PlanarCheckerWithPost();
+  const JointPath path = test::ZigZagAroundPost();
+  ShortcutOptions options;
+  options.max_attempts = -1;
+  EXPECT_EQ(ErrorMessage([&] { ShortcutPath(path, *checker, options); }),
+            "shortcut max_attempts = -1 must be >= 0");
+  options = ShortcutOptions{};
+  options.max_step = 0.0;
+  EXPECT_EQ(ErrorMessage([&] { ShortcutPath(path, *checker, options); }), "shortcut max_step = 0 must be > 0");
+  options.max_step = std::nan("");
+  EXPECT_EQ(ErrorMessage([&] { ShortcutPath(path, *checker, options); }), "shortcut max_step = nan must be finite");
+  JointPath bad = path;
+  bad[3] = Eigen::Vector3d(0, 0, 0);
+  EXPECT_EQ(ErrorMessage([&] { ShortcutPath(bad, *checker, ShortcutOptions{}); }),
+            "path[3] has 3 values, robot has 2 joints");
+  bad = path;
+  bad[2][1] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(ErrorMessage([&] { ShortcutPath(bad, *checker, ShortcutOptions{}); }), "path[2][1] = inf must be finite");
+}
+
+}  // namespace
+}  // namespace chasles
