@@ -134,6 +134,8 @@ std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, co
     const std::string what = e.what();
     // Prefix the proto field unless the robot module already named it.
     if (what.rfind(field, 0) == 0) throw;
+    // "urdf: …" / "srdf: …" from the loader become "robot.urdf.urdf: …" / "robot.urdf.srdf: …".
+    if (what.rfind("urdf", 0) == 0 || what.rfind("srdf", 0) == 0) throw Error(e.code(), field + ".urdf." + what);
     throw Error(e.code(), field + ".urdf: " + what);
   }
 }

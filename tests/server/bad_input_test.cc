@@ -52,7 +52,7 @@ LoopbackServer* BadInput::server_ = nullptr;
 TEST_F(BadInput, MalformedUrdf) {
   v1::PlanRequest request = Planar();
   request.mutable_robot()->mutable_urdf()->set_urdf("<robot name='broken'><link name='a'>");
-  ExpectPlanError(request, grpc::StatusCode::INVALID_ARGUMENT, {"robot.urdf"});
+  ExpectPlanError(request, grpc::StatusCode::INVALID_ARGUMENT, {"robot.urdf.urdf"});
 }
 
 TEST_F(BadInput, EmptyRobotDescription) {
@@ -65,7 +65,7 @@ TEST_F(BadInput, SrdfNamingAnUnknownLink) {
   v1::PlanRequest request = Planar();
   request.mutable_robot()->mutable_urdf()->set_srdf(
       "<robot name='planar_2r'><disable_collisions link1='link1' link2='no_such_link' reason='Never'/></robot>");
-  ExpectPlanError(request, grpc::StatusCode::INVALID_ARGUMENT, {"no_such_link"});
+  ExpectPlanError(request, grpc::StatusCode::INVALID_ARGUMENT, {"robot.urdf.srdf", "no_such_link"});
 
   // Upload reports the same error.
   v1::UploadRobotRequest upload;

@@ -94,7 +94,7 @@ TEST(EveryPlanner, SolvesTwoArmProblems) {
       v1::PlanRequest request = LoadRequest(problem);
       request.mutable_planner()->set_planner_id(planner.id());
       // Anytime planners refine until the budget ends: keep it small.
-      request.set_time_budget(planner.optimizing() ? 0.5 : 5.0);
+      request.set_time_budget(planner.optimizing() ? 0.5 : 2.0);
       v1::PlanResponse response;
       const grpc::Status status = server.Plan(request, &response);
       ASSERT_TRUE(status.ok()) << status.error_message();
