@@ -285,6 +285,7 @@ struct CollisionChecker::Impl {
   std::vector<std::pair<int, int>> self_pairs;  // indices into slinks, not allowed by the ACM
   std::vector<Prim> prims;
   std::vector<std::shared_ptr<fcl::Sphered>> fcl_spheres;  // per sphere, radius + padding
+  std::vector<std::shared_ptr<fcl::Sphered>> fcl_link_bounds;  // per sphere link, its bound
 
   // FCL path.
   std::vector<RobotShape> shapes;
@@ -374,17 +375,23 @@ void CollisionChecker::Impl::ComputeFk(const Eigen::VectorXd& q, Frame* frames) 
 bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* report) const {
   const std::size_t ns = sx.size();
   const std::size_t nl = slinks.size();
-  Scratch<double, 1024> w(3 * ns);   // world sphere centres
+  Scratch<double, 1024> w(3 * ns);   // world sphere centres, filled per link on first use
   Scratch<double, 256> lb(3 * nl);   // world link bounding centres
+  Scratch<char, 256> placed(nl);     // whether link li's sphere centres are in `w`
   for (std::size_t li = 0; li < nl; ++li) {
+    Apply(frames[slinks[li].link], slinks[li].bc, &lb[3 * li]);
+    placed[li] = 0;
+  }
+  const auto place = [&](std::size_t li) {
+    if (placed[li]) return;
+    placed[li] = 1;
     const SphereLink& L = slinks[li];
     const Frame& f = frames[L.link];
-    Apply(f, L.bc, &lb[3 * li]);
     for (int k = L.begin; k < L.end; ++k) {
       const double x[3] = {sx[k], sy[k], sz[k]};
       Apply(f, x, &w[3 * k]);
     }
-  }
+  };
   const auto hit = [&](int link, const std::string& other, bool self) {
     if (report != nullptr) {
       report->in_collision = true;
@@ -403,6 +410,7 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
       const double rr = L.br + o.bound;
       if (d0 * d0 + d1 * d1 + d2 * d2 > rr * rr) continue;
       if (!SphereHits(o, c, L.br)) continue;
+      place(li);
       for (int k = L.begin; k < L.end; ++k) {
         if (SphereHits(o, &w[3 * k], sr[k])) return hit(L.link, scene->objects()[o.object].name, false);
       }
@@ -417,8 +425,14 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
     const double d0 = ca[0] - cb[0], d1 = ca[1] - cb[1], d2 = ca[2] - cb[2];
     const double rr = A.br + B.br;
     if (d0 * d0 + d1 * d1 + d2 * d2 > rr * rr) continue;
+    place(pr.first);
+    place(pr.second);
     for (int i = A.begin; i < A.end; ++i) {
       const double* xi = &w[3 * i];
+      // Cull sphere i against B's bounding sphere first.
+      const double f0 = xi[0] - cb[0], f1 = xi[1] - cb[1], f2 = xi[2] - cb[2];
+      const double rb = sr[i] + B.br;
+      if (f0 * f0 + f1 * f1 + f2 * f2 > rb * rb) continue;
       for (int k = B.begin; k < B.end; ++k) {
         const double* xk = &w[3 * k];
         const double e0 = xi[0] - xk[0], e1 = xi[1] - xk[1], e2 = xi[2] - xk[2];
@@ -437,6 +451,13 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
         const SphereLink& L = slinks[li];
         const Eigen::Vector3d c(lb[3 * li], lb[3 * li + 1], lb[3 * li + 2]);
         if (!SpheresOverlap(c, L.br, g.center, g.radius)) continue;
+        if (L.end - L.begin > 1) {  // one query with the link's bounding sphere first
+          fcl::Transform3d tf = fcl::Transform3d::Identity();
+          tf.translation() = c;
+          fcl::CollisionResultd result;
+          if (fcl::collide(fcl_link_bounds[li].get(), tf, g.g.geom.get(), g.tf, request, result) == 0) continue;
+        }
+        place(li);
         for (int k = L.begin; k < L.end; ++k) {
           const Eigen::Vector3d x(w[3 * k], w[3 * k + 1], w[3 * k + 2]);
           if (!SpheresOverlap(x, sr[k], g.center, g.radius)) continue;
@@ -682,6 +703,7 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
       for (int i = 0; i < 3; ++i) L.bc[i] = bc[i];
       L.br = br;
       m.slinks.push_back(L);
+      m.fcl_link_bounds.push_back(std::make_shared<fcl::Sphered>(br));
     }
     for (std::size_t a = 0; a < m.slinks.size(); ++a) {
       for (std::size_t b = a + 1; b < m.slinks.size(); ++b) {
