@@ -65,7 +65,7 @@ struct Options {
 std::string ReadFileOrExit(const std::string& path, const char* what) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    std::cerr << "chasles: cannot read " << what << " '" << path << "': " << std::strerror(errno) << "\n";
+    std::cerr << "chasles: cannot read " << what << " file '" << path << "': " << std::strerror(errno) << "\n";
     std::exit(kExitUsage);
   }
   std::ostringstream buffer;
@@ -136,7 +136,8 @@ int Health(const Options& options) {
   grpc::GenericStub stub(MakeChannel(options));
   grpc::ClientContext context;
   SetDeadline(&context, options.timeout > 0 ? options.timeout : 10.0);
-  grpc::ByteBuffer request;
+  grpc::Slice empty_slice(std::string{});
+  grpc::ByteBuffer request(&empty_slice, 1);
   grpc::ByteBuffer response;
   std::promise<grpc::Status> done;
   stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
