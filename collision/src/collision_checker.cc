@@ -280,6 +280,7 @@ struct CollisionChecker::Impl {
 
   // Fast path.
   std::vector<SphereLink> slinks;
+  std::vector<double> link_bound_radius;  // slinks[i].br, contiguous
   std::vector<double> sx, sy, sz, sr;          // link-frame centres, radius + padding
   std::vector<int> slink_of;                   // sphere -> index into slinks
   std::vector<std::pair<int, int>> self_pairs;  // indices into slinks, not allowed by the ACM
@@ -401,18 +402,36 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
     }
     return true;
   };
-  // Robot vs scene primitives.
+  // Robot vs scene primitives. The link-bound vs obstacle-bound cull is computed branch-free
+  // into a bit mask over (up to) 64 links at a time; only the set bits are visited.
+  Scratch<double, 256> soa(3 * nl);  // link bounding centres, structure of arrays
+  for (std::size_t li = 0; li < nl; ++li) {
+    soa[li] = lb[3 * li];
+    soa[nl + li] = lb[3 * li + 1];
+    soa[2 * nl + li] = lb[3 * li + 2];
+  }
+  const double* bx = &soa[0];
+  const double* by = &soa[nl];
+  const double* bz = &soa[2 * nl];
+  const double* br = link_bound_radius.data();
   for (const Prim& o : prims) {
-    for (std::size_t li = 0; li < nl; ++li) {
-      const SphereLink& L = slinks[li];
-      const double* c = &lb[3 * li];
-      const double d0 = c[0] - o.p[0], d1 = c[1] - o.p[1], d2 = c[2] - o.p[2];
-      const double rr = L.br + o.bound;
-      if (d0 * d0 + d1 * d1 + d2 * d2 > rr * rr) continue;
-      if (!SphereHits(o, c, L.br)) continue;
-      place(li);
-      for (int k = L.begin; k < L.end; ++k) {
-        if (SphereHits(o, &w[3 * k], sr[k])) return hit(L.link, scene->objects()[o.object].name, false);
+    for (std::size_t base = 0; base < nl; base += 64) {
+      const std::size_t end = std::min(nl, base + 64);
+      std::uint64_t mask = 0;
+      for (std::size_t li = base; li < end; ++li) {
+        const double d0 = bx[li] - o.p[0], d1 = by[li] - o.p[1], d2 = bz[li] - o.p[2];
+        const double rr = br[li] + o.bound;
+        mask |= static_cast<std::uint64_t>(d0 * d0 + d1 * d1 + d2 * d2 <= rr * rr) << (li - base);
+      }
+      while (mask != 0) {
+        const std::size_t li = base + static_cast<std::size_t>(__builtin_ctzll(mask));
+        mask &= mask - 1;
+        const SphereLink& L = slinks[li];
+        if (!SphereHits(o, &lb[3 * li], L.br)) continue;
+        place(li);
+        for (int k = L.begin; k < L.end; ++k) {
+          if (SphereHits(o, &w[3 * k], sr[k])) return hit(L.link, scene->objects()[o.object].name, false);
+        }
       }
     }
   }
@@ -703,6 +722,7 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
       for (int i = 0; i < 3; ++i) L.bc[i] = bc[i];
       L.br = br;
       m.slinks.push_back(L);
+      m.link_bound_radius.push_back(br);
       m.fcl_link_bounds.push_back(std::make_shared<fcl::Sphered>(br));
     }
     for (std::size_t a = 0; a < m.slinks.size(); ++a) {
