@@ -189,6 +189,10 @@ TEST(RestToRest, MultiWaypointPathsRespectLimitsEverywhere) {
       const TrajectorySample at = traj.Evaluate(seg.t0);
       EXPECT_TRUE(BitEqual(at.q, distinct[k]));
       EXPECT_EQ(at.qd, Eigen::VectorXd::Zero(kDofs));
+      // Right limit: inside the trajectory the acceleration is that of the segment starting.
+      if (k > 0) {
+        EXPECT_EQ(at.qdd, (seg.s_acc * (seg.b - seg.a)).eval());
+      }
     }
     EXPECT_TRUE(BitEqual(traj.Evaluate(0).q, path.front()));
     EXPECT_TRUE(BitEqual(traj.Evaluate(traj.duration()).q, path.back()));
