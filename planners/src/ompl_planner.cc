@@ -4,9 +4,9 @@
 // (through JointSpace::allocDefaultStateSampler) and each planner's own RNG (goal bias,
 // random walks) through a thin subclass. A planner that returns at its first solution is then
 // reproducible. Anytime planners stop at their time budget, which depends on the machine;
-// they are reproducible when `max_iterations` ends the run first. PRM-family planners grow
-// their roadmap on a second thread, and BIT* and the informed sampler keep RNGs we cannot
-// reach, so those are not bit-reproducible; docs/architecture.md says so.
+// RRT* is reproducible when `max_iterations` ends the run first. PRM-family planners grow
+// their roadmap on a second thread, and BIT*, LazyPRM* and Informed RRT*'s informed sampler
+// keep RNGs OMPL does not expose, so those are not bit-reproducible; docs/architecture.md says so.
 
 #include <atomic>
 #include <cmath>
@@ -212,7 +212,13 @@ class OmplPlanner : public Planner {
     FromEigen(problem.goal, goal.get());
     pdef_->addStartState(start);
     pdef_->setGoalState(goal, std::max(problem.goal_tolerance, 1e-9));
-    pdef_->setOptimizationObjective(std::make_shared<ob::PathLengthOptimizationObjective>(si_));
+    auto objective = std::make_shared<ob::PathLengthOptimizationObjective>(si_);
+    if (!spec_.optimizing) {
+      // Any path satisfies a first-solution planner; without this PRM keeps refining until
+      // the budget ends (its objective's default threshold is never met).
+      objective->setCostThreshold(ob::Cost(std::numeric_limits<double>::infinity()));
+    }
+    pdef_->setOptimizationObjective(objective);
 
     const std::uint32_t seed = MixSeed(problem.seed);
     max_iterations_ = static_cast<std::uint64_t>(params.count("max_iterations") ? params.at("max_iterations") : 0);

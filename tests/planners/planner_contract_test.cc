@@ -140,9 +140,10 @@ TEST_P(PlannerContractTest, CancelFromAnotherThreadStopsAnAnytimeSolve) {
 
 TEST_P(PlannerContractTest, SeededRunsAreReproducibleWhereDocumented) {
   const std::string id = GetParam();
-  // PRM-family roadmaps grow on a second thread and BIT* keeps internal RNGs: documented as
-  // not bit-reproducible (docs/architecture.md).
-  if (id == "prm" || id == "prm_star" || id == "lazy_prm_star" || id == "bit_star") {
+  // PRM-family roadmaps grow on a second thread; BIT*, LazyPRM* and Informed RRT*'s informed
+  // sampler keep RNGs OMPL does not expose: documented as not bit-reproducible
+  // (docs/architecture.md).
+  if (id == "prm" || id == "prm_star" || id == "lazy_prm_star" || id == "bit_star" || id == "informed_rrt_star") {
     GTEST_SKIP() << id << " is documented as not bit-reproducible";
   }
   const PlanningProblem p = Problem(42);
