@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Content hashes used as robot and scene ids (SHA-256, FIPS 180-4).
+/// Content hashes used as robot and scene ids (SHA-256 via OpenSSL).
 
 #include <string>
 #include <string_view>
