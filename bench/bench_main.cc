@@ -283,6 +283,16 @@ void BenchGrpc(const Options& options) {
       convert_ms.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
     }
   }
+  // Transport floor: a trivial RPC (ListPlanners, answered on the same pool) over the same channel.
+  std::vector<double> floor_ms;
+  for (int i = 0; i < options.grpc_requests + 10; ++i) {
+    grpc::ClientContext context;
+    v1::ListPlannersResponse planners;
+    const auto t0 = Clock::now();
+    const grpc::Status status = stub->ListPlanners(&context, v1::ListPlannersRequest(), &planners);
+    if (!status.ok()) return;
+    if (i >= 10) floor_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+  }
   const double remote = Quantile(remote_ms, 0.5), local = Quantile(local_ms, 0.5);
   std::printf("\n## Plan latency: loopback gRPC vs in-process (panda, table, rrt_connect, %d requests)\n\n",
               options.grpc_requests);
@@ -293,6 +303,8 @@ void BenchGrpc(const Options& options) {
               remote, Quantile(remote_ms, 0.95));
   std::printf("| of which response conversion (in-process) | %.3f | %.3f |\n", Quantile(convert_ms, 0.5),
               Quantile(convert_ms, 0.95));
+  std::printf("| trivial RPC (ListPlanners) over the same channel: transport floor | %.3f | %.3f |\n",
+              Quantile(floor_ms, 0.5), Quantile(floor_ms, 0.95));
   std::printf("\ngRPC overhead (difference of medians): %.3f ms; ratio %.2f×\n", remote - local, remote / local);
 }
 

@@ -266,7 +266,7 @@ class OmplPlanner : public Planner {
         break;
       }
       case Kind::kBitStar: {
-        auto p = std::make_shared<og::BITstar>(si_);
+        auto p = std::make_shared<og::BITstar>(si_, "kBITstar");  // k-nearest is the default mode
         p->setSamplesPerBatch(static_cast<unsigned>(params.at("samples_per_batch")));
         p->setRewireFactor(params.at("rewire_factor"));
         planner_ = p;
