@@ -18,15 +18,8 @@ constexpr char kBinaryHeader[] = "# Octomap OcTree binary file";
 constexpr char kFullHeader[] = "# Octomap OcTree file";
 constexpr int kTreeDepth = 16;  // octomap::OcTree's fixed depth: leaves live at depth 16
 
-std::string Num(double v) {
-  std::ostringstream os;
-  os.precision(17);
-  os << v;
-  return os.str();
-}
-
 void CheckPositive(double v, const std::string& what) {
-  if (!std::isfinite(v) || v <= 0.0) ThrowInvalid(what + " = " + Num(v) + " must be finite and > 0");
+  if (!std::isfinite(v) || v <= 0.0) ThrowInvalid(what + " = " + FormatNumber(v) + " must be finite and > 0");
 }
 
 void CheckPose(const Eigen::Isometry3d& pose, const std::string& field) {
@@ -184,7 +177,7 @@ void Scene::AddOctoMap(const std::string& name, const std::string& bytes, const 
     fail("holds an OctoMap of type '" + h.id + "'; only 'OcTree' is supported");
   }
   if (h.size == 0) fail("holds an empty OctoMap (size 0)");
-  if (h.res < 1e-4 || h.res > 1e3) fail("has resolution " + Num(h.res) + " m outside [1e-4, 1e3]");
+  if (h.res < 1e-4 || h.res > 1e3) fail("has resolution " + FormatNumber(h.res) + " m outside [1e-4, 1e3]");
 
   std::size_t pos = h.data_offset;
   std::uint64_t nodes = 1, leaves = 0;  // the root

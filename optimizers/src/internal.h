@@ -1,26 +1,18 @@
 #pragma once
 /// \file
 /// Internal helpers of the optimizers module (not installed, not part of the API):
-/// number formatting for messages and the piecewise-quadratic segment profile.
+/// the piecewise-quadratic segment profile.
 
 #include <cmath>
 #include <sstream>
 #include <string>
 
 #include "chasles/optimizers/timed_trajectory.h"
+#include "chasles/robot/error.h"
 
 namespace chasles {
 namespace optimizers_internal {
 
-/// Formats a number for an error message: shortest-ish, `nan`, `inf`, `-1`, `0.005`.
-inline std::string Num(double x) {
-  if (std::isnan(x)) return "nan";
-  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
-  std::ostringstream out;
-  out.precision(6);
-  out << x;
-  return out.str();
-}
 
 /// The three phases of a rest-to-rest segment profile.
 enum class Phase { kAccelerate, kCruise, kDecelerate };

@@ -11,7 +11,6 @@
 namespace chasles {
 namespace {
 
-using optimizers_internal::Num;
 
 /// Uniform double in [0, 1) from the top 53 bits: identical on every standard library.
 double Uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
@@ -81,10 +80,10 @@ JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
     ThrowInvalid("shortcut max_attempts = " + std::to_string(options.max_attempts) + " must be >= 0");
   }
   if (!std::isfinite(options.max_step)) {
-    ThrowInvalid("shortcut max_step = " + Num(options.max_step) + " must be finite");
+    ThrowInvalid("shortcut max_step = " + FormatNumber(options.max_step) + " must be finite");
   }
   if (!(options.max_step > 0.0)) {
-    ThrowInvalid("shortcut max_step = " + Num(options.max_step) + " must be > 0");
+    ThrowInvalid("shortcut max_step = " + FormatNumber(options.max_step) + " must be > 0");
   }
   const int dofs = checker.robot().num_dofs();
   for (std::size_t k = 0; k < path.size(); ++k) {
@@ -94,7 +93,7 @@ JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
     }
     for (int i = 0; i < dofs; ++i) {
       if (!std::isfinite(path[k][i])) {
-        ThrowInvalid("path[" + std::to_string(k) + "][" + std::to_string(i) + "] = " + Num(path[k][i]) +
+        ThrowInvalid("path[" + std::to_string(k) + "][" + std::to_string(i) + "] = " + FormatNumber(path[k][i]) +
                      " must be finite");
       }
     }

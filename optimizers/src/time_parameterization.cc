@@ -10,7 +10,6 @@
 namespace chasles {
 namespace {
 
-using optimizers_internal::Num;
 
 void ValidatePositive(const Eigen::VectorXd& values, const char* field, int num_dofs) {
   if (values.size() != num_dofs) {
@@ -19,7 +18,7 @@ void ValidatePositive(const Eigen::VectorXd& values, const char* field, int num_
   }
   for (int i = 0; i < values.size(); ++i) {
     const double v = values[i];
-    const std::string name = std::string(field) + "[" + std::to_string(i) + "] = " + Num(v);
+    const std::string name = std::string(field) + "[" + std::to_string(i) + "] = " + FormatNumber(v);
     if (!std::isfinite(v)) ThrowInvalid(name + " must be finite");
     if (!(v > 0.0)) ThrowInvalid(name + " must be > 0");
   }
@@ -43,7 +42,7 @@ TimedTrajectory ParameterizeRestToRest(const JointPath& path, const KinematicLim
     }
     for (int i = 0; i < n; ++i) {
       if (!std::isfinite(path[k][i])) {
-        ThrowInvalid("path[" + std::to_string(k) + "][" + std::to_string(i) + "] = " + Num(path[k][i]) +
+        ThrowInvalid("path[" + std::to_string(k) + "][" + std::to_string(i) + "] = " + FormatNumber(path[k][i]) +
                      " must be finite");
       }
     }

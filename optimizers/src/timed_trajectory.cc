@@ -114,15 +114,15 @@ TrajectorySample TimedTrajectory::Evaluate(double t) const {
 
 std::vector<TrajectorySample> TimedTrajectory::Sample(double period) const {
   if (!(period > 0.0) || !std::isfinite(period)) {
-    ThrowInvalid("sample period = " + optimizers_internal::Num(period) + " must be finite and > 0");
+    ThrowInvalid("sample period = " + FormatNumber(period) + " must be finite and > 0");
   }
   std::vector<TrajectorySample> out;
   if (segments_.empty()) return out;
   const double end = duration();
   constexpr double kMaxSamples = 1e8;
   if (end / period > kMaxSamples) {
-    ThrowInvalid("sample period = " + optimizers_internal::Num(period) + " s gives more than 1e8 samples for a " +
-                 optimizers_internal::Num(end) + " s trajectory");
+    ThrowInvalid("sample period = " + FormatNumber(period) + " s gives more than 1e8 samples for a " +
+                 FormatNumber(end) + " s trajectory");
   }
   // Times k·period strictly before the end (skipping one within 1e-9·period of it, so no
   // near-duplicate sample precedes the final one), then the end itself.

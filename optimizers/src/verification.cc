@@ -10,7 +10,6 @@
 namespace chasles {
 namespace {
 
-using optimizers_internal::Num;
 using optimizers_internal::Phase;
 using optimizers_internal::PhaseAt;
 using optimizers_internal::PhaseDuration;
@@ -18,7 +17,7 @@ using optimizers_internal::PhaseStart;
 using optimizers_internal::SegmentStateInPhase;
 using Segment = TimedTrajectory::Segment;
 
-std::string At(double t) { return " at t = " + Num(t) + " s"; }
+std::string At(double t) { return " at t = " + FormatNumber(t) + " s"; }
 
 /// Local time at which the segment's profile reaches path parameter s ∈ [0, 1].
 double TimeAtParameter(const Segment& seg, double s) {
@@ -48,16 +47,16 @@ class Verifier {
       const double ratio = std::abs(x.qd[i]) / limits_.max_velocity[i];
       report_->max_velocity_ratio = std::max(report_->max_velocity_ratio, ratio);
       if (!(ratio <= slack)) {
-        return Fail(JointName(i) + " velocity " + Num(x.qd[i]) + " rad/s exceeds limit " +
-                    Num(limits_.max_velocity[i]) + " rad/s" + At(x.t));
+        return Fail(JointName(i) + " velocity " + FormatNumber(x.qd[i]) + " rad/s exceeds limit " +
+                    FormatNumber(limits_.max_velocity[i]) + " rad/s" + At(x.t));
       }
     }
     for (int i = 0; i < x.qdd.size(); ++i) {
       const double ratio = std::abs(x.qdd[i]) / limits_.max_acceleration[i];
       report_->max_acceleration_ratio = std::max(report_->max_acceleration_ratio, ratio);
       if (!(ratio <= slack)) {
-        return Fail(JointName(i) + " acceleration " + Num(x.qdd[i]) + " rad/s² exceeds limit " +
-                    Num(limits_.max_acceleration[i]) + " rad/s²" + At(x.t));
+        return Fail(JointName(i) + " acceleration " + FormatNumber(x.qdd[i]) + " rad/s² exceeds limit " +
+                    FormatNumber(limits_.max_acceleration[i]) + " rad/s²" + At(x.t));
       }
     }
     return true;
@@ -69,8 +68,8 @@ class Verifier {
     const Eigen::VectorXd& upper = robot_.upper_limits();
     for (int i = 0; i < x.q.size(); ++i) {
       if (!(x.q[i] >= lower[i] && x.q[i] <= upper[i])) {
-        return Fail(JointName(i) + " position " + Num(x.q[i]) + " is outside its limits [" + Num(lower[i]) +
-                    ", " + Num(upper[i]) + "]" + At(x.t));
+        return Fail(JointName(i) + " position " + FormatNumber(x.q[i]) + " is outside its limits [" + FormatNumber(lower[i]) +
+                    ", " + FormatNumber(upper[i]) + "]" + At(x.t));
       }
     }
     ++report_->states_checked;
@@ -110,22 +109,22 @@ std::string SegmentDefect(const TimedTrajectory& trajectory, std::size_t k, int 
   if (!seg.a.allFinite() || !seg.b.allFinite()) return name + " has a non-finite waypoint";
   for (double x : {seg.t0, seg.t_acc, seg.t_cruise, seg.s_acc}) {
     if (!std::isfinite(x) || x < 0.0) {
-      return name + " has an invalid profile (t0 = " + Num(seg.t0) + ", t_acc = " + Num(seg.t_acc) +
-             ", t_cruise = " + Num(seg.t_cruise) + ", s_acc = " + Num(seg.s_acc) + ")";
+      return name + " has an invalid profile (t0 = " + FormatNumber(seg.t0) + ", t_acc = " + FormatNumber(seg.t_acc) +
+             ", t_cruise = " + FormatNumber(seg.t_cruise) + ", s_acc = " + FormatNumber(seg.s_acc) + ")";
     }
   }
   const double s_end = seg.s_acc * seg.t_acc * (seg.t_acc + seg.t_cruise);
   if (seg.a != seg.b && !(std::abs(s_end - 1.0) <= 1e-9)) {
-    return name + " profile covers s = " + Num(s_end) + " instead of 1" + At(seg.t0);
+    return name + " profile covers s = " + FormatNumber(s_end) + " instead of 1" + At(seg.t0);
   }
   const double expected_t0 = k == 0 ? 0.0 : trajectory.segments()[k - 1].t0 + trajectory.segments()[k - 1].duration();
   if (!(std::abs(seg.t0 - expected_t0) <= 1e-9 * std::max(1.0, expected_t0))) {
-    return name + " starts at t = " + Num(seg.t0) + " s, expected " + Num(expected_t0) + " s";
+    return name + " starts at t = " + FormatNumber(seg.t0) + " s, expected " + FormatNumber(expected_t0) + " s";
   }
   if (k > 0) {
     const double jump = (seg.a - trajectory.segments()[k - 1].b).cwiseAbs().maxCoeff();
     if (!(jump <= position_tolerance)) {
-      return name + " does not start where segment " + std::to_string(k - 1) + " ends (jump " + Num(jump) +
+      return name + " does not start where segment " + std::to_string(k - 1) + " ends (jump " + FormatNumber(jump) +
              " rad)" + At(seg.t0);
     }
   }
@@ -138,14 +137,14 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
                                     const Eigen::VectorXd& goal, const CollisionChecker& checker,
                                     const KinematicLimits& limits, const VerificationOptions& options) {
   if (!std::isfinite(options.max_joint_step) || !(options.max_joint_step > 0.0)) {
-    ThrowInvalid("verification max_joint_step = " + Num(options.max_joint_step) + " must be finite and > 0");
+    ThrowInvalid("verification max_joint_step = " + FormatNumber(options.max_joint_step) + " must be finite and > 0");
   }
   if (!std::isfinite(options.endpoint_tolerance) || !(options.endpoint_tolerance >= 0.0)) {
-    ThrowInvalid("verification endpoint_tolerance = " + Num(options.endpoint_tolerance) +
+    ThrowInvalid("verification endpoint_tolerance = " + FormatNumber(options.endpoint_tolerance) +
                  " must be finite and >= 0");
   }
   if (!std::isfinite(options.limit_tolerance) || !(options.limit_tolerance >= 0.0)) {
-    ThrowInvalid("verification limit_tolerance = " + Num(options.limit_tolerance) + " must be finite and >= 0");
+    ThrowInvalid("verification limit_tolerance = " + FormatNumber(options.limit_tolerance) + " must be finite and >= 0");
   }
   const RobotModel& robot = checker.robot();
   const int n = robot.num_dofs();
@@ -172,14 +171,14 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
   }
   const double start_error = (trajectory.Evaluate(0.0).q - start).cwiseAbs().maxCoeff();
   if (!(start_error <= options.endpoint_tolerance)) {
-    report.reason = "trajectory starts " + Num(start_error) + " rad from the start configuration (tolerance " +
-                    Num(options.endpoint_tolerance) + " rad)";
+    report.reason = "trajectory starts " + FormatNumber(start_error) + " rad from the start configuration (tolerance " +
+                    FormatNumber(options.endpoint_tolerance) + " rad)";
     return report;
   }
   const double end_error = (trajectory.Evaluate(trajectory.duration()).q - goal).cwiseAbs().maxCoeff();
   if (!(end_error <= options.endpoint_tolerance)) {
-    report.reason = "trajectory ends " + Num(end_error) + " rad from the goal configuration (tolerance " +
-                    Num(options.endpoint_tolerance) + " rad)" + At(trajectory.duration());
+    report.reason = "trajectory ends " + FormatNumber(end_error) + " rad from the goal configuration (tolerance " +
+                    FormatNumber(options.endpoint_tolerance) + " rad)" + At(trajectory.duration());
     return report;
   }
 
@@ -200,7 +199,7 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
     const double steps = std::ceil(widest / options.max_joint_step);
     if (steps > kMaxStatesPerSegment) {
       report.reason = "segment " + std::to_string(k) + " would need more than 1e8 checks at max_joint_step = " +
-                      Num(options.max_joint_step);
+                      FormatNumber(options.max_joint_step);
       return report;
     }
     const int m = std::max(1, static_cast<int>(steps));

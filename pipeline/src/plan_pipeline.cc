@@ -17,15 +17,9 @@ double SecondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-std::string Num(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
-
 void CheckRange(double value, double lo, double hi, const std::string& field) {
   if (!std::isfinite(value) || value < lo || value > hi) {
-    ThrowInvalid(field + " = " + Num(value) + " must be within [" + Num(lo) + ", " + Num(hi) + "]");
+    ThrowInvalid(field + " = " + FormatNumber(value) + " must be within [" + FormatNumber(lo) + ", " + FormatNumber(hi) + "]");
   }
 }
 
@@ -85,7 +79,7 @@ void PlanQuery::Validate(const PlannerRegistry& registry) const {
     }
     for (int i = 0; i < n; ++i) {
       if (!std::isfinite(v[i]) || v[i] <= 0) {
-        ThrowInvalid("trajectory." + field + "[" + std::to_string(i) + "] = " + Num(v[i]) + " must be finite and > 0");
+        ThrowInvalid("trajectory." + field + "[" + std::to_string(i) + "] = " + FormatNumber(v[i]) + " must be finite and > 0");
       }
     }
   };

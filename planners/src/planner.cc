@@ -14,16 +14,6 @@ const ParameterSpec* PlannerSpec::Find(const std::string& name) const {
   return nullptr;
 }
 
-namespace {
-
-std::string FormatNumber(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
-
-}  // namespace
-
 ParameterValues ResolveParameters(const PlannerSpec& spec, const ParameterValues& values) {
   ParameterValues resolved;
   for (const auto& p : spec.parameters) resolved[p.name] = p.default_value;

@@ -10,6 +10,7 @@
 namespace chasles {
 
 using robot_internal::FormatNumber;
+using chasles::FormatNumber;
 
 // ---------------------------------------------------------------------------------------------
 // AllowedCollisionMatrix

@@ -19,6 +19,7 @@ namespace chasles {
 namespace {
 
 using robot_internal::FormatNumber;
+using chasles::FormatNumber;
 
 /// Collects the error messages urdfdom reports through console_bridge while it parses.
 class ErrorCollector : public console_bridge::OutputHandler {

@@ -74,15 +74,6 @@ void ToProto(const Eigen::VectorXd& v, google::protobuf::RepeatedField<double>* 
 
 }  // namespace
 
-std::string FormatNumber(double value) {
-  if (std::isnan(value)) return "nan";
-  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
-  std::ostringstream out;
-  out.precision(6);
-  out << value;
-  return out.str();
-}
-
 std::string ProtoContentId(const google::protobuf::Message& message) {
   std::string bytes;
   {

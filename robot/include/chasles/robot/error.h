@@ -27,6 +27,10 @@ class Error : public std::runtime_error {
   ErrorCode code_;
 };
 
+/// Formats a number for messages: the shortest decimal text that reads back as exactly
+/// `value` ("2", "0.0825", "-1", "nan", "-inf"). Every module's messages use it.
+std::string FormatNumber(double value);
+
 /// Throws Error(kInvalidArgument, message).
 [[noreturn]] inline void ThrowInvalid(const std::string& message) {
   throw Error(ErrorCode::kInvalidArgument, message);

@@ -52,7 +52,5 @@ void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::
 /// Fills a catalogue entry.
 void PlannerSpecToProto(const PlannerSpec& spec, v1::PlannerDescription* description);
 
-/// Formats a number for messages: shortest round-trip-ish form, e.g. `-1`, `0.5`, `nan`.
-std::string FormatNumber(double value);
 
 }  // namespace chasles
