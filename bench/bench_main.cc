@@ -4,6 +4,7 @@
 //
 //   chasles-bench [--section checks|plan|grpc|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
+//                 [--grpc-requests N] [--shortcut-attempts N] [--examples DIR]
 
 #include <algorithm>
 #include <chrono>
@@ -42,6 +43,7 @@ struct Options {
   double budget = 1.0;          // non-optimizing planners [s]
   double anytime_budget = 0.1;  // optimizing planners [s]
   int grpc_requests = 200;
+  int shortcut_attempts = 100;
 };
 
 std::string ReadFile(const std::string& path) {
@@ -189,15 +191,15 @@ void BenchPlanning(const Options& options) {
   std::printf("Non-optimizing planners get %.2g s per query; anytime planners %.2g s and are compared by path length.\n\n",
               options.budget, options.anytime_budget);
   std::printf("| scene | planner | solved | plan median [ms] | plan p95 [ms] | vs rrt_connect (median) | pipeline median [ms] | "
-              "raw length median [rad] | shortcut length median [rad] |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+              "shortcut median [ms] | verify median [ms] | raw length median [rad] | shortcut length median [rad] |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& scene_name : options.scenes) {
     auto checker = std::make_shared<const CollisionChecker>(robot, LoadScene(scene_name));
     const auto queries = MakeQueries(*checker, options.queries, options.seed);
     double baseline_median = std::nan("");
     for (const auto& id : planners) {
       const bool optimizing = registry.Spec(id).optimizing;
-      std::vector<double> plan_ms, total_ms, raw_length, length;
+      std::vector<double> plan_ms, total_ms, shortcut_ms, verify_ms, raw_length, length;
       int solved = 0;
       for (size_t k = 0; k < queries.size(); ++k) {
         PlanQuery query;
@@ -206,12 +208,15 @@ void BenchPlanning(const Options& options) {
         query.goal = queries[k].second;
         query.planner_id = id;
         query.seed = options.seed + k;
+        query.shortcut_attempts = options.shortcut_attempts;
         const PlanOutcome out = pipeline.Plan(
             query, Termination::After(std::chrono::duration<double>(optimizing ? options.anytime_budget : options.budget)));
         if (out.code != PlanOutcomeCode::kSuccess) continue;
         ++solved;
         plan_ms.push_back(1e3 * out.seconds.plan);
         total_ms.push_back(1e3 * out.seconds.total);
+        shortcut_ms.push_back(1e3 * out.seconds.shortcut);
+        verify_ms.push_back(1e3 * out.seconds.verify);
         double raw = 0, shortened = 0;
         for (size_t i = 1; i < out.raw_path.size(); ++i) raw += (out.raw_path[i] - out.raw_path[i - 1]).norm();
         for (size_t i = 1; i < out.path.size(); ++i) shortened += (out.path[i] - out.path[i - 1]).norm();
@@ -220,9 +225,10 @@ void BenchPlanning(const Options& options) {
       }
       const double median = Quantile(plan_ms, 0.5);
       if (id == "rrt_connect") baseline_median = median;
-      std::printf("| %s | %s | %d/%zu | %.2f | %.2f | %.2f× | %.2f | %.2f | %.2f |\n", scene_name.c_str(), id.c_str(),
-                  solved, queries.size(), median, Quantile(plan_ms, 0.95), median / baseline_median,
-                  Quantile(total_ms, 0.5), Quantile(raw_length, 0.5), Quantile(length, 0.5));
+      std::printf("| %s | %s | %d/%zu | %.2f | %.2f | %.2f× | %.2f | %.2f | %.2f | %.2f | %.2f |\n", scene_name.c_str(),
+                  id.c_str(), solved, queries.size(), median, Quantile(plan_ms, 0.95), median / baseline_median,
+                  Quantile(total_ms, 0.5), Quantile(shortcut_ms, 0.5), Quantile(verify_ms, 0.5),
+                  Quantile(raw_length, 0.5), Quantile(length, 0.5));
       std::fflush(stdout);
     }
   }
@@ -326,11 +332,12 @@ int Main(int argc, char** argv) {
     else if (arg == "--anytime-budget") options.anytime_budget = std::stod(value());
     else if (arg == "--grpc-requests") options.grpc_requests = std::stoi(value());
     else if (arg == "--examples") examples_dir = value();
+    else if (arg == "--shortcut-attempts") options.shortcut_attempts = std::stoi(value());
     else {
       std::fprintf(stderr,
                    "usage: chasles-bench [--section checks|plan|grpc|all] [--queries N] [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
-                   "                     [--grpc-requests N] [--examples DIR]\n");
+                   "                     [--grpc-requests N] [--shortcut-attempts N] [--examples DIR]\n");
       return arg == "--help" ? 0 : 2;
     }
   }
