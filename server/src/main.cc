@@ -1,4 +1,5 @@
 // chasles-server: the Chasles motion planning gRPC server.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -79,8 +80,12 @@ int main(int argc, char** argv) {
 
   try {
     chasles::PlanningServer server(options);
-    std::fprintf(stderr, "chasles-server: listening on %s (port %d), %s planning threads\n", options.listen.c_str(),
-                 server.port(), options.threads == 0 ? "hardware" : std::to_string(options.threads).c_str());
+    const unsigned threads =
+        options.threads > 0 ? static_cast<unsigned>(options.threads) : std::max(1u, std::thread::hardware_concurrency());
+    std::fprintf(stderr,
+                 "chasles-server: listening on %s (port %d), %u planning threads; requests that name no robot or "
+                 "scene use the embedded default robot 'panda' (7 DOF) and scene 'table'\n",
+                 options.listen.c_str(), server.port(), threads);
     std::signal(SIGINT, OnSignal);
     std::signal(SIGTERM, OnSignal);
     std::atomic<bool> done{false};
