@@ -201,6 +201,7 @@ void BenchPlanning(const Options& options) {
       const bool optimizing = registry.Spec(id).optimizing;
       std::vector<double> plan_ms, total_ms, shortcut_ms, verify_ms, raw_length, length;
       int solved = 0;
+      std::map<std::string, int> failures;  // outcome → count, for the unsolved queries
       for (size_t k = 0; k < queries.size(); ++k) {
         PlanQuery query;
         query.checker = checker;
@@ -211,7 +212,10 @@ void BenchPlanning(const Options& options) {
         query.shortcut_attempts = options.shortcut_attempts;
         const PlanOutcome out = pipeline.Plan(
             query, Termination::After(std::chrono::duration<double>(optimizing ? options.anytime_budget : options.budget)));
-        if (out.code != PlanOutcomeCode::kSuccess) continue;
+        if (out.code != PlanOutcomeCode::kSuccess) {
+          ++failures[ToString(out.code)];
+          continue;
+        }
         ++solved;
         plan_ms.push_back(1e3 * out.seconds.plan);
         total_ms.push_back(1e3 * out.seconds.total);
@@ -225,8 +229,11 @@ void BenchPlanning(const Options& options) {
       }
       const double median = Quantile(plan_ms, 0.5);
       if (id == "rrt_connect") baseline_median = median;
-      std::printf("| %s | %s | %d/%zu | %.2f | %.2f | %.2f× | %.2f | %.2f | %.2f | %.2f | %.2f |\n", scene_name.c_str(),
-                  id.c_str(), solved, queries.size(), median, Quantile(plan_ms, 0.95), median / baseline_median,
+      std::string unsolved;
+      for (const auto& [code, count] : failures) unsolved += (unsolved.empty() ? " (" : ", ") + code + " " + std::to_string(count);
+      if (!unsolved.empty()) unsolved += ")";
+      std::printf("| %s | %s | %d/%zu%s | %.2f | %.2f | %.2f× | %.2f | %.2f | %.2f | %.2f | %.2f |\n", scene_name.c_str(),
+                  id.c_str(), solved, queries.size(), unsolved.c_str(), median, Quantile(plan_ms, 0.95), median / baseline_median,
                   Quantile(total_ms, 0.5), Quantile(shortcut_ms, 0.5), Quantile(verify_ms, 0.5),
                   Quantile(raw_length, 0.5), Quantile(length, 0.5));
       std::fflush(stdout);
