@@ -11,6 +11,7 @@
 #include <octomap/OcTree.h>
 
 #include "chasles/robot/error.h"
+#include "occupancy_grid.h"
 
 // Design notes
 // ------------
@@ -20,8 +21,14 @@
 // * Fast path (every robot shape a sphere, force_fcl off): spheres are kept as flat arrays
 //   (link-frame centre, radius + padding), grouped per link with one bounding sphere per link.
 //   Scene primitives are kept as flat records with their world->local transform precomputed;
-//   tests are closed-form. Meshes and occupancy maps still go through FCL, with the robot
-//   spheres as fcl::Sphered.
+//   tests are closed-form. Occupancy maps are expanded once, at construction, into a bit grid
+//   of their finest voxels (occupancy_grid.h: FCL's own occupancy rule and box boundaries), and
+//   each sphere is tested exactly against the occupied voxels overlapping its box. A map whose
+//   obstacle voxels span more than OccupancyGrid::kMaxVoxels stays on FCL. Meshes still go
+//   through FCL, with the robot spheres as fcl::Sphered.
+// * Fast-path order: primitives, occupancy maps (scene order), self, meshes. The FCL path checks
+//   scene objects, then maps, then self, so for a scene of maps only both paths report the same
+//   first contact.
 // * FCL path: shared, immutable fcl geometries; every query calls the geometry+transform
 //   overloads of fcl::collide / fcl::distance, which build their traversal state on the
 //   stack. Nothing is mutated in const methods, so one checker serves all threads.
@@ -218,6 +225,7 @@ struct SceneGeom {  // an FCL scene object (world pose fixed)
   Eigen::Vector3d center;  // bounding centre, world
   double radius;
   bool octree = false;
+  int grid = -1;  // fast path: index into Impl::grids when this map is gridded
 };
 
 FclGeom MakeGeom(const Shape& s) {
@@ -287,6 +295,7 @@ struct CollisionChecker::Impl {
   std::vector<Prim> prims;
   std::vector<std::shared_ptr<fcl::Sphered>> fcl_spheres;  // per sphere, radius + padding
   std::vector<std::shared_ptr<fcl::Sphered>> fcl_link_bounds;  // per sphere link, its bound
+  std::vector<detail::OccupancyGrid> grids;  // gridded occupancy maps
 
   // FCL path.
   std::vector<RobotShape> shapes;
@@ -435,6 +444,56 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
       }
     }
   }
+  // A mesh, or a map too large to grid, through FCL, robot spheres as fcl::Sphered.
+  const auto fcl_geom_hit = [&](const SceneGeom& g) {
+    fcl::CollisionRequestd request;
+    for (std::size_t li = 0; li < nl; ++li) {
+      const SphereLink& L = slinks[li];
+      const Eigen::Vector3d c(lb[3 * li], lb[3 * li + 1], lb[3 * li + 2]);
+      if (!SpheresOverlap(c, L.br, g.center, g.radius)) continue;
+      if (L.end - L.begin > 1) {  // one query with the link's bounding sphere first
+        fcl::Transform3d tf = fcl::Transform3d::Identity();
+        tf.translation() = c;
+        fcl::CollisionResultd result;
+        if (fcl::collide(fcl_link_bounds[li].get(), tf, g.g.geom.get(), g.tf, request, result) == 0) continue;
+      }
+      place(li);
+      for (int k = L.begin; k < L.end; ++k) {
+        const Eigen::Vector3d x(w[3 * k], w[3 * k + 1], w[3 * k + 2]);
+        if (!SpheresOverlap(x, sr[k], g.center, g.radius)) continue;
+        fcl::Transform3d tf = fcl::Transform3d::Identity();
+        tf.translation() = x;
+        fcl::CollisionResultd result;
+        if (fcl::collide(fcl_spheres[k].get(), tf, g.g.geom.get(), g.tf, request, result) > 0) {
+          return hit(L.link, g.name, false);
+        }
+      }
+    }
+    return false;
+  };
+  // Occupancy maps, in scene order: link bounding sphere against the map's bound, then against
+  // the voxel grid, then every sphere of the link.
+  for (const SceneGeom& g : scene_geoms) {
+    if (!g.octree) continue;
+    if (g.grid < 0) {
+      if (fcl_geom_hit(g)) return true;
+      continue;
+    }
+    const detail::OccupancyGrid& grid = grids[g.grid];
+    const double* gc = g.center.data();
+    for (std::size_t li = 0; li < nl; ++li) {
+      const SphereLink& L = slinks[li];
+      const double* c = &lb[3 * li];
+      const double d0 = c[0] - gc[0], d1 = c[1] - gc[1], d2 = c[2] - gc[2];
+      const double rr = L.br + g.radius;
+      if (d0 * d0 + d1 * d1 + d2 * d2 > rr * rr) continue;
+      if (L.end - L.begin > 1 && !grid.SphereHits(c, L.br)) continue;
+      place(li);
+      for (int k = L.begin; k < L.end; ++k) {
+        if (grid.SphereHits(&w[3 * k], sr[k])) return hit(L.link, g.name, false);
+      }
+    }
+  }
   // Self collision.
   for (const auto& pr : self_pairs) {
     const SphereLink& A = slinks[pr.first];
@@ -462,33 +521,9 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
       }
     }
   }
-  // Meshes and occupancy maps through FCL, robot spheres as fcl::Sphered.
-  if (!scene_geoms.empty()) {
-    fcl::CollisionRequestd request;
-    for (const SceneGeom& g : scene_geoms) {
-      for (std::size_t li = 0; li < nl; ++li) {
-        const SphereLink& L = slinks[li];
-        const Eigen::Vector3d c(lb[3 * li], lb[3 * li + 1], lb[3 * li + 2]);
-        if (!SpheresOverlap(c, L.br, g.center, g.radius)) continue;
-        if (L.end - L.begin > 1) {  // one query with the link's bounding sphere first
-          fcl::Transform3d tf = fcl::Transform3d::Identity();
-          tf.translation() = c;
-          fcl::CollisionResultd result;
-          if (fcl::collide(fcl_link_bounds[li].get(), tf, g.g.geom.get(), g.tf, request, result) == 0) continue;
-        }
-        place(li);
-        for (int k = L.begin; k < L.end; ++k) {
-          const Eigen::Vector3d x(w[3 * k], w[3 * k + 1], w[3 * k + 2]);
-          if (!SpheresOverlap(x, sr[k], g.center, g.radius)) continue;
-          fcl::Transform3d tf = fcl::Transform3d::Identity();
-          tf.translation() = x;
-          fcl::CollisionResultd result;
-          if (fcl::collide(fcl_spheres[k].get(), tf, g.g.geom.get(), g.tf, request, result) > 0) {
-            return hit(L.link, g.name, false);
-          }
-        }
-      }
-    }
+  // Meshes through FCL.
+  for (const SceneGeom& g : scene_geoms) {
+    if (!g.octree && fcl_geom_hit(g)) return true;
   }
   return false;
 }
@@ -691,6 +726,21 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
     g.tf = map.pose;
     g.center = map.pose * (0.5 * (lo + hi));
     g.radius = 0.5 * (hi - lo).norm();
+    if (m.fast) {
+      detail::OccupancyGrid grid;
+      switch (grid.Build(*map.tree, map.pose)) {
+        case detail::OccupancyGrid::Status::kBuilt:
+          g.center = grid.center();  // bounds exactly the voxels FCL treats as obstacles
+          g.radius = grid.radius();
+          [[fallthrough]];
+        case detail::OccupancyGrid::Status::kEmpty:  // FCL's traversal reaches no obstacle
+          g.grid = static_cast<int>(m.grids.size());
+          m.grids.push_back(std::move(grid));
+          break;
+        case detail::OccupancyGrid::Status::kTooLarge:  // stays on FCL
+          break;
+      }
+    }
     m.scene_geoms.push_back(std::move(g));
   }
 
@@ -751,6 +801,8 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
 CollisionChecker::~CollisionChecker() = default;
 
 bool CollisionChecker::uses_fast_path() const { return impl_->fast; }
+
+int CollisionChecker::num_gridded_occupancy_maps() const { return static_cast<int>(impl_->grids.size()); }
 
 namespace {
 void CheckSize(const RobotModel& robot, const Eigen::VectorXd& q, const char* field) {

@@ -68,9 +68,16 @@ class CollisionChecker {
   double Clearance(const Eigen::VectorXd& q) const;
 
   /// True when the fast sphere path is used: every robot shape is a sphere and force_fcl is
-  /// off. Then self checks and robot–primitive checks bypass FCL's generic machinery (exact
-  /// sphere–primitive tests); meshes and occupancy maps always go through FCL.
+  /// off. Then self checks, robot–primitive checks and robot–occupancy-map checks bypass FCL's
+  /// generic machinery (exact sphere–primitive and sphere–voxel tests, same answers as FCL up
+  /// to rounding at exact contact); meshes always go through FCL, and so does Clearance()
+  /// against meshes and occupancy maps.
   bool uses_fast_path() const;
+
+  /// Fast path: how many occupancy maps were expanded into a voxel bit grid at construction
+  /// (the others — whose occupied voxels span a box of more than 2^28 finest voxels — are
+  /// checked through FCL's octree traversal). 0 on the FCL path.
+  int num_gridded_occupancy_maps() const;
 
  private:
   struct Impl;
