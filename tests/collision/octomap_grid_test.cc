@@ -300,8 +300,10 @@ TEST(OccupancyGrid, TouchingAndJustMissingAFaceAnEdgeAndACorner) {
       const CollisionChecker fcl(ball, scene, fcl_options);
       ASSERT_EQ(fast.num_gridded_occupancy_maps(), 1);
       const Eigen::Vector3d touching = c.contact + c.offset;
-      // Touching is a collision (as for primitives).
+      // Touching is a collision (as for primitives), on both paths: with exact binary
+      // coordinates neither path rounds.
       EXPECT_FALSE(fast.IsValid(touching)) << c.what << " padding " << padding;
+      EXPECT_FALSE(fcl.IsValid(touching)) << c.what << " padding " << padding << " (FCL)";
       for (double eps : {1e-9, 1e-6}) {
         const Eigen::Vector3d out = c.contact + (1 + eps) * c.offset;
         const Eigen::Vector3d in = c.contact + (1 - eps) * c.offset;
