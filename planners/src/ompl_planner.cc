@@ -4,9 +4,10 @@
 // (through JointSpace::allocDefaultStateSampler) and each planner's own RNG (goal bias,
 // random walks) through a thin subclass. A planner that returns at its first solution is then
 // reproducible. Anytime planners stop at their time budget, which depends on the machine;
-// RRT* is reproducible when `max_iterations` ends the run first. PRM-family planners grow
-// their roadmap on a second thread, and BIT*, LazyPRM* and Informed RRT*'s informed sampler
-// keep RNGs OMPL does not expose, so those are not bit-reproducible; docs/architecture.md says so.
+// they are reproducible when `max_iterations` ends the run first. Two OMPL behaviours would
+// break this and are replaced: PRM's roadmap grows beside a solution-checking thread in timed
+// slices (SingleThreadPrm), and the direct informed sampler keeps a private clock-seeded RNG
+// (SeededPathLengthObjective samples the informed set by rejection from our seeded stream).
 
 #include <atomic>
 #include <cmath>
@@ -22,7 +23,9 @@
 #include <ompl/base/ScopedState.h>
 #include <ompl/base/SpaceInformation.h>
 #include <ompl/base/StateValidityChecker.h>
+#include <ompl/base/goals/GoalSampleableRegion.h>
 #include <ompl/base/objectives/PathLengthOptimizationObjective.h>
+#include <ompl/base/samplers/informed/RejectionInfSampler.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/geometric/PathGeometric.h>
 #include <ompl/geometric/planners/informedtrees/BITstar.h>
@@ -72,6 +75,18 @@ class JointSpace : public ob::RealVectorStateSpace {
  private:
   std::uint64_t seed_;
   mutable std::atomic<std::uint64_t> counter_{0};
+};
+
+/// Path length, with informed sampling by rejection from the space's (seeded) sampler.
+/// OMPL's default direct informed sampler keeps a private, clock-seeded RNG; rejection
+/// sampling draws the same uniform distribution over the informed set from our seeded stream.
+class SeededPathLengthObjective : public ob::PathLengthOptimizationObjective {
+ public:
+  using ob::PathLengthOptimizationObjective::PathLengthOptimizationObjective;
+  ob::InformedSamplerPtr allocInformedStateSampler(const ob::ProblemDefinitionPtr& problem,
+                                                   unsigned int max_calls) const override {
+    return std::make_shared<ob::RejectionInfSampler>(problem, max_calls);
+  }
 };
 
 void ToEigen(const ob::State* state, int n, Eigen::VectorXd* q) {
@@ -161,6 +176,60 @@ class Seeded : public P {
   Seeded(const ob::SpaceInformationPtr& si, std::uint32_t seed) : P(si) { this->rng_.setLocalSeed(seed); }
 };
 
+/// PRM / PRM* run on one thread: OMPL's own roadmap growth, expansion and solution search,
+/// in slices of a fixed number of termination checks, instead of OMPL's solution-checking
+/// thread and timed slices. The roadmap then depends only on the seed, so a seeded run repeats.
+/// A first-solution PRM stops at the first connection; PRM* keeps the best path until `ptc`.
+template <class Base>
+class SingleThreadPrm : public Base {
+ public:
+  SingleThreadPrm(const ob::SpaceInformationPtr& si, std::uint32_t seed) : Base(si) { this->rng_.setLocalSeed(seed); }
+
+  ob::PlannerStatus solve(const ob::PlannerTerminationCondition& ptc) override {
+    this->checkValidity();
+    auto* goal = dynamic_cast<ob::GoalSampleableRegion*>(this->pdef_->getGoal().get());
+    if (goal == nullptr) return ob::PlannerStatus::UNRECOGNIZED_GOAL_TYPE;
+    while (const ob::State* start = this->pis_.nextStart()) {
+      this->startM_.push_back(this->addMilestone(this->si_->cloneState(start)));
+    }
+    if (this->startM_.empty()) return ob::PlannerStatus::INVALID_START;
+    if (this->goalM_.empty()) {
+      if (const ob::State* g = this->pis_.nextGoal(ptc)) this->goalM_.push_back(this->addMilestone(this->si_->cloneState(g)));
+    }
+    if (this->goalM_.empty()) return ob::PlannerStatus::INVALID_GOAL;
+    if (!this->sampler_) this->sampler_ = this->si_->allocValidStateSampler();
+    if (!this->simpleSampler_) this->simpleSampler_ = this->si_->allocStateSampler();
+
+    constexpr unsigned kBounceSteps = 5;  // length of an expansion's random bounce walk
+    // Termination checks per expansion slice; a growth slice gets twice as many (about two
+    // milestones). The solution check after each slice is a disjoint-set lookup until start
+    // and goal share a component, so checking this often costs little and finds paths early.
+    constexpr unsigned kGrowSlice = 2;
+    std::vector<ob::State*> work(kBounceSteps);
+    this->si_->allocStates(work);
+    ob::PathPtr solution;
+    bool satisfied = false;
+    bool grow = true;  // 2:1 growth to expansion, as OMPL's PRM does by time
+    while (!satisfied && !ptc) {
+      unsigned left = grow ? 2 * kGrowSlice : kGrowSlice;
+      const ob::PlannerTerminationCondition slice([&ptc, &left] { return ptc() || left-- == 0; });
+      if (grow) {
+        this->growRoadmap(slice, work[0]);
+      } else {
+        this->expandRoadmap(slice, work);
+      }
+      grow = !grow;
+      satisfied = this->maybeConstructSolution(this->startM_, this->goalM_, solution);
+    }
+    this->si_->freeStates(work);
+    if (!solution) return ob::PlannerStatus::TIMEOUT;
+    ob::PlannerSolution found(solution);
+    found.setPlannerName(this->getName());
+    this->pdef_->addSolutionPath(found);
+    return ob::PlannerStatus::EXACT_SOLUTION;
+  }
+};
+
 enum class Kind { kPrm, kPrmStar, kLazyPrmStar, kRrt, kRrtStar, kInformedRrtStar, kRrtConnect, kBitStar };
 
 ParameterSpec RangeParam() {
@@ -212,7 +281,7 @@ class OmplPlanner : public Planner {
     FromEigen(problem.goal, goal.get());
     pdef_->addStartState(start);
     pdef_->setGoalState(goal, std::max(problem.goal_tolerance, 1e-9));
-    auto objective = std::make_shared<ob::PathLengthOptimizationObjective>(si_);
+    auto objective = std::make_shared<SeededPathLengthObjective>(si_);
     if (!spec_.optimizing) {
       // Any path satisfies a first-solution planner; without this PRM keeps refining until
       // the budget ends (its objective's default threshold is never met).
@@ -224,13 +293,13 @@ class OmplPlanner : public Planner {
     max_iterations_ = static_cast<std::uint64_t>(params.count("max_iterations") ? params.at("max_iterations") : 0);
     switch (kind_) {
       case Kind::kPrm: {
-        auto p = std::make_shared<Seeded<og::PRM>>(si_, seed);
+        auto p = std::make_shared<SingleThreadPrm<og::PRM>>(si_, seed);
         p->setMaxNearestNeighbors(static_cast<unsigned>(params.at("max_nearest_neighbors")));
         planner_ = p;
         break;
       }
       case Kind::kPrmStar:
-        planner_ = std::make_shared<Seeded<og::PRMstar>>(si_, seed);
+        planner_ = std::make_shared<SingleThreadPrm<og::PRMstar>>(si_, seed);
         break;
       case Kind::kLazyPrmStar: {
         auto p = std::make_shared<og::LazyPRMstar>(si_);
