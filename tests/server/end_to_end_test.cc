@@ -115,7 +115,7 @@ TEST_P(EveryPlannerOnEveryRequest, ReturnsAVerifiedTrajectory) {
   bool optimizing = false;
   for (const v1::PlannerDescription& p : planners.planners()) optimizing |= p.id() == planner && p.optimizing();
   // Anytime planners refine until the budget ends: keep it small.
-  request.set_time_budget(optimizing ? 0.3 : 3.0);
+  request.set_time_budget(optimizing ? 0.5 : 3.0);
   v1::PlanResponse response;
   const grpc::Status status = server_->Plan(request, &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
