@@ -38,6 +38,9 @@ struct Joint {
   Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  ///< child frame in parent frame at q = 0
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();             ///< unit, in the joint (child) frame
   JointLimits limits;
+  double damping = 0.0;   ///< viscous friction [N·m·s/rad] or [N·s/m], >= 0
+  double friction = 0.0;  ///< Coulomb friction [N·m] or [N], >= 0
+  double armature = 0.0;  ///< reflected rotor inertia added to M(q)'s diagonal [kg·m²] or [kg], >= 0
   int dof = -1;  ///< index into the configuration vector, -1 for fixed joints
 };
 

@@ -1,0 +1,31 @@
+#pragma once
+/// \file
+/// Jacobians and manipulability (Lynch & Park, ch. 5). Columns follow the configuration-vector
+/// order of the model; columns of joints that do not move the link are zero. Rows are (ω, v).
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "chasles/robot/lie_group.h"
+#include "chasles/robot/robot_model.h"
+
+namespace chasles {
+
+using Jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+
+/// Space Jacobian J_s(q) of `link`: the twist of the link frame expressed in the base frame,
+/// 𝒱_s = J_s q̇. Precondition: q.size() == num_dofs(), 0 <= link < num_links().
+Jacobian SpaceJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int link);
+/// Body Jacobian J_b(q) = [Ad_{T_sb^{-1}}] J_s(q) of `link` (twist in the link frame).
+Jacobian BodyJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int link);
+/// Geometric Jacobian of a point fixed on `link` (`point` in the link frame): rows are the
+/// link's angular velocity ω and the point's linear velocity ṗ, both in the base frame.
+Jacobian PointJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int link,
+                       const Eigen::Vector3d& point);
+
+/// Yoshikawa's manipulability √det(J Jᵀ) of a 6×n Jacobian (0 at a singularity).
+double Manipulability(const Jacobian& J);
+/// True when the smallest singular value of J is below `tolerance` (rank-deficient).
+bool IsSingular(const Jacobian& J, double tolerance = 1e-6);
+
+}  // namespace chasles
