@@ -1,1 +1,107 @@
-// placeholder: filled in by the issue-3 work
+#include "chasles/robot/kinematics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+
+#include "chasles/robot/error.h"
+#include "kinematics_internal.h"
+
+namespace chasles {
+
+namespace {
+
+void CheckArguments(const RobotModel& robot, const Eigen::VectorXd& q, int link,
+                    const char* function) {
+  if (q.size() != robot.num_dofs()) {
+    ThrowInvalid(std::string(function) + ": q has " + std::to_string(q.size()) +
+                 " values, robot '" + robot.name() + "' has " + std::to_string(robot.num_dofs()) +
+                 " joints");
+  }
+  if (link < 0 || link >= robot.num_links()) {
+    ThrowInvalid(std::string(function) + ": link = " + std::to_string(link) +
+                 " is not a link of robot '" + robot.name() + "' (" +
+                 std::to_string(robot.num_links()) + " links)");
+  }
+}
+
+// Fills J (already 6×n and zeroed) with the space Jacobian; returns the link pose if asked.
+void FillSpaceJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int link, Jacobian* J,
+                       Eigen::Matrix3d* R, Eigen::Vector3d* p) {
+  const std::vector<int>& chain = robot.link_chain(link);
+  kinematics_internal::ChainForward(
+      robot, q.data(), chain, link, R, p,
+      [&](int j, const Eigen::Vector3d& w, const Eigen::Vector3d& v) {
+        const int d = chain[j];
+        J->col(d).head<3>() = w;
+        J->col(d).tail<3>() = v;
+      });
+}
+
+}  // namespace
+
+Jacobian SpaceJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int link) {
+  CheckArguments(robot, q, link, "SpaceJacobian");
+  Jacobian J = Jacobian::Zero(6, robot.num_dofs());
+  FillSpaceJacobian(robot, q, link, &J, nullptr, nullptr);
+  return J;
+}
+
+Jacobian BodyJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int link) {
+  CheckArguments(robot, q, link, "BodyJacobian");
+  Jacobian J = Jacobian::Zero(6, robot.num_dofs());
+  Eigen::Matrix3d R;
+  Eigen::Vector3d p;
+  FillSpaceJacobian(robot, q, link, &J, &R, &p);
+  // [Ad_{T⁻¹}] (ω, v) = (Rᵀω, Rᵀ(v − p × ω)), column by column in place.
+  for (int d : robot.link_chain(link)) {
+    const Eigen::Vector3d w = J.col(d).head<3>();
+    const Eigen::Vector3d v = J.col(d).tail<3>();
+    J.col(d).head<3>().noalias() = R.transpose() * w;
+    J.col(d).tail<3>().noalias() = R.transpose() * (v - p.cross(w));
+  }
+  return J;
+}
+
+Jacobian PointJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int link,
+                       const Eigen::Vector3d& point) {
+  CheckArguments(robot, q, link, "PointJacobian");
+  Jacobian J = Jacobian::Zero(6, robot.num_dofs());
+  Eigen::Matrix3d R;
+  Eigen::Vector3d p;
+  FillSpaceJacobian(robot, q, link, &J, &R, &p);
+  // ṗ = v_s + ω_s × p_world for the point's position p_world in the base frame.
+  const Eigen::Vector3d x = R * point + p;
+  for (int d : robot.link_chain(link)) {
+    const Eigen::Vector3d w = J.col(d).head<3>();
+    J.col(d).tail<3>() += w.cross(x);
+  }
+  return J;
+}
+
+double Manipulability(const Jacobian& J) {
+  const Eigen::Index n = J.cols();
+  if (n == 0) return 0.0;
+  double det;
+  if (n >= 6) {
+    const Matrix6d G = J * J.transpose();
+    det = G.determinant();
+  } else {
+    const Eigen::MatrixXd G = J.transpose() * J;
+    det = G.determinant();
+  }
+  return std::sqrt(std::max(det, 0.0));
+}
+
+bool IsSingular(const Jacobian& J, double tolerance) {
+  if (J.cols() == 0) return true;
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J);
+  const Eigen::VectorXd& s = svd.singularValues();  // min(6, n) values, descending
+  return s[s.size() - 1] < tolerance;
+}
+
+}  // namespace chasles

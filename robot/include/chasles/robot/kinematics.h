@@ -14,7 +14,9 @@ namespace chasles {
 using Jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 
 /// Space Jacobian J_s(q) of `link`: the twist of the link frame expressed in the base frame,
-/// 𝒱_s = J_s q̇. Precondition: q.size() == num_dofs(), 0 <= link < num_links().
+/// 𝒱_s = J_s q̇. Precondition: q.size() == num_dofs(), 0 <= link < num_links()
+/// (\throws Error(kInvalidArgument) otherwise; same for the functions below).
+/// Allocates only the returned matrix.
 Jacobian SpaceJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int link);
 /// Body Jacobian J_b(q) = [Ad_{T_sb^{-1}}] J_s(q) of `link` (twist in the link frame).
 Jacobian BodyJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int link);
@@ -24,8 +26,12 @@ Jacobian PointJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int li
                        const Eigen::Vector3d& point);
 
 /// Yoshikawa's manipulability √det(J Jᵀ) of a 6×n Jacobian (0 at a singularity).
+/// In general the product of the min(6, n) singular values of J: √det(J Jᵀ) for n >= 6 and
+/// √det(Jᵀ J) for n < 6 (so an arm with fewer than 6 joints is not identically 0); 0 for n = 0.
+/// To measure a task subspace (e.g. planar position), zero the other rows first.
 double Manipulability(const Jacobian& J);
-/// True when the smallest singular value of J is below `tolerance` (rank-deficient).
+/// True when the smallest of the min(6, n) singular values of J is below `tolerance`
+/// (J has lost rank; units are those of J's rows). True for n = 0.
 bool IsSingular(const Jacobian& J, double tolerance = 1e-6);
 
 }  // namespace chasles
