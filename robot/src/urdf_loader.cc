@@ -242,6 +242,18 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
           ThrowInvalid(where + " limit effort = " + FormatNumber(ul.effort) + " must be >= 0 and finite");
         }
       }
+      if (ujoint->dynamics) {
+        // <dynamics damping=".." friction=".."/>: viscous [N·m·s/rad] and Coulomb [N·m] friction.
+        const urdf::JointDynamics& ud = *ujoint->dynamics;
+        if (!(ud.damping >= 0.0) || !std::isfinite(ud.damping)) {
+          ThrowInvalid(where + " dynamics damping = " + FormatNumber(ud.damping) + " must be >= 0 and finite");
+        }
+        if (!(ud.friction >= 0.0) || !std::isfinite(ud.friction)) {
+          ThrowInvalid(where + " dynamics friction = " + FormatNumber(ud.friction) + " must be >= 0 and finite");
+        }
+        joint.damping = ud.damping;
+        joint.friction = ud.friction;
+      }
       urdf::LinkConstSharedPtr child = model->getLink(ujoint->child_link_name);
       if (!child) ThrowInvalid(where + " child = '" + ujoint->child_link_name + "' is not a link");
       joint.parent_link = link_index.at(parent.name);
