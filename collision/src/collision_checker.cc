@@ -480,12 +480,13 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
       continue;
     }
     const detail::OccupancyGrid& grid = grids[g.grid];
-    const double* gc = g.center.data();
+    if (grid.num_blocks() == 0) continue;
+    const double* gc = grid.center().data();
     for (std::size_t li = 0; li < nl; ++li) {
       const SphereLink& L = slinks[li];
       const double* c = &lb[3 * li];
       const double d0 = c[0] - gc[0], d1 = c[1] - gc[1], d2 = c[2] - gc[2];
-      const double rr = L.br + g.radius;
+      const double rr = L.br + grid.radius();
       if (d0 * d0 + d1 * d1 + d2 * d2 > rr * rr) continue;
       if (L.end - L.begin > 1 && !grid.SphereHits(c, L.br)) continue;
       place(li);
@@ -729,11 +730,10 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
     if (m.fast) {
       detail::OccupancyGrid grid;
       switch (grid.Build(*map.tree, map.pose)) {
+        // g.center/g.radius keep bounding every occupied leaf: Clearance's fcl::distance
+        // traversal may reach leaves the collision traversal (and so the grid) does not.
         case detail::OccupancyGrid::Status::kBuilt:
-          g.center = grid.center();  // bounds exactly the voxels FCL treats as obstacles
-          g.radius = grid.radius();
-          [[fallthrough]];
-        case detail::OccupancyGrid::Status::kEmpty:  // FCL's traversal reaches no obstacle
+        case detail::OccupancyGrid::Status::kEmpty:  // FCL's collision traversal reaches no obstacle
           g.grid = static_cast<int>(m.grids.size());
           m.grids.push_back(std::move(grid));
           break;
