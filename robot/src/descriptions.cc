@@ -342,6 +342,8 @@ std::shared_ptr<const RobotModel> RobotFromPoe(const PoeDescription& poe) {
       const Eigen::Vector3d h = given_frame.translation();
       frame.translation() = point + axis_space * axis_space.dot(h - point);
     }
+    // Without link_home the link is described in the default frame itself.
+    if (!j.link_home) given_frame = frame;
     const Eigen::Vector3d axis_local = frame.linear().transpose() * axis_space;
     const Eigen::Isometry3d origin = prev_frame.inverse() * frame;
     const int child = static_cast<int>(links.size());
