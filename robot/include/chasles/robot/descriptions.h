@@ -77,6 +77,13 @@ struct PoeDescription {
 };
 
 /// Builds the model; the end-effector link is called "tool" (DH: tool frame; PoE: M).
+/// Links: `base_link` (root), `link1`…`linkn`, `tool` (fixed joint `tool_joint`); joint names
+/// default to `joint<i+1>`. Internal link frames sit on their joint axes, and link geometry and
+/// inertia are converted into them: modified DH: link i = DH frame i; standard DH: link i =
+/// DH frame i−1 · Rz(θ_off + q_i) Tz(d_i), so DH frame i = link i · Tx(a_i) Rx(α_i); PoE: link i
+/// has link_home's orientation, at the foot of the perpendicular from link_home's origin to the
+/// axis (revolute) or at link_home (prismatic). The `tool` pose is exactly the DH product
+/// base · T_1 ··· T_n · tool, or e^[S1]q1 ··· e^[Sn]qn M.
 /// \throws Error(kInvalidArgument) naming the field, e.g.
 /// `poe.joints[2].screw: |ω| = 0.5 must be 1 for a revolute joint`,
 /// `poe.joints[1].screw: ω = 0 and |v| = 2 must be 1 for a prismatic joint`,
