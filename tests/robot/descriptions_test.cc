@@ -2,7 +2,9 @@
 // products, agreement of the URDF / DH / PoE UR5, geometry placement, and every validation rule.
 #include "chasles/robot/descriptions.h"
 
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <random>
 #include <string>
 #include <type_traits>
@@ -609,6 +611,122 @@ TEST(PoeDescription, BodyFrameScrewsGiveTheSameRobotAsSpaceFrameScrews) {
     const Eigen::VectorXd q = RandomConfiguration(rng2, 6);
     ASSERT_LT(PoseError(Fk(*ur5_body, q)[7], Fk(*ur5_space, q)[7]), 1e-12);
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The example JSON files hold the numbers of the C++ descriptions above (the JSON → model path
+// itself is tested with the proto conversion in tests/server).
+
+/// One expected JSON value: a number, or a quaternion (x, y, z, w) compared up to sign.
+struct Expected {
+  std::vector<double> values;
+  bool quaternion = false;
+};
+
+class Flattener {
+ public:
+  void Num(double x) { items.push_back({{x}, false}); }
+  void Position(const Eigen::Isometry3d& t) {
+    for (int i = 0; i < 3; ++i) Num(t.translation()[i]);
+  }
+  void Orientation(const Eigen::Isometry3d& t) {
+    const Eigen::Quaterniond q(t.linear());
+    items.push_back({{q.x(), q.y(), q.z(), q.w()}, true});
+  }
+  void FullPose(const Eigen::Isometry3d& t) {
+    Position(t);
+    Orientation(t);
+  }
+  /// A pose whose orientation the files omit when it is the identity.
+  void ShapePose(const Eigen::Isometry3d& t, bool sphere) {
+    Position(t);
+    if (!sphere && !t.linear().isIdentity(1e-15)) Orientation(t);
+  }
+  void Limits(const JointLimits& l) {
+    for (double x : {l.lower, l.upper, l.velocity, l.effort}) Num(x);
+  }
+  void Link(const LinkProperties& p) {
+    for (ShapeType type : {ShapeType::kSphere, ShapeType::kBox, ShapeType::kCylinder, ShapeType::kCapsule}) {
+      for (const Shape& s : p.collision) {
+        if (s.type != type) continue;
+        if (type == ShapeType::kBox) {
+          for (int i = 0; i < 3; ++i) Num(s.size[i]);
+        } else {
+          Num(s.radius);
+          if (type != ShapeType::kSphere) Num(s.length);
+        }
+        ShapePose(s.pose, type == ShapeType::kSphere);
+      }
+    }
+  }
+  std::vector<Expected> items;
+};
+
+std::vector<Expected> Flatten(const DhDescription& dh) {
+  Flattener f;
+  for (const DhJoint& j : dh.joints) {
+    for (double x : {j.a, j.alpha, j.d, j.theta_offset}) f.Num(x);
+    f.Limits(j.limits);
+    f.Link(j.link);
+  }
+  f.FullPose(dh.base);
+  f.FullPose(dh.tool);
+  f.Link(dh.base_link);
+  return f.items;
+}
+
+std::vector<Expected> Flatten(const PoeDescription& poe) {
+  Flattener f;
+  f.FullPose(poe.home);
+  for (const PoeJoint& j : poe.joints) {
+    for (int i = 0; i < 6; ++i) f.Num(j.screw[i]);
+    f.Limits(j.limits);
+    if (j.link_home) f.ShapePose(*j.link_home, false);
+    f.Link(j.link);
+  }
+  f.Link(poe.base_link);
+  return f.items;
+}
+
+/// Every number of a JSON text that is an object value (`"key": number`), in document order.
+std::vector<double> JsonNumbers(const std::string& text) {
+  std::vector<double> numbers;
+  for (size_t i = text.find(':'); i != std::string::npos; i = text.find(':', i + 1)) {
+    size_t k = i + 1;
+    while (k < text.size() && std::isspace(static_cast<unsigned char>(text[k]))) ++k;
+    if (k < text.size() && (text[k] == '-' || std::isdigit(static_cast<unsigned char>(text[k])))) {
+      numbers.push_back(std::strtod(text.c_str() + k, nullptr));
+    }
+  }
+  return numbers;
+}
+
+void ExpectJsonHolds(const std::string& file, const std::vector<Expected>& expected) {
+  const std::vector<double> numbers = JsonNumbers(testing::ReadExample("robots/" + file));
+  size_t at = 0;
+  for (size_t e = 0; e < expected.size(); ++e) {
+    const std::vector<double>& want = expected[e].values;
+    ASSERT_LE(at + want.size(), numbers.size()) << file << ": too few numbers";
+    double plus = 0.0, minus = 0.0;
+    for (size_t k = 0; k < want.size(); ++k) {
+      plus = std::max(plus, std::abs(numbers[at + k] - want[k]));
+      minus = std::max(minus, std::abs(numbers[at + k] + want[k]));
+    }
+    EXPECT_LT(expected[e].quaternion ? std::min(plus, minus) : plus, 1e-12)
+        << file << ": value " << e << " (number " << at << ") is " << numbers[at] << ", expected " << want[0];
+    at += want.size();
+  }
+  EXPECT_EQ(at, numbers.size()) << file << ": more numbers than expected";
+}
+
+TEST(ExampleFiles, JsonDescriptionsHoldTheNumbersTestedHere) {
+  ExpectJsonHolds("ur5_dh.json", Flatten(Ur5Dh()));
+  ExpectJsonHolds("ur5_poe.json", Flatten(Ur5Poe(false)));
+  ExpectJsonHolds("puma560_dh.json", Flatten(Puma560Dh()));
+  const std::string dh = testing::ReadExample("robots/ur5_dh.json");
+  EXPECT_NE(dh.find("\"convention\": \"STANDARD\""), std::string::npos);
+  EXPECT_NE(dh.find("\"link1\": \"base_link\""), std::string::npos);
+  EXPECT_NE(testing::ReadExample("robots/ur5_poe.json").find("\"body_frame\": false"), std::string::npos);
 }
 
 // ---------------------------------------------------------------------------------------------
