@@ -189,6 +189,8 @@ IkResult SolveIk(const RobotModel& robot, const IkRequest& request) {
     bool converged = false;
     double attempt_best = std::numeric_limits<double>::infinity();
     int stall = 0;
+    bool dls_now = dls;
+    double previous_error = std::numeric_limits<double>::infinity();
     for (int iteration = 0; iteration < request.max_iterations; ++iteration) {
       if ((iteration & 15) == 15 && Clock::now() >= deadline) break;
       Eigen::Matrix3d R;
@@ -228,14 +230,30 @@ IkResult SolveIk(const RobotModel& robot, const IkRequest& request) {
       Matrix6d G;
       G.noalias() = J * J.transpose();
       Vector6d y;
-      if (dls) {
+      // Newton–Raphson falls back to damped steps for the rest of the attempt once a full
+      // step has made the error grow (it overshot, typically near a singularity).
+      if (!dls_now && e > previous_error) dls_now = true;
+      previous_error = e;
+      bool solved = false;
+      if (!dls_now) {
+        // Newton–Raphson with the pseudo-inverse J⁺ = Jᵀ (JJᵀ)⁺: an LDLT solve when JJᵀ is
+        // well conditioned, an eigen-decomposition pseudo-inverse otherwise.
+        const Eigen::LDLT<Matrix6d> ldlt(G);
+        const auto D = ldlt.vectorD();
+        if (ldlt.info() == Eigen::Success && D.minCoeff() > 1e-10 * D.maxCoeff()) {
+          y = ldlt.solve(Vs);
+          solved = true;
+        }
+      }
+      if (solved) {
+        // done
+      } else if (dls_now) {
         // Damped least squares Jᵀ(JJᵀ + λ²I)⁻¹V; λ shrinks with the error so that the last
         // steps are Newton steps (quadratic convergence) while large errors stay damped.
         const double l2 = lambda2 * std::min(1.0, 10.0 * e) + 1e-12;
         G.diagonal().array() += l2;
         y = G.ldlt().solve(Vs);
       } else {
-        // Newton–Raphson with the pseudo-inverse: J⁺ = Jᵀ (JJᵀ)⁺.
         const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(G);
         const Vector6d& ev = eig.eigenvalues();
         const double cutoff = std::max(ev[5], 1e-300) * 1e-10;

@@ -19,6 +19,12 @@
 
 namespace chasles {
 
+/// kNewtonRaphson: Δq = J_b⁺ V_b (pseudo-inverse), switching to damped steps for the rest of an
+/// attempt once a full step made the error grow. kDampedLeastSquares: Δq = J_bᵀ(J_b J_bᵀ + λ²I)⁻¹ V_b
+/// with λ² = damping² · min(1, 10 ‖V_b‖), so large errors are damped and the last steps are
+/// Newton steps. Both limit each step to 0.6 rad (or m) per joint, clamp to the joint limits
+/// (continuous joints wrap into [-π, π]) and abandon an attempt that stops improving.
+/// Dofs that do not move `link` keep `initial_guess` (or 0 moved into their limits).
 enum class IkMethod { kNewtonRaphson, kDampedLeastSquares };
 
 struct IkRequest {
