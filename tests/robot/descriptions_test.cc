@@ -757,7 +757,7 @@ PoeDescription TwoLinkPoe() {
 }
 
 template <typename Description, typename Edit>
-void ExpectDhInvalid(Edit edit, const std::string& message) {
+void ExpectDescriptionInvalid(Edit edit, const std::string& message) {
   Description desc;
   if constexpr (std::is_same_v<Description, DhDescription>) {
     desc = TwoLinkDh();
@@ -775,9 +775,9 @@ void ExpectDhInvalid(Edit edit, const std::string& message) {
 }
 
 template <typename Edit>
-void ExpectDh(Edit edit, const std::string& message) { ExpectDhInvalid<DhDescription>(edit, message); }
+void ExpectDh(Edit edit, const std::string& message) { ExpectDescriptionInvalid<DhDescription>(edit, message); }
 template <typename Edit>
-void ExpectPoe(Edit edit, const std::string& message) { ExpectDhInvalid<PoeDescription>(edit, message); }
+void ExpectPoe(Edit edit, const std::string& message) { ExpectDescriptionInvalid<PoeDescription>(edit, message); }
 
 TEST(DescriptionValidation, ValidBaselinesBuild) {
   EXPECT_EQ(RobotFromDh(TwoLinkDh())->num_dofs(), 2);
