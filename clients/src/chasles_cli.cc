@@ -1,5 +1,7 @@
 // chasles: command-line client of the Chasles planning server.
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -38,8 +40,12 @@ const char kUsage[] =
     "                                  --out F.json writes the response, --out F.csv the trajectory\n"
     "                                  (columns t, q_<joint>..., qd_<joint>..., qdd_<joint>...);\n"
     "                                  exit 0 only when a trajectory came back\n"
+    "  ik REQUEST.json                 send a chasles.v1.InverseKinematicsRequest (protobuf JSON); print\n"
+    "                                  each solution with its manipulability; exit 0 only when solved\n"
     "  upload-robot FILE.urdf [--srdf FILE.srdf] [--mesh NAME=FILE]...\n"
-    "                                  store a robot on the server; prints its robot_id\n"
+    "  upload-robot --dh FILE.json | --poe FILE.json\n"
+    "                                  store a robot (URDF, or a chasles.v1.DhRobot / PoeRobot in\n"
+    "                                  protobuf JSON) on the server; prints its robot_id\n"
     "  upload-scene SCENE.json         store a chasles.v1.Scene (protobuf JSON); prints its scene_id\n"
     "\n"
     "Options:\n"
@@ -52,6 +58,8 @@ struct Options {
   double timeout = 0.0;  // 0 = per command default
   std::string out;
   std::string srdf;
+  std::string dh;   // DhRobot JSON file
+  std::string poe;  // PoeRobot JSON file
   std::vector<std::string> meshes;  // NAME=FILE
   std::vector<std::string> positional;
 };
@@ -208,6 +216,16 @@ bool EndsWith(const std::string& text, const std::string& suffix) {
   return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
+std::string FormatPositions(const google::protobuf::RepeatedField<double>& values) {
+  std::string out = "[";
+  char buffer[32];
+  for (int i = 0; i < values.size(); ++i) {
+    std::snprintf(buffer, sizeof(buffer), "%s%.6f", i == 0 ? "" : ", ", values[i]);
+    out += buffer;
+  }
+  return out + "]";
+}
+
 int Plan(const Options& options) {
   if (options.positional.size() != 2) UsageError("plan takes one REQUEST.json");
   if (!options.out.empty() && !EndsWith(options.out, ".json") && !EndsWith(options.out, ".csv")) {
@@ -239,6 +257,15 @@ int Plan(const Options& options) {
               1e3 * t.total());
   std::printf("verified    %u states at step %.4g rad, max |qd|/v %.3f, max |qdd|/a %.3f\n", v.states_checked(),
               v.max_joint_step(), v.max_velocity_ratio(), v.max_acceleration_ratio());
+  if (response.has_reached_goal()) {
+    std::printf("reached     %s (manipulability %.4g)\n", FormatPositions(response.reached_goal().positions()).c_str(),
+                response.goal_manipulability());
+  }
+  double max_effort = -1.0;
+  for (const v1::TrajectoryPoint& point : response.trajectory().points()) {
+    for (double e : point.efforts()) max_effort = std::max(max_effort, std::abs(e));
+  }
+  if (max_effort >= 0.0) std::printf("max |effort| %.4g N·m (N for prismatic joints)\n", max_effort);
 
   if (!options.out.empty()) {
     std::ofstream out(options.out, std::ios::binary);
@@ -270,20 +297,65 @@ int Plan(const Options& options) {
   return kExitOk;
 }
 
+// --- ik ----------------------------------------------------------------------------------------
+
+int InverseKinematics(const Options& options) {
+  if (options.positional.size() != 2) UsageError("ik takes one REQUEST.json");
+  const v1::InverseKinematicsRequest request = ParseJsonFileOrExit<v1::InverseKinematicsRequest>(options.positional[1]);
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  const double budget = request.time_budget() > 0 ? request.time_budget() : 0.05;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : budget + 10.0);
+  v1::InverseKinematicsResponse response;
+  const grpc::Status status = stub->InverseKinematics(&context, request, &response);
+  if (!status.ok()) return ReportRpcError("InverseKinematics", options, status);
+  std::printf("solved      %s\n", response.solved() ? "yes" : "no");
+  if (!response.message().empty()) std::printf("message     %s\n", response.message().c_str());
+  std::printf("robot       %s\n", response.robot_id().c_str());
+  std::printf("attempts    %u in %.2f ms; best error %.3g m, %.3g rad\n", response.attempts(), 1e3 * response.seconds(),
+              response.best_position_error(), response.best_orientation_error());
+  std::string names;
+  for (const std::string& name : response.joint_names()) names += (names.empty() ? "" : ", ") + name;
+  std::printf("joints      %s\n", names.c_str());
+  for (int i = 0; i < response.solutions_size(); ++i) {
+    std::printf("solution %d  %s  manipulability %.4g%s\n", i, FormatPositions(response.solutions(i).positions()).c_str(),
+                i < response.manipulability_size() ? response.manipulability(i) : 0.0,
+                i < response.singular_size() && response.singular(i) ? "  SINGULAR" : "");
+  }
+  if (!response.solved()) {
+    std::cerr << "chasles: no IK solution: " << response.message() << "\n";
+    return kExitFailed;
+  }
+  return kExitOk;
+}
+
 // --- uploads -----------------------------------------------------------------------------------
 
 int UploadRobot(const Options& options) {
-  if (options.positional.size() != 2) UsageError("upload-robot takes one FILE.urdf");
   v1::UploadRobotRequest request;
-  v1::UrdfRobot* urdf = request.mutable_robot()->mutable_urdf();
-  urdf->set_urdf(ReadFileOrExit(options.positional[1], "URDF"));
-  if (!options.srdf.empty()) urdf->set_srdf(ReadFileOrExit(options.srdf, "SRDF"));
-  for (const std::string& mesh : options.meshes) {
-    const auto eq = mesh.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == mesh.size()) {
-      UsageError("--mesh '" + mesh + "' must be NAME=FILE (NAME as in the URDF <mesh filename>)");
+  if (!options.dh.empty() || !options.poe.empty()) {
+    if (!options.dh.empty() && !options.poe.empty()) UsageError("upload-robot takes --dh or --poe, not both");
+    if (options.positional.size() != 1) UsageError("upload-robot --dh/--poe takes no FILE.urdf");
+    if (!options.srdf.empty() || !options.meshes.empty()) {
+      UsageError("--srdf and --mesh belong to URDF robots, not --dh/--poe");
     }
-    (*urdf->mutable_mesh_files())[mesh.substr(0, eq)] = ReadFileOrExit(mesh.substr(eq + 1), "mesh");
+    if (!options.dh.empty()) {
+      *request.mutable_robot()->mutable_dh() = ParseJsonFileOrExit<v1::DhRobot>(options.dh);
+    } else {
+      *request.mutable_robot()->mutable_poe() = ParseJsonFileOrExit<v1::PoeRobot>(options.poe);
+    }
+  } else {
+    if (options.positional.size() != 2) UsageError("upload-robot takes one FILE.urdf (or --dh/--poe FILE.json)");
+    v1::UrdfRobot* urdf = request.mutable_robot()->mutable_urdf();
+    urdf->set_urdf(ReadFileOrExit(options.positional[1], "URDF"));
+    if (!options.srdf.empty()) urdf->set_srdf(ReadFileOrExit(options.srdf, "SRDF"));
+    for (const std::string& mesh : options.meshes) {
+      const auto eq = mesh.find('=');
+      if (eq == std::string::npos || eq == 0 || eq + 1 == mesh.size()) {
+        UsageError("--mesh '" + mesh + "' must be NAME=FILE (NAME as in the URDF <mesh filename>)");
+      }
+      (*urdf->mutable_mesh_files())[mesh.substr(0, eq)] = ReadFileOrExit(mesh.substr(eq + 1), "mesh");
+    }
   }
   auto stub = v1::Planning::NewStub(MakeChannel(options));
   grpc::ClientContext context;
@@ -339,6 +411,10 @@ int main(int argc, char** argv) {
       options.out = value();
     } else if (arg == "--srdf") {
       options.srdf = value();
+    } else if (arg == "--dh") {
+      options.dh = value();
+    } else if (arg == "--poe") {
+      options.poe = value();
     } else if (arg == "--mesh") {
       options.meshes.push_back(value());
     } else if (arg.size() > 1 && arg[0] == '-') {
@@ -354,6 +430,7 @@ int main(int argc, char** argv) {
     return command == "health" ? Health(options) : Planners(options);
   }
   if (command == "plan") return Plan(options);
+  if (command == "ik") return InverseKinematics(options);
   if (command == "upload-robot") return UploadRobot(options);
   if (command == "upload-scene") return UploadScene(options);
   UsageError("unknown command '" + command + "'");

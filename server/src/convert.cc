@@ -13,6 +13,7 @@
 #include "chasles/collision/mesh.h"
 #include "chasles/optimizers/shortcut.h"
 #include "chasles/robot/error.h"
+#include "chasles/robot/kinematics.h"
 #include "chasles/server/content_hash.h"
 
 namespace chasles {
@@ -72,6 +73,128 @@ void ToProto(const Eigen::VectorXd& v, google::protobuf::RepeatedField<double>* 
   for (Eigen::Index i = 0; i < v.size(); ++i) out->Add(v[i]);
 }
 
+
+JointType JointTypeFromProto(v1::JointKind kind, const std::string& field) {
+  switch (kind) {
+    case v1::JOINT_KIND_UNSPECIFIED:
+    case v1::REVOLUTE: return JointType::kRevolute;
+    case v1::CONTINUOUS: return JointType::kContinuous;
+    case v1::PRISMATIC: return JointType::kPrismatic;
+    default: break;
+  }
+  ThrowInvalid(field + " = " + std::to_string(static_cast<int>(kind)) +
+               " is not a joint kind (REVOLUTE, CONTINUOUS or PRISMATIC)");
+}
+
+JointLimits LimitsFromProto(const v1::JointLimits& limits, const std::string& field) {
+  RequireFinite(limits.lower(), field + ".lower");
+  RequireFinite(limits.upper(), field + ".upper");
+  RequireFinite(limits.velocity(), field + ".velocity");
+  RequireFinite(limits.effort(), field + ".effort");
+  JointLimits out;
+  out.lower = limits.lower();
+  out.upper = limits.upper();
+  out.velocity = limits.velocity();
+  out.effort = limits.effort();
+  return out;
+}
+
+void RequireNonNegative(double value, const std::string& field) {
+  if (!(std::isfinite(value) && value >= 0.0)) {
+    ThrowInvalid(field + " = " + FormatNumber(value) + " must be finite and >= 0");
+  }
+}
+
+LinkProperties LinkPropertiesFromProto(const v1::LinkGeometry& link, const std::string& field) {
+  LinkProperties out;
+  for (int i = 0; i < link.spheres_size(); ++i) {
+    const v1::Sphere& sphere = link.spheres(i);
+    const std::string f = Indexed(field + ".spheres", i);
+    RequirePositive(sphere.radius(), f + ".radius");
+    out.collision.push_back(Shape::Sphere(sphere.radius(), PoseFromProto(sphere.pose(), f + ".pose")));
+  }
+  for (int i = 0; i < link.boxes_size(); ++i) {
+    const v1::Box& box = link.boxes(i);
+    const std::string f = Indexed(field + ".boxes", i);
+    const Eigen::Vector3d size = VectorFromProto(box.size(), f + ".size");
+    RequirePositive(size.x(), f + ".size.x");
+    RequirePositive(size.y(), f + ".size.y");
+    RequirePositive(size.z(), f + ".size.z");
+    out.collision.push_back(Shape::Box(size, PoseFromProto(box.pose(), f + ".pose")));
+  }
+  for (int i = 0; i < link.cylinders_size(); ++i) {
+    const v1::Cylinder& cylinder = link.cylinders(i);
+    const std::string f = Indexed(field + ".cylinders", i);
+    RequirePositive(cylinder.radius(), f + ".radius");
+    RequirePositive(cylinder.length(), f + ".length");
+    out.collision.push_back(
+        Shape::Cylinder(cylinder.radius(), cylinder.length(), PoseFromProto(cylinder.pose(), f + ".pose")));
+  }
+  for (int i = 0; i < link.capsules_size(); ++i) {
+    const v1::Capsule& capsule = link.capsules(i);
+    const std::string f = Indexed(field + ".capsules", i);
+    RequirePositive(capsule.radius(), f + ".radius");
+    RequirePositive(capsule.length(), f + ".length");
+    out.collision.push_back(
+        Shape::Capsule(capsule.radius(), capsule.length(), PoseFromProto(capsule.pose(), f + ".pose")));
+  }
+  if (link.has_inertial()) {
+    const v1::Inertial& inertial = link.inertial();
+    const std::string f = field + ".inertial";
+    RequirePositive(inertial.mass(), f + ".mass");
+    Inertial in;
+    in.mass = inertial.mass();
+    in.com = VectorFromProto(inertial.com(), f + ".com");
+    const v1::InertiaTensor& t = inertial.inertia();
+    const std::string tf = f + ".inertia";
+    RequireFinite(t.ixx(), tf + ".ixx");
+    RequireFinite(t.ixy(), tf + ".ixy");
+    RequireFinite(t.ixz(), tf + ".ixz");
+    RequireFinite(t.iyy(), tf + ".iyy");
+    RequireFinite(t.iyz(), tf + ".iyz");
+    RequireFinite(t.izz(), tf + ".izz");
+    in.inertia << t.ixx(), t.ixy(), t.ixz(), t.ixy(), t.iyy(), t.iyz(), t.ixz(), t.iyz(), t.izz();
+    out.inertial = in;
+  }
+  return out;
+}
+
+std::vector<std::pair<std::string, std::string>> PairsFromProto(
+    const google::protobuf::RepeatedPtrField<v1::LinkPair>& pairs, const std::string& field) {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (int i = 0; i < pairs.size(); ++i) {
+    if (pairs[i].link1().empty() || pairs[i].link2().empty()) {
+      ThrowInvalid(Indexed(field, i) + " must name two links (link1 and link2)");
+    }
+    out.emplace_back(pairs[i].link1(), pairs[i].link2());
+  }
+  return out;
+}
+
+/// Re-throws a robot-module error with the proto path: "dh.joints[2]…" → "robot.dh.joints[2]…".
+[[noreturn]] void RethrowWithField(const Error& e, const std::string& field, const std::string& kind) {
+  const std::string what = e.what();
+  if (what.rfind(field, 0) == 0) throw e;
+  if (what.rfind(kind, 0) == 0) {
+    // "robot.dh" + ".joints…" when field ends in the description name, else field + "." + what.
+    const std::string parent = field.size() > kind.size() &&
+                                       field.compare(field.size() - kind.size(), kind.size(), kind) == 0
+                                   ? field.substr(0, field.size() - kind.size())
+                                   : field + ".";
+    throw Error(e.code(), parent + what);
+  }
+  throw Error(e.code(), field + ": " + what);
+}
+
+double DefaultedInRange(double value, double fallback, double lo_exclusive, double hi, const std::string& field) {
+  const double v = value == 0.0 ? fallback : value;
+  if (!(v > lo_exclusive && v <= hi)) {
+    ThrowInvalid(field + " = " + FormatNumber(value) + " must be within (" + FormatNumber(lo_exclusive) + ", " +
+                 FormatNumber(hi) + "] (0 = " + FormatNumber(fallback) + ")");
+  }
+  return v;
+}
+
 }  // namespace
 
 std::string ProtoContentId(const google::protobuf::Message& message) {
@@ -106,9 +229,98 @@ Eigen::Isometry3d PoseFromProto(const v1::Pose& pose, const std::string& field) 
   return out;
 }
 
+DhDescription DhFromProto(const v1::DhRobot& dh, const std::string& field) {
+  DhDescription out;
+  out.name = dh.name();
+  switch (dh.convention()) {
+    case v1::DhRobot::CONVENTION_UNSPECIFIED:
+    case v1::DhRobot::STANDARD: out.convention = DhConvention::kStandard; break;
+    case v1::DhRobot::MODIFIED: out.convention = DhConvention::kModified; break;
+    default:
+      ThrowInvalid(field + ".convention = " + std::to_string(static_cast<int>(dh.convention())) +
+                   " is not STANDARD or MODIFIED");
+  }
+  for (int i = 0; i < dh.joints_size(); ++i) {
+    const v1::DhJoint& joint = dh.joints(i);
+    const std::string f = Indexed(field + ".joints", i);
+    DhJoint j;
+    j.name = joint.name();
+    j.type = JointTypeFromProto(joint.type(), f + ".type");
+    RequireFinite(joint.a(), f + ".a");
+    RequireFinite(joint.alpha(), f + ".alpha");
+    RequireFinite(joint.d(), f + ".d");
+    RequireFinite(joint.theta_offset(), f + ".theta_offset");
+    j.a = joint.a();
+    j.alpha = joint.alpha();
+    j.d = joint.d();
+    j.theta_offset = joint.theta_offset();
+    j.limits = LimitsFromProto(joint.limits(), f + ".limits");
+    RequireNonNegative(joint.damping(), f + ".damping");
+    RequireNonNegative(joint.friction(), f + ".friction");
+    RequireNonNegative(joint.armature(), f + ".armature");
+    j.damping = joint.damping();
+    j.friction = joint.friction();
+    j.armature = joint.armature();
+    j.link = LinkPropertiesFromProto(joint.link(), f + ".link");
+    out.joints.push_back(std::move(j));
+  }
+  if (dh.has_base()) out.base = PoseFromProto(dh.base(), field + ".base");
+  if (dh.has_tool()) out.tool = PoseFromProto(dh.tool(), field + ".tool");
+  out.base_link = LinkPropertiesFromProto(dh.base_link(), field + ".base_link");
+  out.allowed_collisions = PairsFromProto(dh.allowed_collisions(), field + ".allowed_collisions");
+  return out;
+}
+
+PoeDescription PoeFromProto(const v1::PoeRobot& poe, const std::string& field) {
+  PoeDescription out;
+  out.name = poe.name();
+  if (poe.has_home()) out.home = PoseFromProto(poe.home(), field + ".home");
+  out.body_frame = poe.body_frame();
+  for (int i = 0; i < poe.joints_size(); ++i) {
+    const v1::PoeJoint& joint = poe.joints(i);
+    const std::string f = Indexed(field + ".joints", i);
+    PoeJoint j;
+    j.name = joint.name();
+    j.type = JointTypeFromProto(joint.type(), f + ".type");
+    j.screw.head<3>() = VectorFromProto(joint.screw().angular(), f + ".screw.angular");
+    j.screw.tail<3>() = VectorFromProto(joint.screw().linear(), f + ".screw.linear");
+    j.limits = LimitsFromProto(joint.limits(), f + ".limits");
+    RequireNonNegative(joint.damping(), f + ".damping");
+    RequireNonNegative(joint.friction(), f + ".friction");
+    RequireNonNegative(joint.armature(), f + ".armature");
+    j.damping = joint.damping();
+    j.friction = joint.friction();
+    j.armature = joint.armature();
+    if (joint.has_link_home()) j.link_home = PoseFromProto(joint.link_home(), f + ".link_home");
+    j.link = LinkPropertiesFromProto(joint.link(), f + ".link");
+    out.joints.push_back(std::move(j));
+  }
+  out.base_link = LinkPropertiesFromProto(poe.base_link(), field + ".base_link");
+  out.allowed_collisions = PairsFromProto(poe.allowed_collisions(), field + ".allowed_collisions");
+  return out;
+}
+
 std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, const std::string& field) {
+  if (robot.description_case() == v1::RobotModel::kDh) {
+    DhDescription dh = DhFromProto(robot.dh(), field + ".dh");
+    if (dh.name.empty()) dh.name = robot.name();
+    try {
+      return RobotFromDh(dh);
+    } catch (const Error& e) {
+      RethrowWithField(e, field + ".dh", "dh");
+    }
+  }
+  if (robot.description_case() == v1::RobotModel::kPoe) {
+    PoeDescription poe = PoeFromProto(robot.poe(), field + ".poe");
+    if (poe.name.empty()) poe.name = robot.name();
+    try {
+      return RobotFromPoe(poe);
+    } catch (const Error& e) {
+      RethrowWithField(e, field + ".poe", "poe");
+    }
+  }
   if (robot.description_case() != v1::RobotModel::kUrdf) {
-    ThrowInvalid(field + " has no description: set " + field + ".urdf");
+    ThrowInvalid(field + " has no description: set " + field + ".urdf, " + field + ".dh or " + field + ".poe");
   }
   const v1::UrdfRobot& urdf = robot.urdf();
   if (urdf.urdf().empty()) ThrowInvalid(field + ".urdf.urdf is empty: it must hold the URDF XML text");
@@ -129,6 +341,67 @@ std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, co
     if (what.rfind("urdf", 0) == 0 || what.rfind("srdf", 0) == 0) throw Error(e.code(), field + ".urdf." + what);
     throw Error(e.code(), field + ".urdf: " + what);
   }
+}
+
+int LinkFromProto(const RobotModel& robot, const std::string& name, const std::string& field) {
+  if (name.empty()) {
+    const int tool = robot.FindLink("tool");
+    return tool >= 0 ? tool : robot.num_links() - 1;
+  }
+  const int link = robot.FindLink(name);
+  if (link >= 0) return link;
+  std::string known;
+  for (const Link& l : robot.links()) known += (known.empty() ? "" : ", ") + l.name;
+  ThrowInvalid(field + " = '" + name + "' is not a link of robot '" + robot.name() + "'; known links: " + known);
+}
+
+IkRequest IkRequestFromProto(const v1::InverseKinematicsRequest& request, const RobotModel& robot) {
+  IkRequest ik;
+  ik.link = LinkFromProto(robot, request.link(), "link");
+  ik.target = PoseFromProto(request.pose(), "pose");
+  ik.position_tolerance = DefaultedInRange(request.position_tolerance(), 1e-4, 0.0, 0.1, "position_tolerance");
+  ik.orientation_tolerance =
+      DefaultedInRange(request.orientation_tolerance(), 1e-3, 0.0, 0.5, "orientation_tolerance");
+  switch (request.method()) {
+    case v1::InverseKinematicsRequest::METHOD_UNSPECIFIED:
+    case v1::InverseKinematicsRequest::DAMPED_LEAST_SQUARES: ik.method = IkMethod::kDampedLeastSquares; break;
+    case v1::InverseKinematicsRequest::NEWTON_RAPHSON: ik.method = IkMethod::kNewtonRaphson; break;
+    default:
+      ThrowInvalid("method = " + std::to_string(static_cast<int>(request.method())) +
+                   " is not DAMPED_LEAST_SQUARES or NEWTON_RAPHSON");
+  }
+  const double damping = request.damping() == 0.0 ? 0.05 : request.damping();
+  RequireInRange(damping, 0.0, 10.0, "damping");
+  ik.damping = damping;
+  if (request.max_solutions() > 64) {
+    ThrowInvalid("max_solutions = " + std::to_string(request.max_solutions()) + " must be at most 64 (0 = 1)");
+  }
+  ik.max_solutions = request.max_solutions() == 0 ? 1 : static_cast<int>(request.max_solutions());
+  ik.time_budget = DefaultedInRange(request.time_budget(), 0.05, 0.0, 60.0, "time_budget");
+  ik.seed = request.seed() == 0 ? 1 : request.seed();
+  if (request.initial_guess_size() > 0) {
+    RequireJointCount(request.initial_guess_size(), robot, "initial_guess");
+    ik.initial_guess = PositionsFromProto(request.initial_guess(), "initial_guess");
+    robot.ValidateConfiguration(ik.initial_guess, "initial_guess");
+  }
+  return ik;
+}
+
+void IkResultToProto(const IkResult& result, const IkRequest& ik, const RobotModel& robot,
+                     v1::InverseKinematicsResponse* response) {
+  response->set_solved(!result.solutions.empty());
+  response->set_message(result.message);
+  for (const std::string& name : robot.dof_names()) response->add_joint_names(name);
+  for (const Eigen::VectorXd& q : result.solutions) {
+    ToProto(q, response->add_solutions()->mutable_positions());
+    const Jacobian J = SpaceJacobian(robot, q, ik.link);
+    response->add_manipulability(Manipulability(J));
+    response->add_singular(IsSingular(J));
+  }
+  response->set_best_position_error(result.best_position_error);
+  response->set_best_orientation_error(result.best_orientation_error);
+  response->set_attempts(static_cast<std::uint32_t>(std::max(0, result.attempts)));
+  response->set_seconds(result.seconds);
 }
 
 std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::string& field) {
@@ -213,13 +486,37 @@ PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<con
   RequireJointCount(request.start().positions_size(), robot, "start.positions");
   query.start = PositionsFromProto(request.start().positions(), "start.positions");
   robot.ValidateConfiguration(query.start, "start.positions");
-  RequireJointCount(request.goal().positions_size(), robot, "goal.positions");
-  query.goal = PositionsFromProto(request.goal().positions(), "goal.positions");
-  robot.ValidateConfiguration(query.goal, "goal.positions");
+  if (request.target_case() == v1::PlanRequest::kPoseGoal) {
+    const v1::PoseGoal& goal = request.pose_goal();
+    PoseGoalSpec spec;
+    spec.link = LinkFromProto(robot, goal.link(), "pose_goal.link");
+    spec.pose = PoseFromProto(goal.pose(), "pose_goal.pose");
+    spec.position_tolerance =
+        DefaultedInRange(goal.position_tolerance(), 1e-4, 0.0, 0.1, "pose_goal.position_tolerance");
+    spec.orientation_tolerance =
+        DefaultedInRange(goal.orientation_tolerance(), 1e-3, 0.0, 0.5, "pose_goal.orientation_tolerance");
+    if (goal.max_goal_states() > 64) {
+      ThrowInvalid("pose_goal.max_goal_states = " + std::to_string(goal.max_goal_states()) +
+                   " must be at most 64 (0 = 4)");
+    }
+    spec.max_goal_states = goal.max_goal_states() == 0 ? 4 : static_cast<int>(goal.max_goal_states());
+    const double ik_budget = goal.ik_time_budget() == 0.0 ? 0.2 : goal.ik_time_budget();
+    if (!(std::isfinite(ik_budget) && ik_budget > 0.0)) {
+      ThrowInvalid("pose_goal.ik_time_budget = " + FormatNumber(goal.ik_time_budget()) +
+                   " must be finite and > 0 s (0 = 0.2 s)");
+    }
+    spec.ik_time_budget = ik_budget;
+    query.pose_goal = spec;
+  } else {
+    RequireJointCount(request.goal().positions_size(), robot, "goal.positions");
+    query.goal = PositionsFromProto(request.goal().positions(), "goal.positions");
+    robot.ValidateConfiguration(query.goal, "goal.positions");
 
-  const double tolerance = request.goal().tolerance();
-  RequireInRange(tolerance, 0.0, 0.1, "goal.tolerance");
-  query.goal_tolerance = tolerance == 0.0 ? 1e-3 : tolerance;
+    const double tolerance = request.goal().tolerance();
+    RequireInRange(tolerance, 0.0, 0.1, "goal.tolerance");
+    query.goal_tolerance = tolerance == 0.0 ? 1e-3 : tolerance;
+  }
+  if (request.has_gravity()) query.gravity = VectorFromProto(request.gravity(), "gravity");
 
   // Planner and its parameters (types checked here, ranges by ResolveParameters).
   query.planner_id = request.planner().planner_id().empty() ? "rrt_connect" : request.planner().planner_id();
@@ -304,6 +601,7 @@ v1::PlanOutcome OutcomeToProto(PlanOutcomeCode code) {
     case PlanOutcomeCode::kNoPathWithinBudget: return v1::NO_PATH_WITHIN_BUDGET;
     case PlanOutcomeCode::kStartInCollision: return v1::START_IN_COLLISION;
     case PlanOutcomeCode::kGoalInCollision: return v1::GOAL_IN_COLLISION;
+    case PlanOutcomeCode::kGoalUnreachable: return v1::GOAL_UNREACHABLE;
     case PlanOutcomeCode::kVerificationFailed: return v1::VERIFICATION_FAILED;
     case PlanOutcomeCode::kApproximateOnly: return v1::APPROXIMATE_ONLY;
     case PlanOutcomeCode::kCancelled:
@@ -347,8 +645,13 @@ void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::
     ToProto(sample.q, point->mutable_positions());
     ToProto(sample.qd, point->mutable_velocities());
     ToProto(sample.qdd, point->mutable_accelerations());
+    if (sample.effort.size() > 0) ToProto(sample.effort, point->mutable_efforts());
   }
   response->set_duration(outcome.trajectory.duration());
+  if (query.pose_goal && outcome.goal.size() > 0) {
+    ToProto(outcome.goal, response->mutable_reached_goal()->mutable_positions());
+    response->set_goal_manipulability(outcome.goal_manipulability);
+  }
 }
 
 void PlannerSpecToProto(const PlannerSpec& spec, v1::PlannerDescription* description) {

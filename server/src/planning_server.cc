@@ -18,6 +18,7 @@
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/planners/registry.h"
 #include "chasles/robot/error.h"
+#include "chasles/robot/inverse_kinematics.h"
 #include "chasles/server/convert.h"
 #include "chasles/server/default_assets.h"
 #include "chasles/server/model_store.h"
@@ -155,6 +156,46 @@ class PlanningService final : public v1::Planning::CallbackService {
       response->set_scene_id(scene.id);
       Log("upload-scene scene=%s objects=%zu maps=%zu status=OK ms=%.1f", IdPrefix(scene.id).c_str(),
           scene.scene->objects().size(), scene.scene->occupancy_maps().size(), 1e3 * SecondsSince(start));
+    });
+  }
+
+  grpc::ServerUnaryReactor* InverseKinematics(grpc::CallbackServerContext* context,
+                                              const v1::InverseKinematicsRequest* request,
+                                              v1::InverseKinematicsResponse* response) override {
+    const Clock::time_point arrival = Clock::now();
+    const Clock::time_point deadline = SteadyDeadline(*context);
+    return RunOnPool("ik", [this, request, response, arrival, deadline] {
+      // Robot (inline, id or default) and, for collision_free, the scene's cached checker.
+      StoredRobot robot;
+      switch (request->robot_source_case()) {
+        case v1::InverseKinematicsRequest::kRobot: robot = store_->AddRobot(request->robot(), "robot"); break;
+        case v1::InverseKinematicsRequest::kRobotId: robot = store_->FindRobot(request->robot_id()); break;
+        default: robot = store_->default_robot(); break;
+      }
+      response->set_robot_id(robot.id);
+      IkRequest ik = IkRequestFromProto(*request, *robot.model);
+      std::string scene_id = "-";
+      std::shared_ptr<const CollisionChecker> checker;
+      if (request->collision_free()) {
+        StoredScene scene;
+        switch (request->scene_source_case()) {
+          case v1::InverseKinematicsRequest::kScene: scene = store_->AddScene(request->scene(), "scene"); break;
+          case v1::InverseKinematicsRequest::kSceneId: scene = store_->FindScene(request->scene_id()); break;
+          default: scene = store_->default_scene(); break;
+        }
+        scene_id = IdPrefix(scene.id);
+        checker = store_->Checker(robot, scene);
+        ik.accept = [checker](const Eigen::VectorXd& q) { return checker->IsValid(q); };
+      }
+      // The solver's budget ends before the gRPC deadline, leaving time for the answer.
+      const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
+      ik.time_budget = std::min(ik.time_budget, std::max(1e-3, 0.9 * left));
+      const IkResult result = SolveIk(*robot.model, ik);
+      IkResultToProto(result, ik, *robot.model, response);
+      Log("ik robot=%s scene=%s link=%s solutions=%d/%d attempts=%d status=OK ms=%.1f%s%s",
+          IdPrefix(robot.id).c_str(), scene_id.c_str(), robot.model->links()[ik.link].name.c_str(),
+          response->solutions_size(), ik.max_solutions, result.attempts, 1e3 * SecondsSince(arrival),
+          response->solved() ? "" : " message=", response->solved() ? "" : result.message.c_str());
     });
   }
 

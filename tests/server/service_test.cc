@@ -289,5 +289,43 @@ TEST(Cli, HealthPlannersPlanAndUploads) {
   EXPECT_NE(down.exit_code, 0) << down.output;
 }
 
+TEST(Cli, IkPoseGoalAndDhPoeUploads) {
+  LoopbackServer server;
+  const std::string at = "--server " + server.address() + " ";
+
+  CommandResult ik = RunCli(at + "ik " + ExamplePath("requests/ik_ur5.json"));
+  EXPECT_EQ(ik.exit_code, 0) << ik.output;
+  EXPECT_NE(ik.output.find("solved      yes"), std::string::npos) << ik.output;
+  EXPECT_NE(ik.output.find("solution 0"), std::string::npos) << ik.output;
+  EXPECT_NE(ik.output.find("manipulability"), std::string::npos) << ik.output;
+
+  // Unreachable: OK response without solutions, exit 1 with the reason.
+  v1::InverseKinematicsRequest far;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(ReadText(ExamplePath("requests/ik_panda.json")), &far).ok());
+  far.mutable_pose()->mutable_position()->set_z(4.0);
+  far.set_time_budget(0.05);
+  std::string far_json;
+  ASSERT_TRUE(google::protobuf::util::MessageToJsonString(far, &far_json).ok());
+  const std::string far_path = ::testing::TempDir() + "/chasles_cli_ik_far.json";
+  std::ofstream(far_path) << far_json;
+  CommandResult unsolved = RunCli(at + "ik " + far_path);
+  EXPECT_EQ(unsolved.exit_code, 1) << unsolved.output;
+  EXPECT_NE(unsolved.output.find("solved      no"), std::string::npos) << unsolved.output;
+
+  CommandResult pose = RunCli(at + "plan " + ExamplePath("requests/panda_pose_table.json"));
+  EXPECT_EQ(pose.exit_code, 0) << pose.output;
+  EXPECT_NE(pose.output.find("reached     ["), std::string::npos) << pose.output;
+
+  for (const char* option : {"--dh robots/ur5_dh.json", "--poe robots/ur5_poe.json"}) {
+    std::string arguments = option;
+    arguments.replace(arguments.find(' ') + 1, 0, ExamplePath(""));
+    CommandResult upload = RunCli(at + "upload-robot " + arguments);
+    EXPECT_EQ(upload.exit_code, 0) << upload.output;
+    EXPECT_NE(upload.output.find("robot_id "), std::string::npos) << upload.output;
+  }
+  CommandResult both = RunCli(at + "upload-robot --dh a.json --poe b.json");
+  EXPECT_EQ(both.exit_code, 2) << both.output;
+}
+
 }  // namespace
 }  // namespace chasles::testing

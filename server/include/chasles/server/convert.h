@@ -11,6 +11,8 @@
 
 #include "chasles/collision/scene.h"
 #include "chasles/pipeline/plan_pipeline.h"
+#include "chasles/robot/descriptions.h"
+#include "chasles/robot/inverse_kinematics.h"
 #include "chasles/robot/robot_model.h"
 #include "chasles/v1/chasles.pb.h"
 
@@ -23,9 +25,30 @@ std::string ProtoContentId(const google::protobuf::Message& message);
 /// normalised); every number must be finite.
 Eigen::Isometry3d PoseFromProto(const v1::Pose& pose, const std::string& field);
 
-/// Parses a robot: every mesh file through ParseMesh, then RobotModel::FromUrdf.
+/// Parses a robot: URDF (every mesh file through ParseMesh, then RobotModel::FromUrdf), a DH
+/// table (RobotFromDh) or a PoE screw list (RobotFromPoe). Errors name the proto field, e.g.
+/// `robot.dh.joints[2].alpha = nan must be finite`, `robot.poe.joints[1].screw: ...`.
 std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot,
                                                  const std::string& field = "robot");
+
+/// DhRobot → DhDescription (numbers checked finite, shapes checked positive); `field` is the
+/// path of the DhRobot, e.g. "robot.dh". Limits and the table itself are checked by RobotFromDh.
+DhDescription DhFromProto(const v1::DhRobot& dh, const std::string& field);
+/// PoeRobot → PoeDescription; `field` e.g. "robot.poe".
+PoeDescription PoeFromProto(const v1::PoeRobot& poe, const std::string& field);
+
+/// The link named `name` (empty = "tool" if the robot has one, else the last link).
+/// \throws Error(kInvalidArgument) naming `field`, the link and the known links.
+int LinkFromProto(const RobotModel& robot, const std::string& name, const std::string& field);
+
+/// An InverseKinematicsRequest's solver settings with the proto's defaults and ranges applied
+/// (robot/scene resolution and `accept` are the caller's). \throws Error(kInvalidArgument).
+IkRequest IkRequestFromProto(const v1::InverseKinematicsRequest& request, const RobotModel& robot);
+
+/// Fills solved, message, joint_names, solutions, manipulability, singular (the Jacobian of
+/// `ik.link` at each solution), best errors, attempts and seconds.
+void IkResultToProto(const IkResult& result, const IkRequest& ik, const RobotModel& robot,
+                     v1::InverseKinematicsResponse* response);
 
 /// Builds a scene from primitives, meshes and OctoMaps. Unnamed objects are called e.g. `box[2]`.
 std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& scene, const std::string& field = "scene");
@@ -35,7 +58,7 @@ struct RequestSettings {
   double time_budget = 5.0;  ///< [s], in (0, 600]
 };
 
-/// The query part of a request (start, goal, planner, trajectory options, seed, resolution),
+/// The query part of a request (start, joint or pose goal, gravity, planner, trajectory options, seed, resolution),
 /// with every default applied as documented in the proto. `checker` supplies the robot.
 /// \throws Error(kInvalidArgument) naming the field, Error(kNotFound) for an unknown planner.
 PlanQuery PlanQueryFromProto(const v1::PlanRequest& request,
@@ -46,7 +69,8 @@ PlanQuery PlanQueryFromProto(const v1::PlanRequest& request,
 /// gRPC statuses; they map to PLAN_OUTCOME_UNSPECIFIED here).
 v1::PlanOutcome OutcomeToProto(PlanOutcomeCode code);
 
-/// Fills outcome, message, path, trajectory, duration, timings, statistics and verification.
+/// Fills outcome, message, path, trajectory (with efforts when computed), duration, timings,
+/// statistics, verification and, for a pose goal, reached_goal and goal_manipulability.
 void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::PlanResponse* response);
 
 /// Fills a catalogue entry.
