@@ -6,7 +6,10 @@
 #include <sstream>
 
 #include "chasles/optimizers/shortcut.h"
+#include "chasles/robot/dynamics.h"
 #include "chasles/robot/error.h"
+#include "chasles/robot/inverse_kinematics.h"
+#include "chasles/robot/kinematics.h"
 
 namespace chasles {
 namespace {
@@ -50,6 +53,7 @@ const char* ToString(PlanOutcomeCode code) {
     case PlanOutcomeCode::kNoPathWithinBudget: return "NO_PATH_WITHIN_BUDGET";
     case PlanOutcomeCode::kStartInCollision: return "START_IN_COLLISION";
     case PlanOutcomeCode::kGoalInCollision: return "GOAL_IN_COLLISION";
+    case PlanOutcomeCode::kGoalUnreachable: return "GOAL_UNREACHABLE";
     case PlanOutcomeCode::kVerificationFailed: return "VERIFICATION_FAILED";
     case PlanOutcomeCode::kApproximateOnly: return "APPROXIMATE_ONLY";
     case PlanOutcomeCode::kCancelled: return "CANCELLED";
@@ -63,7 +67,27 @@ void PlanQuery::Validate(const PlannerRegistry& registry) const {
   const RobotModel& robot = checker->robot();
   const int n = robot.num_dofs();
   robot.ValidateConfiguration(start, "start.positions");
-  robot.ValidateConfiguration(goal, "goal.positions");
+  if (pose_goal) {
+    const PoseGoalSpec& p = *pose_goal;
+    if (p.link < 0 || p.link >= robot.num_links()) {
+      ThrowInvalid("pose_goal.link = " + std::to_string(p.link) + " is not a link of robot '" + robot.name() + "'");
+    }
+    if (!p.pose.matrix().allFinite()) ThrowInvalid("pose_goal.pose must be finite");
+    const auto check_open = [](double v, double hi, const std::string& field) {
+      if (!std::isfinite(v) || v <= 0.0 || v > hi) {
+        ThrowInvalid(field + " = " + FormatNumber(v) + " must be within (0, " + FormatNumber(hi) + "]");
+      }
+    };
+    check_open(p.position_tolerance, 0.1, "pose_goal.position_tolerance");
+    check_open(p.orientation_tolerance, 0.5, "pose_goal.orientation_tolerance");
+    check_open(p.ik_time_budget, 600.0, "pose_goal.ik_time_budget");
+    if (p.max_goal_states < 1 || p.max_goal_states > 64) {
+      ThrowInvalid("pose_goal.max_goal_states = " + std::to_string(p.max_goal_states) + " must be within [1, 64]");
+    }
+  } else {
+    robot.ValidateConfiguration(goal, "goal.positions");
+  }
+  if (!gravity.allFinite()) ThrowInvalid("gravity must be finite");
   CheckRange(goal_tolerance, 0.0, 0.1, "goal.tolerance");
   ResolveParameters(registry.Spec(planner_id), parameters);  // throws NotFound / InvalidArgument
   CheckRange(collision_resolution, 1e-4, 0.1, "collision_resolution");
@@ -102,15 +126,47 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
   const CollisionChecker& checker = *query.checker;
   out.limits = ResolveLimits(query);
   const CollisionResult start_contact = checker.Check(query.start);
-  const CollisionResult goal_contact = checker.Check(query.goal);
-  out.state_checks += 2;
-  out.seconds.validate = SecondsSince(t_start);
+  out.state_checks += 1;
   if (start_contact.in_collision) {
+    out.seconds.validate = SecondsSince(t_start);
     return finish(PlanOutcomeCode::kStartInCollision, "start is in collision: " + DescribeContact(start_contact));
   }
-  if (goal_contact.in_collision) {
-    return finish(PlanOutcomeCode::kGoalInCollision, "goal is in collision: " + DescribeContact(goal_contact));
+  // The goal states: the joint goal, or collision-free IK solutions of the pose goal, nearest
+  // to the start first.
+  std::vector<Eigen::VectorXd> goals;
+  if (query.pose_goal) {
+    const PoseGoalSpec& pose = *query.pose_goal;
+    IkRequest ik;
+    ik.link = pose.link;
+    ik.target = pose.pose;
+    ik.position_tolerance = pose.position_tolerance;
+    ik.orientation_tolerance = pose.orientation_tolerance;
+    ik.max_solutions = pose.max_goal_states;
+    ik.time_budget = std::max(1e-3, std::min(pose.ik_time_budget, termination.SecondsLeft()));
+    ik.seed = query.seed;
+    ik.initial_guess = query.start;
+    ik.accept = [&checker](const Eigen::VectorXd& q) { return checker.IsValid(q); };
+    const IkResult solved = SolveIk(checker.robot(), ik);
+    if (solved.solutions.empty()) {
+      out.seconds.validate = SecondsSince(t_start);
+      return finish(PlanOutcomeCode::kGoalUnreachable, "pose goal for link '" +
+                                                           checker.robot().links()[pose.link].name +
+                                                           "' has no collision-free IK solution: " + solved.message);
+    }
+    goals = solved.solutions;
+    std::stable_sort(goals.begin(), goals.end(), [&query](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+      return (a - query.start).norm() < (b - query.start).norm();
+    });
+  } else {
+    const CollisionResult goal_contact = checker.Check(query.goal);
+    out.state_checks += 1;
+    if (goal_contact.in_collision) {
+      out.seconds.validate = SecondsSince(t_start);
+      return finish(PlanOutcomeCode::kGoalInCollision, "goal is in collision: " + DescribeContact(goal_contact));
+    }
+    goals.push_back(query.goal);
   }
+  out.seconds.validate = SecondsSince(t_start);
 
   // 2. Plan a geometric path.
   auto t = Clock::now();
@@ -118,7 +174,8 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
   PlanningProblem problem;
   problem.checker = query.checker;
   problem.start = query.start;
-  problem.goal = query.goal;
+  problem.goal = goals.front();
+  problem.additional_goals.assign(goals.begin() + 1, goals.end());
   problem.goal_tolerance = query.goal_tolerance;
   problem.max_step = query.collision_resolution;
   problem.seed = query.seed;
@@ -130,7 +187,9 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
   out.state_checks += planned.state_checks;
   out.raw_path = planned.path;
   switch (planned.status) {
-    case PlanStatus::kExactSolution: break;
+    case PlanStatus::kExactSolution:
+      out.goal = planned.path.back();  // exactly one of the goal states
+      break;
     case PlanStatus::kApproximateSolution:
       return finish(PlanOutcomeCode::kApproximateOnly, planned.message);
     case PlanStatus::kCancelled: return finish(PlanOutcomeCode::kCancelled, planned.message);
@@ -164,7 +223,7 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
   t = Clock::now();
   VerificationOptions verify;
   verify.max_joint_step = std::min(0.005, query.collision_resolution);
-  out.verification = VerifyTrajectory(out.trajectory, query.start, query.goal, checker, out.limits, verify);
+  out.verification = VerifyTrajectory(out.trajectory, query.start, out.goal, checker, out.limits, verify);
   out.state_checks += static_cast<std::uint64_t>(out.verification.states_checked);
   out.seconds.verify = SecondsSince(t);
   if (!out.verification.ok) {
@@ -173,6 +232,17 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
                   "the trajectory failed dense verification: " + out.verification.reason);
   }
   out.samples = out.trajectory.Sample(query.sample_period);
+  const RobotModel& robot = checker.robot();
+  if (HasInertia(robot)) {
+    DynamicsOptions dynamics;
+    dynamics.gravity = query.gravity;
+    for (TrajectorySample& sample : out.samples) {
+      sample.effort = InverseDynamics(robot, sample.q, sample.qd, sample.qdd, dynamics);
+    }
+  }
+  if (query.pose_goal) {
+    out.goal_manipulability = Manipulability(SpaceJacobian(robot, out.goal, query.pose_goal->link));
+  }
   std::ostringstream message;
   message << planned.message << "; " << out.path.size() << " waypoints after shortcutting, duration "
           << out.trajectory.duration() << " s, verified at " << out.verification.states_checked << " states";

@@ -24,6 +24,7 @@
 #include <ompl/base/SpaceInformation.h>
 #include <ompl/base/StateValidityChecker.h>
 #include <ompl/base/goals/GoalSampleableRegion.h>
+#include <ompl/base/goals/GoalStates.h>
 #include <ompl/base/objectives/PathLengthOptimizationObjective.h>
 #include <ompl/base/samplers/informed/RejectionInfSampler.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
@@ -280,7 +281,19 @@ class OmplPlanner : public Planner {
     FromEigen(problem.start, start.get());
     FromEigen(problem.goal, goal.get());
     pdef_->addStartState(start);
-    pdef_->setGoalState(goal, std::max(problem.goal_tolerance, 1e-9));
+    if (problem.additional_goals.empty()) {
+      pdef_->setGoalState(goal, std::max(problem.goal_tolerance, 1e-9));
+    } else {
+      auto goals = std::make_shared<ob::GoalStates>(si_);
+      goals->addState(goal);
+      for (const Eigen::VectorXd& q : problem.additional_goals) {
+        ob::ScopedState<> g(space);
+        FromEigen(q, g.get());
+        goals->addState(g);
+      }
+      goals->setThreshold(std::max(problem.goal_tolerance, 1e-9));
+      pdef_->setGoal(goals);
+    }
     auto objective = std::make_shared<SeededPathLengthObjective>(si_);
     if (!spec_.optimizing) {
       // Any path satisfies a first-solution planner; without this PRM keeps refining until
@@ -418,9 +431,14 @@ class OmplPlanner : public Planner {
   void FinishAtGoal(PlannerResult* result) const {
     CheckCounters counters;
     const Eigen::VectorXd& last = result->path.back();
-    if (last != problem_.goal) {
-      if (problem_.checker->IsMotionValid(last, problem_.goal, problem_.max_step, &counters)) {
-        result->path.push_back(problem_.goal);
+    // The goal state the path reached: the nearest of the acceptable ones.
+    const Eigen::VectorXd* goal = &problem_.goal;
+    for (const Eigen::VectorXd& g : problem_.additional_goals) {
+      if ((g - last).norm() < (*goal - last).norm()) goal = &g;
+    }
+    if (last != *goal) {
+      if (problem_.checker->IsMotionValid(last, *goal, problem_.max_step, &counters)) {
+        result->path.push_back(*goal);
       } else {
         result->status = PlanStatus::kApproximateSolution;
         result->message = spec_.id + " reached the goal region but the final connection to the exact goal collides";

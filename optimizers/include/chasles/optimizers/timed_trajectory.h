@@ -17,6 +17,7 @@ struct TrajectorySample {
   Eigen::VectorXd q;       ///< positions [rad] / [m]
   Eigen::VectorXd qd;      ///< velocities [rad/s] / [m/s]
   Eigen::VectorXd qdd;     ///< accelerations [rad/s²] / [m/s²]
+  Eigen::VectorXd effort;  ///< joint torques [N·m] / forces [N]; empty unless computed (pipeline)
 };
 
 /// A trajectory that is exact between samples: a sequence of segments, each a straight

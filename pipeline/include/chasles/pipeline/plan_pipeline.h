@@ -5,10 +5,12 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "chasles/collision/collision_checker.h"
 #include "chasles/optimizers/time_parameterization.h"
@@ -20,12 +22,24 @@
 
 namespace chasles {
 
+/// A pose goal, solved by inverse kinematics into collision-free goal states before planning.
+struct PoseGoalSpec {
+  int link = -1;                        ///< link index in the robot
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  ///< target in the base frame
+  double position_tolerance = 1e-4;     ///< [m], in (0, 0.1]
+  double orientation_tolerance = 1e-3;  ///< [rad], in (0, 0.5]
+  int max_goal_states = 4;              ///< in [1, 64]
+  double ik_time_budget = 0.2;          ///< [s], > 0
+};
+
 /// One planning query in domain types. Defaults match the proto documentation.
 struct PlanQuery {
   std::shared_ptr<const CollisionChecker> checker;  ///< robot + scene
   Eigen::VectorXd start;
-  Eigen::VectorXd goal;
+  Eigen::VectorXd goal;                ///< joint goal; ignored when pose_goal is set
+  std::optional<PoseGoalSpec> pose_goal;  ///< set: the goal is a link pose (IK before planning)
   double goal_tolerance = 1e-3;       ///< [rad], in [0, 0.1]
+  Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);  ///< for the returned torques [m/s²]
   std::string planner_id = "rrt_connect";
   ParameterValues parameters;         ///< unresolved; validated against the planner's spec
   std::uint64_t seed = 1;
@@ -46,6 +60,7 @@ enum class PlanOutcomeCode {
   kNoPathWithinBudget,
   kStartInCollision,
   kGoalInCollision,
+  kGoalUnreachable,   ///< pose goal: no collision-free IK solution within its budget
   kVerificationFailed,
   kApproximateOnly,
   kCancelled,
@@ -63,7 +78,10 @@ struct PlanOutcome {
   JointPath raw_path;                  ///< as the planner returned it
   JointPath path;                      ///< after shortcutting (start … goal, exact)
   TimedTrajectory trajectory;          ///< empty unless kSuccess
-  std::vector<TrajectorySample> samples;  ///< at sample_period, last one at the end exactly
+  std::vector<TrajectorySample> samples;  ///< at sample_period, last one at the end exactly;
+                                          ///< `effort` filled when the robot has inertia
+  Eigen::VectorXd goal;                ///< the goal the trajectory ends at (a pose goal's IK solution)
+  double goal_manipulability = 0.0;    ///< pose goal: √det(J Jᵀ) of the link at `goal`
   KinematicLimits limits;              ///< the limits the trajectory respects
   VerificationReport verification;
   StageSeconds seconds;

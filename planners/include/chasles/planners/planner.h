@@ -52,6 +52,9 @@ struct PlanningProblem {
   std::shared_ptr<const CollisionChecker> checker;
   Eigen::VectorXd start;
   Eigen::VectorXd goal;
+  /// More acceptable goal states (e.g. several IK solutions of a pose goal); the path ends
+  /// exactly at `goal` or at one of these.
+  std::vector<Eigen::VectorXd> additional_goals;
   double goal_tolerance = 1e-6;  ///< max-norm distance at which the goal counts as reached [rad]
   double max_step = 0.005;       ///< motion-check resolution, max joint step [rad]
   std::uint64_t seed = 1;        ///< the same seed gives the same path (see docs for anytime planners)
@@ -73,7 +76,8 @@ const char* ToString(PlanStatus status);
 struct PlannerResult {
   PlanStatus status = PlanStatus::kNoSolution;
   std::string message;
-  JointPath path;                 ///< start … goal (exact endpoints) for kExactSolution
+  JointPath path;                 ///< start … goal (exact endpoints) for kExactSolution; with
+                                  ///< additional goals it ends exactly at the one reached
   std::uint64_t graph_states = 0; ///< vertices in the planner's tree/graph
   std::uint64_t state_checks = 0; ///< state validity checks (motion checks count their states)
   double solve_seconds = 0.0;
