@@ -2,9 +2,9 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|grpc|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|grpc|kinematics|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
-//                 [--grpc-requests N] [--shortcut-attempts N] [--examples DIR]
+//                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 
 #include <algorithm>
 #include <chrono>
@@ -24,7 +24,11 @@
 #include "chasles/collision/collision_checker.h"
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/planners/registry.h"
+#include "chasles/robot/dynamics.h"
 #include "chasles/robot/error.h"
+#include "chasles/robot/inverse_kinematics.h"
+#include "chasles/robot/kinematics.h"
+#include "chasles/robot/lie_group.h"
 #include "chasles/server/convert.h"
 #include "chasles/server/planning_server.h"
 #include "chasles/v1/chasles.grpc.pb.h"
@@ -44,6 +48,7 @@ struct Options {
   double anytime_budget = 0.1;  // optimizing planners [s]
   int grpc_requests = 200;
   int shortcut_attempts = 100;
+  int ik_poses = 1000;
 };
 
 std::string ReadFile(const std::string& path) {
@@ -321,6 +326,159 @@ void BenchGrpc(const Options& options) {
   std::printf("\ngRPC overhead (difference of medians): %.3f ms; ratio %.2f×\n", remote - local, remote / local);
 }
 
+// ---------------------------------------------------------------------------------------------
+// Kinematics and dynamics (issue 3): FK, Jacobian, IK, RNEA, mass matrix, each with a baseline.
+
+/// Median over `repeats` runs of the mean time per call [µs] of `call(i)` over i in [0, n).
+template <typename Call>
+double MedianMicros(int n, int repeats, Call&& call) {
+  std::vector<double> per_call;
+  for (int r = 0; r < repeats; ++r) {
+    const auto t0 = Clock::now();
+    for (int i = 0; i < n; ++i) call(i);
+    per_call.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count() / n);
+  }
+  return Quantile(per_call, 0.5);
+}
+
+volatile double bench_sink = 0.0;  // keeps results alive
+
+void BenchKinematics(const Options& options) {
+  constexpr int kRuns = 21;
+  std::printf("\n## Kinematics and dynamics, one thread (median of %d runs of 1000 calls; µs per call)\n\n", kRuns);
+  std::printf("| robot | operation | ours [µs] | baseline | baseline [µs] | speed-up |\n|---|---|---|---|---|---|\n");
+  struct IkRow {
+    std::string robot, method;
+    int solved = 0, total = 0;
+    double median_us = 0, p95_us = 0, attempts = 0;
+  };
+  std::vector<IkRow> ik_rows;
+  for (const std::string name : {"ur5", "panda"}) {
+    auto robot_ptr = LoadRobot(name);
+    const RobotModel& robot = *robot_ptr;
+    const int tool = robot.FindLink("tool") >= 0 ? robot.FindLink("tool") : robot.num_links() - 1;
+    const int n = robot.num_dofs();
+    std::mt19937_64 rng(options.seed);
+    const int count = 1000;
+    std::vector<Eigen::VectorXd> qs, qds, qdds;
+    std::normal_distribution<double> normal(0.0, 1.0);
+    for (int i = 0; i < count; ++i) {
+      qs.push_back(RandomConfiguration(robot, &rng));
+      Eigen::VectorXd qd(n), qdd(n);
+      for (int j = 0; j < n; ++j) {
+        qd[j] = normal(rng);
+        qdd[j] = normal(rng);
+      }
+      qds.push_back(qd);
+      qdds.push_back(qdd);
+    }
+    std::vector<Eigen::Isometry3d> poses;
+    const auto row = [&](const char* op, double ours, const char* baseline, double base) {
+      std::printf("| %s | %s | %.3f | %s | %.3f | %.1f× |\n", name.c_str(), op, ours, baseline, base, base / ours);
+      std::fflush(stdout);
+    };
+
+    // FK of every link: PoE vs chaining the joint transforms.
+    const double fk = MedianMicros(count, kRuns, [&](int i) {
+      robot.ForwardKinematics(qs[i], &poses);
+      bench_sink = bench_sink + poses.back().translation().x();
+    });
+    const double fk_chain = MedianMicros(count, kRuns, [&](int i) {
+      robot.ForwardKinematicsByChaining(qs[i], &poses);
+      bench_sink = bench_sink + poses.back().translation().x();
+    });
+    row("FK, all links", fk, "ForwardKinematicsByChaining", fk_chain);
+
+    // Space Jacobian of the tool vs central differences of FK (2n FK calls and logs).
+    const double jac = MedianMicros(count, kRuns, [&](int i) {
+      const Jacobian J = SpaceJacobian(robot, qs[i], tool);
+      bench_sink = bench_sink + J(0, 0);
+    });
+    const double jac_fd = MedianMicros(count, kRuns, [&](int i) {
+      Jacobian J(6, n);
+      const double h = 1e-6;
+      std::vector<Eigen::Isometry3d> plus, minus;
+      for (int j = 0; j < n; ++j) {
+        Eigen::VectorXd qp = qs[i], qm = qs[i];
+        qp[j] += h;
+        qm[j] -= h;
+        robot.ForwardKinematics(qp, &plus);
+        robot.ForwardKinematics(qm, &minus);
+        J.col(j) = LogSE3(plus[tool] * minus[tool].inverse()) / (2 * h);
+      }
+      bench_sink = bench_sink + J(0, 0);
+    });
+    row("space Jacobian (tool)", jac, "central differences of FK", jac_fd);
+
+    // Dynamics (only when every moving link has a mass).
+    if (HasInertia(robot)) {
+      const double rnea = MedianMicros(count, kRuns, [&](int i) {
+        const Eigen::VectorXd tau = InverseDynamics(robot, qs[i], qds[i], qdds[i]);
+        bench_sink = bench_sink + tau[0];
+      });
+      const double closed = MedianMicros(count, kRuns, [&](int i) {
+        const Eigen::VectorXd tau = MassMatrix(robot, qs[i]) * qdds[i] + CoriolisTorques(robot, qs[i], qds[i]) +
+                                    GravityTorques(robot, qs[i]);
+        bench_sink = bench_sink + tau[0];
+      });
+      row("InverseDynamics (RNEA)", rnea, "M q̈ + c + g (MassMatrix, CoriolisTorques, GravityTorques)", closed);
+      const double mass = MedianMicros(count, kRuns, [&](int i) {
+        const Eigen::MatrixXd M = MassMatrix(robot, qs[i]);
+        bench_sink = bench_sink + M(0, 0);
+      });
+      DynamicsOptions no_bias;
+      no_bias.gravity.setZero();
+      no_bias.include_friction = false;
+      const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
+      const double mass_rnea = MedianMicros(count, kRuns, [&](int i) {
+        Eigen::MatrixXd M(n, n);
+        for (int j = 0; j < n; ++j) M.col(j) = InverseDynamics(robot, qs[i], zero, Eigen::VectorXd::Unit(n, j), no_bias);
+        bench_sink = bench_sink + M(0, 0);
+      });
+      row("MassMatrix", mass, "n RNEA calls with unit q̈", mass_rnea);
+    } else {
+      std::printf("| %s | dynamics | — | robot has no inertia on every moving link | — | — |\n", name.c_str());
+    }
+
+    // IK: random reachable poses (FK of random configurations), random restarts from the seed.
+    for (const IkMethod method : {IkMethod::kDampedLeastSquares, IkMethod::kNewtonRaphson}) {
+      IkRow ik_row;
+      ik_row.robot = name;
+      ik_row.method = method == IkMethod::kDampedLeastSquares ? "damped least squares (default)" : "Newton–Raphson";
+      std::vector<double> micros;
+      double attempts = 0;
+      std::mt19937_64 ik_rng(options.seed + 17);
+      for (int k = 0; k < options.ik_poses; ++k) {
+        const Eigen::VectorXd q = RandomConfiguration(robot, &ik_rng);
+        robot.ForwardKinematics(q, &poses);
+        IkRequest request;
+        request.link = tool;
+        request.target = poses[tool];
+        request.method = method;
+        request.seed = options.seed + k;
+        const auto t0 = Clock::now();
+        const IkResult result = SolveIk(robot, request);
+        micros.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
+        ik_row.solved += result.solutions.empty() ? 0 : 1;
+        attempts += result.attempts;
+      }
+      ik_row.total = options.ik_poses;
+      ik_row.median_us = Quantile(micros, 0.5);
+      ik_row.p95_us = Quantile(micros, 0.95);
+      ik_row.attempts = attempts / options.ik_poses;
+      ik_rows.push_back(ik_row);
+    }
+  }
+  std::printf("\n## Inverse kinematics of the tool link: %d random reachable poses per robot "
+              "(FK of uniform random configurations; tolerances 1e-4 m / 1e-3 rad; budget 0.05 s)\n\n",
+              options.ik_poses);
+  std::printf("| robot | method | solved | median [µs] | p95 [µs] | attempts per solve (mean) |\n|---|---|---|---|---|---|\n");
+  for (const IkRow& r : ik_rows) {
+    std::printf("| %s | %s | %d/%d (%.1f%%) | %.1f | %.1f | %.2f |\n", r.robot.c_str(), r.method.c_str(), r.solved,
+                r.total, 100.0 * r.solved / r.total, r.median_us, r.p95_us, r.attempts);
+  }
+}
+
 int Main(int argc, char** argv) {
   Options options;
   examples_dir = CHASLES_EXAMPLES_DIR;
@@ -340,17 +498,19 @@ int Main(int argc, char** argv) {
     else if (arg == "--grpc-requests") options.grpc_requests = std::stoi(value());
     else if (arg == "--examples") examples_dir = value();
     else if (arg == "--shortcut-attempts") options.shortcut_attempts = std::stoi(value());
+    else if (arg == "--ik-poses") options.ik_poses = std::stoi(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|grpc|all] [--queries N] [--seed S]\n"
+                   "usage: chasles-bench [--section checks|plan|grpc|kinematics|all] [--queries N] [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
-                   "                     [--grpc-requests N] [--shortcut-attempts N] [--examples DIR]\n");
+                   "                     [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]\n");
       return arg == "--help" ? 0 : 2;
     }
   }
   if (options.section == "checks" || options.section == "all") BenchChecks(options);
   if (options.section == "plan" || options.section == "all") BenchPlanning(options);
   if (options.section == "grpc" || options.section == "all") BenchGrpc(options);
+  if (options.section == "kinematics" || options.section == "all") BenchKinematics(options);
   return 0;
 }
 
