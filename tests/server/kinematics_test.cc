@@ -122,6 +122,9 @@ TEST_P(PoseGoalExample, EndsExactlyAtAnIkSolutionWithinTheTolerances) {
   EXPECT_GE(response.goal_manipulability(), 0.0);
 
   // Efforts: one per joint on every point exactly when every moving link has a mass.
+  // The example Panda and UR5 (URDF) carry inertials; the PUMA 560 table has none.
+  if (GetParam() == "panda_pose_table" || GetParam() == "ur5_pose_table") EXPECT_TRUE(HasInertia(*robot));
+  if (GetParam() == "puma560_dh_pose") EXPECT_FALSE(HasInertia(*robot));
   const int expected_efforts = HasInertia(*robot) ? dofs : 0;
   for (const v1::TrajectoryPoint& point : trajectory.points()) {
     ASSERT_EQ(point.efforts_size(), expected_efforts);
@@ -435,6 +438,23 @@ TEST_F(PoseGoalBadInput, NanGravity) {
   v1::PlanRequest request = LoadRequest("panda_pose_table");
   request.mutable_gravity()->set_z(kNan);
   ExpectPlanError(request, grpc::StatusCode::INVALID_ARGUMENT, {"gravity.z = nan"});
+}
+
+TEST_F(PoseGoalBadInput, GravityChangesTheEfforts) {
+  v1::PlanRequest request = LoadRequest("panda_pose_table");
+  v1::PlanResponse with_gravity, without_gravity;
+  ASSERT_TRUE(server_->Plan(request, &with_gravity).ok());
+  request.mutable_gravity()->set_z(0.0);  // present and zero: no gravity
+  ASSERT_TRUE(server_->Plan(request, &without_gravity).ok());
+  ASSERT_EQ(with_gravity.outcome(), v1::SUCCESS);
+  ASSERT_EQ(without_gravity.outcome(), v1::SUCCESS);
+  const v1::TrajectoryPoint& a = with_gravity.trajectory().points(0);
+  const v1::TrajectoryPoint& b = without_gravity.trajectory().points(0);
+  ASSERT_EQ(a.efforts_size(), 7);
+  ASSERT_EQ(b.efforts_size(), 7);
+  double difference = 0.0;
+  for (int j = 0; j < 7; ++j) difference = std::max(difference, std::abs(a.efforts(j) - b.efforts(j)));
+  EXPECT_GT(difference, 1.0);  // the Panda's gravity load at the ready pose is tens of N·m
 }
 
 TEST_F(PoseGoalBadInput, UnreachablePoseIsAnOutcome) {
