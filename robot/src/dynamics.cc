@@ -14,6 +14,7 @@
 
 #include <cassert>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -53,10 +54,27 @@ inline void JointTransform(const Joint& joint, double q, LinkState* child) {
   const Matrix3d& R0 = joint.origin.linear();
   switch (joint.type) {
     case JointType::kRevolute:
-    case JointType::kContinuous:
-      child->R.noalias() = R0 * Eigen::AngleAxisd(q, joint.axis).toRotationMatrix();
+    case JointType::kContinuous: {
+      const double c = std::cos(q), s = std::sin(q);
+      if (joint.axis.z() == 1.0) {  // the common case (DH-style URDFs): R0 · Rz(q)
+        child->R.col(0) = c * R0.col(0) + s * R0.col(1);
+        child->R.col(1) = c * R0.col(1) - s * R0.col(0);
+        child->R.col(2) = R0.col(2);
+      } else {  // Rodrigues: c·1 + s·[a] + (1 − c)·a aᵀ
+        const Vector3d& a = joint.axis;
+        Matrix3d rot = (1.0 - c) * (a * a.transpose());
+        rot.diagonal().array() += c;
+        rot(0, 1) -= s * a.z();
+        rot(1, 0) += s * a.z();
+        rot(0, 2) += s * a.y();
+        rot(2, 0) -= s * a.y();
+        rot(1, 2) -= s * a.x();
+        rot(2, 1) += s * a.x();
+        child->R.noalias() = R0 * rot;
+      }
       child->r = joint.origin.translation();
       break;
+    }
     case JointType::kPrismatic:
       child->R = R0;
       child->r = joint.origin.translation() + R0 * (joint.axis * q);
@@ -136,11 +154,11 @@ Eigen::VectorXd Rnea(const RobotModel& robot, const Eigen::VectorXd& q, const Ei
       c.w = w_in + joint.axis * vj;
       c.dw = dw_in + joint.axis * aj + w_in.cross(joint.axis * vj);
     }
-    const MassProperties mp = LinkMass(links[joint.child_link]);
-    if (mp.m > 0.0 || !mp.I.isZero(0.0)) {
-      const Vector3d acom = c.a + c.dw.cross(mp.c) + c.w.cross(c.w.cross(mp.c));
-      c.f = mp.m * acom;
-      c.n = mp.I * c.dw + c.w.cross(mp.I * c.w) + mp.c.cross(c.f);
+    const std::optional<Inertial>& in = links[joint.child_link].inertial;
+    if (in) {
+      const Vector3d acom = c.a + c.dw.cross(in->com) + c.w.cross(c.w.cross(in->com));
+      c.f = in->mass * acom;
+      c.n = in->inertia * c.dw + c.w.cross(in->inertia * c.w) + in->com.cross(c.f);
     } else {
       c.f.setZero();
       c.n.setZero();
@@ -255,10 +273,16 @@ Eigen::MatrixXd MassMatrix(const RobotModel& robot, const Eigen::VectorXd& q) {
 
   // Link transforms and each link's own inertia about its origin.
   for (int l = 0; l < robot.num_links(); ++l) {
-    const MassProperties mp = LinkMass(links[l]);
-    s[l].cm = mp.m;
-    s[l].ch = mp.m * mp.c;
-    s[l].cI = mp.I - mp.m * SkewSquared(mp.c);
+    const std::optional<Inertial>& in = links[l].inertial;
+    if (in) {
+      s[l].cm = in->mass;
+      s[l].ch = in->mass * in->com;
+      s[l].cI = in->inertia - in->mass * SkewSquared(in->com);
+    } else {
+      s[l].cm = 0.0;
+      s[l].ch.setZero();
+      s[l].cI.setZero();
+    }
   }
   for (const Joint& joint : joints) JointTransform(joint, joint.dof >= 0 ? q[joint.dof] : 0.0, &s[joint.child_link]);
 
@@ -317,7 +341,7 @@ Eigen::VectorXd CoriolisTorques(const RobotModel& robot, const Eigen::VectorXd& 
 Eigen::MatrixXd CoriolisMatrix(const RobotModel& robot, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
   // Exact: M = Σ_l J_lᵀ G_l J_l over links l (body Jacobians J_l, spatial inertias G_l about the
   // link origins), and ∂J_l/∂q_k has column i equal to [ad_{J_l,i}] J_l,k when dof i is a proper
-  // ancestor of dof k on l's chain, else 0 (Lynch & Park §8.?, derivative of the body Jacobian).
+  // ancestor of dof k on l's chain, else 0 (differentiate J_b,i = Ad_{e^{-[B_n]q_n}···e^{-[B_i+1]q_i+1}} B_i).
   // From ∂M/∂q_k the Christoffel symbols Γ_ijk = ½(∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) give
   // C_ij = Σ_k Γ_ijk q̇_k.
   assert(q.size() == robot.num_dofs() && qd.size() == robot.num_dofs());
