@@ -146,6 +146,7 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
     ik.seed = query.seed;
     ik.initial_guess = query.start;
     ik.accept = [&checker](const Eigen::VectorXd& q) { return checker.IsValid(q); };
+    ik.stop = [&termination] { return termination.ShouldStop(); };
     const IkResult solved = SolveIk(checker.robot(), ik);
     if (solved.solutions.empty()) {
       out.seconds.validate = SecondsSince(t_start);

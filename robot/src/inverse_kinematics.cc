@@ -192,7 +192,7 @@ IkResult SolveIk(const RobotModel& robot, const IkRequest& request) {
     bool dls_now = dls;
     double previous_error = std::numeric_limits<double>::infinity();
     for (int iteration = 0; iteration < request.max_iterations; ++iteration) {
-      if ((iteration & 15) == 15 && Clock::now() >= deadline) break;
+      if ((iteration & 15) == 15 && (Clock::now() >= deadline || (request.stop && request.stop()))) break;
       Eigen::Matrix3d R;
       Eigen::Vector3d p;
       kinematics_internal::ChainForward(
@@ -297,7 +297,7 @@ IkResult SolveIk(const RobotModel& robot, const IkRequest& request) {
       }
     }
     if (k == 0) break;  // nothing moves the link: every further attempt is the same
-    if (Clock::now() >= deadline) break;
+    if (Clock::now() >= deadline || (request.stop && request.stop())) break;
   }
 
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();

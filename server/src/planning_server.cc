@@ -132,7 +132,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
   grpc::ServerUnaryReactor* UploadRobot(grpc::CallbackServerContext* context, const v1::UploadRobotRequest* request,
                                         v1::UploadRobotResponse* response) override {
-    return RunOnPool("upload-robot", [this, request, response] {
+    return RunOnPool("upload-robot", [this, request, response](const PoolReactor&) {
       const Clock::time_point start = Clock::now();
       StoredRobot robot = store_->AddRobot(request->robot(), "robot");
       response->set_robot_id(robot.id);
@@ -150,7 +150,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
   grpc::ServerUnaryReactor* UploadScene(grpc::CallbackServerContext* context, const v1::UploadSceneRequest* request,
                                         v1::UploadSceneResponse* response) override {
-    return RunOnPool("upload-scene", [this, request, response] {
+    return RunOnPool("upload-scene", [this, request, response](const PoolReactor&) {
       const Clock::time_point start = Clock::now();
       StoredScene scene = store_->AddScene(request->scene(), "scene");
       response->set_scene_id(scene.id);
@@ -164,7 +164,7 @@ class PlanningService final : public v1::Planning::CallbackService {
                                               v1::InverseKinematicsResponse* response) override {
     const Clock::time_point arrival = Clock::now();
     const Clock::time_point deadline = SteadyDeadline(*context);
-    return RunOnPool("ik", [this, request, response, arrival, deadline] {
+    return RunOnPool("ik", [this, request, response, arrival, deadline](const PoolReactor& reactor) {
       // Robot (inline, id or default) and, for collision_free, the scene's cached checker.
       StoredRobot robot;
       switch (request->robot_source_case()) {
@@ -190,6 +190,7 @@ class PlanningService final : public v1::Planning::CallbackService {
       // The solver's budget ends before the gRPC deadline, leaving time for the answer.
       const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
       ik.time_budget = std::min(ik.time_budget, std::max(1e-3, 0.9 * left));
+      ik.stop = [&reactor] { return reactor.cancelled(); };
       const IkResult result = SolveIk(*robot.model, ik);
       IkResultToProto(result, ik, *robot.model, response);
       Log("ik robot=%s scene=%s link=%s solutions=%d/%d attempts=%d status=OK ms=%.1f%s%s",
@@ -201,7 +202,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
  private:
   /// Runs `work` on the pool and finishes the call with OK or the mapped exception.
-  grpc::ServerUnaryReactor* RunOnPool(const char* what, std::function<void()> work) {
+  grpc::ServerUnaryReactor* RunOnPool(const char* what, std::function<void(const PoolReactor&)> work) {
     auto* reactor = new PoolReactor();
     const bool queued = pool_->Submit([this, reactor, what, work = std::move(work)] {
       grpc::Status status;
@@ -209,7 +210,8 @@ class PlanningService final : public v1::Planning::CallbackService {
         status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled before it started");
       } else {
         try {
-          work();
+          work(*reactor);
+          if (reactor->cancelled()) status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
         } catch (...) {
           status = StatusFromException(std::current_exception());
           Log("%s status=%d message=%s", what, static_cast<int>(status.error_code()),

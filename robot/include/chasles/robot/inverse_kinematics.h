@@ -43,6 +43,9 @@ struct IkRequest {
   /// Optional extra acceptance test (e.g. collision-free); a rejected solution counts as a
   /// failed attempt and the search goes on.
   std::function<bool(const Eigen::VectorXd&)> accept;
+  /// Optional: polled between attempts and every 16 iterations; true ends the search at once
+  /// (client cancellation, a deadline) with what has been found so far.
+  std::function<bool()> stop;
   /// \throws Error(kInvalidArgument) naming the field, e.g. `ik.position_tolerance = 0 must be > 0`.
   void Validate(const RobotModel& robot) const;
 };
