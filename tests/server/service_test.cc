@@ -1,6 +1,7 @@
 // The Planning service beyond single requests: uploads and ids, deadlines, cancellation,
 // determinism, concurrency, and the `chasles` CLI against an in-process server.
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
@@ -10,6 +11,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -197,12 +200,16 @@ struct CommandResult {
 };
 
 CommandResult RunCli(const std::string& arguments) {
-  const std::string log = ::testing::TempDir() + "/chasles_cli_output.txt";
+  // One output file per invocation: ctest runs tests in parallel processes.
+  static int calls = 0;
+  const std::string log = ::testing::TempDir() + "/chasles_cli_output_" + std::to_string(::getpid()) + "_" +
+                          std::to_string(calls++) + ".txt";
   const std::string command = std::string(CHASLES_CLI) + " " + arguments + " > " + log + " 2>&1";
   const int raw = std::system(command.c_str());
   CommandResult result;
   result.exit_code = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
   result.output = ReadText(log);
+  std::remove(log.c_str());
   return result;
 }
 
