@@ -12,7 +12,6 @@
 #include <thread>
 #include <vector>
 
-#include <unistd.h>
 
 #include <gtest/gtest.h>
 
