@@ -105,39 +105,59 @@ void RequireNonNegative(double value, const std::string& field) {
   }
 }
 
+// One converter per primitive, shared by scenes and DH/PoE link geometry; `f` names the element.
+Shape ShapeFromProto(const v1::Sphere& sphere, const std::string& f) {
+  RequirePositive(sphere.radius(), f + ".radius");
+  return Shape::Sphere(sphere.radius(), PoseFromProto(sphere.pose(), f + ".pose"));
+}
+
+Shape ShapeFromProto(const v1::Box& box, const std::string& f) {
+  const Eigen::Vector3d size = VectorFromProto(box.size(), f + ".size");
+  RequirePositive(size.x(), f + ".size.x");
+  RequirePositive(size.y(), f + ".size.y");
+  RequirePositive(size.z(), f + ".size.z");
+  return Shape::Box(size, PoseFromProto(box.pose(), f + ".pose"));
+}
+
+Shape ShapeFromProto(const v1::Cylinder& cylinder, const std::string& f) {
+  RequirePositive(cylinder.radius(), f + ".radius");
+  RequirePositive(cylinder.length(), f + ".length");
+  return Shape::Cylinder(cylinder.radius(), cylinder.length(), PoseFromProto(cylinder.pose(), f + ".pose"));
+}
+
+// Shape::Capsule takes the full length of the cylindrical part, as the proto does.
+Shape ShapeFromProto(const v1::Capsule& capsule, const std::string& f) {
+  RequirePositive(capsule.radius(), f + ".radius");
+  RequirePositive(capsule.length(), f + ".length");
+  return Shape::Capsule(capsule.radius(), capsule.length(), PoseFromProto(capsule.pose(), f + ".pose"));
+}
+
+/// Calls add(shape, field, name, kind, index) for every primitive of a Scene or LinkGeometry.
+template <typename Message, typename Add>
+void ForEachPrimitive(const Message& m, const std::string& field, Add add) {
+  for (int i = 0; i < m.boxes_size(); ++i) {
+    const std::string f = Indexed(field + ".boxes", i);
+    add(ShapeFromProto(m.boxes(i), f), f, m.boxes(i).name(), "box", i);
+  }
+  for (int i = 0; i < m.spheres_size(); ++i) {
+    const std::string f = Indexed(field + ".spheres", i);
+    add(ShapeFromProto(m.spheres(i), f), f, m.spheres(i).name(), "sphere", i);
+  }
+  for (int i = 0; i < m.cylinders_size(); ++i) {
+    const std::string f = Indexed(field + ".cylinders", i);
+    add(ShapeFromProto(m.cylinders(i), f), f, m.cylinders(i).name(), "cylinder", i);
+  }
+  for (int i = 0; i < m.capsules_size(); ++i) {
+    const std::string f = Indexed(field + ".capsules", i);
+    add(ShapeFromProto(m.capsules(i), f), f, m.capsules(i).name(), "capsule", i);
+  }
+}
+
 LinkProperties LinkPropertiesFromProto(const v1::LinkGeometry& link, const std::string& field) {
   LinkProperties out;
-  for (int i = 0; i < link.spheres_size(); ++i) {
-    const v1::Sphere& sphere = link.spheres(i);
-    const std::string f = Indexed(field + ".spheres", i);
-    RequirePositive(sphere.radius(), f + ".radius");
-    out.collision.push_back(Shape::Sphere(sphere.radius(), PoseFromProto(sphere.pose(), f + ".pose")));
-  }
-  for (int i = 0; i < link.boxes_size(); ++i) {
-    const v1::Box& box = link.boxes(i);
-    const std::string f = Indexed(field + ".boxes", i);
-    const Eigen::Vector3d size = VectorFromProto(box.size(), f + ".size");
-    RequirePositive(size.x(), f + ".size.x");
-    RequirePositive(size.y(), f + ".size.y");
-    RequirePositive(size.z(), f + ".size.z");
-    out.collision.push_back(Shape::Box(size, PoseFromProto(box.pose(), f + ".pose")));
-  }
-  for (int i = 0; i < link.cylinders_size(); ++i) {
-    const v1::Cylinder& cylinder = link.cylinders(i);
-    const std::string f = Indexed(field + ".cylinders", i);
-    RequirePositive(cylinder.radius(), f + ".radius");
-    RequirePositive(cylinder.length(), f + ".length");
-    out.collision.push_back(
-        Shape::Cylinder(cylinder.radius(), cylinder.length(), PoseFromProto(cylinder.pose(), f + ".pose")));
-  }
-  for (int i = 0; i < link.capsules_size(); ++i) {
-    const v1::Capsule& capsule = link.capsules(i);
-    const std::string f = Indexed(field + ".capsules", i);
-    RequirePositive(capsule.radius(), f + ".radius");
-    RequirePositive(capsule.length(), f + ".length");
-    out.collision.push_back(
-        Shape::Capsule(capsule.radius(), capsule.length(), PoseFromProto(capsule.pose(), f + ".pose")));
-  }
+  ForEachPrimitive(link, field, [&out](Shape shape, const std::string&, const std::string&, const char*, int) {
+    out.collision.push_back(std::move(shape));
+  });
   if (link.has_inertial()) {
     const v1::Inertial& inertial = link.inertial();
     const std::string f = field + ".inertial";
@@ -406,41 +426,10 @@ void IkResultToProto(const IkResult& result, const IkRequest& ik, const RobotMod
 
 std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::string& field) {
   auto scene = std::make_shared<Scene>();
-  for (int i = 0; i < proto.boxes_size(); ++i) {
-    const v1::Box& box = proto.boxes(i);
-    const std::string f = Indexed(field + ".boxes", i);
-    const Eigen::Vector3d size = VectorFromProto(box.size(), f + ".size");
-    RequirePositive(size.x(), f + ".size.x");
-    RequirePositive(size.y(), f + ".size.y");
-    RequirePositive(size.z(), f + ".size.z");
-    scene->AddObject({ObjectName(box.name(), "box", i), Shape::Box(size, PoseFromProto(box.pose(), f + ".pose"))}, f);
-  }
-  for (int i = 0; i < proto.spheres_size(); ++i) {
-    const v1::Sphere& sphere = proto.spheres(i);
-    const std::string f = Indexed(field + ".spheres", i);
-    RequirePositive(sphere.radius(), f + ".radius");
-    scene->AddObject({ObjectName(sphere.name(), "sphere", i),
-                      Shape::Sphere(sphere.radius(), PoseFromProto(sphere.pose(), f + ".pose"))}, f);
-  }
-  for (int i = 0; i < proto.cylinders_size(); ++i) {
-    const v1::Cylinder& cylinder = proto.cylinders(i);
-    const std::string f = Indexed(field + ".cylinders", i);
-    RequirePositive(cylinder.radius(), f + ".radius");
-    RequirePositive(cylinder.length(), f + ".length");
-    scene->AddObject({ObjectName(cylinder.name(), "cylinder", i),
-                      Shape::Cylinder(cylinder.radius(), cylinder.length(),
-                                      PoseFromProto(cylinder.pose(), f + ".pose"))}, f);
-  }
-  for (int i = 0; i < proto.capsules_size(); ++i) {
-    const v1::Capsule& capsule = proto.capsules(i);
-    const std::string f = Indexed(field + ".capsules", i);
-    RequirePositive(capsule.radius(), f + ".radius");
-    RequirePositive(capsule.length(), f + ".length");
-    // Shape::Capsule takes the full length of the cylindrical part, as the proto does.
-    scene->AddObject({ObjectName(capsule.name(), "capsule", i),
-                      Shape::Capsule(capsule.radius(), capsule.length(),
-                                     PoseFromProto(capsule.pose(), f + ".pose"))}, f);
-  }
+  ForEachPrimitive(proto, field,
+                   [&scene](Shape shape, const std::string& f, const std::string& name, const char* kind, int i) {
+                     scene->AddObject({ObjectName(name, kind, i), std::move(shape)}, f);
+                   });
   for (int i = 0; i < proto.meshes_size(); ++i) {
     const v1::Mesh& mesh = proto.meshes(i);
     const std::string f = Indexed(field + ".meshes", i);
