@@ -105,6 +105,7 @@ JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
   std::mt19937_64 rng(options.seed);
   bool changed = false;
   for (int attempt = 0; attempt < options.max_attempts; ++attempt) {
+    if (options.stop && options.stop()) break;
     const int segments = static_cast<int>(current.size()) - 1;
     if (segments < 2) break;  // a single straight segment cannot get shorter
     // Two different segments i < j, a point on each.

@@ -207,6 +207,11 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
     options.max_attempts = query.shortcut_attempts;
     options.max_step = query.collision_resolution;
     options.seed = query.seed;
+    // The time budget is the planner's; only the deadline or a cancellation cuts this short.
+    options.stop = [&termination] {
+      const StopReason reason = termination.Reason();
+      return reason == StopReason::kCancelled || reason == StopReason::kDeadline;
+    };
     CheckCounters counters;
     out.path = ShortcutPath(planned.path, checker, options, &counters);
     out.state_checks += counters.state_checks;

@@ -90,6 +90,31 @@ TEST(Shortcut, RandomShortcutsImproveOnVertexReductionAlone) {
   EXPECT_LE(PathLength(shortened), PathLength(reduced));
 }
 
+TEST(Shortcut, StopEndsRandomShortcutsWithAValidPath) {
+  const auto checker = test::PlanarCheckerWithPost();
+  const JointPath input = test::ZigZagAroundPost();
+  ShortcutOptions options;
+  options.max_attempts = 0;
+  const JointPath reduced = ShortcutPath(input, *checker, options);
+  // Stopped before the first attempt: exactly the vertex reduction, even with many attempts.
+  options.max_attempts = 200;
+  int polls = 0;
+  options.stop = [&polls] { return ++polls > 0; };
+  const JointPath stopped = ShortcutPath(input, *checker, options);
+  EXPECT_EQ(polls, 1);
+  ASSERT_EQ(stopped.size(), reduced.size());
+  for (size_t i = 0; i < stopped.size(); ++i) EXPECT_EQ(stopped[i], reduced[i]);
+  ExpectEverySegmentValid(stopped, *checker);
+  // Stopped after a few attempts: still valid, endpoints exact.
+  polls = 0;
+  options.stop = [&polls] { return ++polls > 5; };
+  const JointPath partial = ShortcutPath(input, *checker, options);
+  EXPECT_EQ(polls, 6);
+  EXPECT_EQ(partial.front(), input.front());
+  EXPECT_EQ(partial.back(), input.back());
+  ExpectEverySegmentValid(partial, *checker);
+}
+
 TEST(Shortcut, FreeSpaceCollapsesToOneSegmentAndDropsDuplicatesAndCollinearPoints) {
   const auto checker = test::PlanarCheckerWithPost();
   // Folded elbow: the whole region is free, so start and goal connect directly.

@@ -3,6 +3,7 @@
 /// Path shortening by random shortcuts, each validated by the collision checker.
 
 #include <cstdint>
+#include <functional>
 
 #include "chasles/collision/collision_checker.h"
 #include "chasles/optimizers/timed_trajectory.h"
@@ -13,6 +14,9 @@ struct ShortcutOptions {
   int max_attempts = 100;       ///< shortcut attempts; >= 0
   double max_step = 0.005;      ///< motion-check resolution [rad] (max-norm); > 0
   std::uint64_t seed = 1;       ///< the same seed gives the same result
+  /// Optional: polled before each attempt; true ends shortcutting with the (valid) path so far
+  /// (a deadline or cancellation). Unset: all attempts run.
+  std::function<bool()> stop;
 };
 
 /// Removes redundant waypoints (greedy: connect each kept waypoint to the farthest valid one),
