@@ -296,6 +296,12 @@ struct CollisionChecker::Impl {
   std::vector<std::shared_ptr<fcl::Sphered>> fcl_spheres;  // per sphere, radius + padding
   std::vector<std::shared_ptr<fcl::Sphered>> fcl_link_bounds;  // per sphere link, its bound
   std::vector<detail::OccupancyGrid> grids;  // gridded occupancy maps
+  // Certified motion: lever[k * num_dofs + i] = R_ik, a bound on how far sphere k's centre
+  // moves per unit of q_i [m/rad, or 1 for prismatic]. certifiable = fast path and no scene
+  // geometry left to FCL (meshes, ungridded maps).
+  int num_dofs = 0;
+  std::vector<double> lever;
+  bool certifiable = false;
 
   // FCL path.
   std::vector<RobotShape> shapes;
@@ -310,7 +316,192 @@ struct CollisionChecker::Impl {
   bool FclCollide(const Frame* frames, CollisionResult* report) const;
   double FclClearance(const Frame* frames) const;
   bool Collide(const Eigen::VectorXd& q, CollisionResult* report) const;
+  void BuildLevers();
+  void SweepBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double* out) const;
+  bool CertifiedMotion(const Eigen::VectorXd& a, const Eigen::VectorXd& b, CheckCounters* counters) const;
 };
+
+// Lever arms. A revolute joint turns everything below it about an axis through its child
+// frame's origin, so a point x moves at most |x − o| per radian of that joint; |x − o| is
+// bounded, by the triangle inequality, by the sphere centre's norm in its link frame plus the
+// norms of the joint-origin translations between that link and the joint (a prismatic joint in
+// between adds the largest |limit| to that length). A prismatic joint moves every point below
+// it by exactly |Δq|. Summing over the chain: |x(q + Δq) − x(q)| <= Σ_i R_i |Δq_i| along any
+// path whose joint increments are monotone — in particular a straight segment.
+void CollisionChecker::Impl::BuildLevers() {
+  num_dofs = robot->num_dofs();
+  const std::size_t ns = sx.size();
+  lever.assign(ns * static_cast<std::size_t>(num_dofs), 0.0);
+  for (const SphereLink& L : slinks) {
+    for (int k = L.begin; k < L.end; ++k) {
+      double* r = &lever[static_cast<std::size_t>(k) * num_dofs];
+      double dist = std::sqrt(sx[k] * sx[k] + sy[k] * sy[k] + sz[k] * sz[k]);
+      int link = L.link;
+      while (robot->links()[link].parent_joint >= 0) {
+        const Joint& j = robot->joints()[robot->links()[link].parent_joint];
+        if (j.dof >= 0 && j.type != JointType::kFixed) {
+          if (j.type == JointType::kPrismatic) {
+            r[j.dof] += 1.0;
+            const double reach = std::max(std::abs(j.limits.lower), std::abs(j.limits.upper));
+            dist += std::isfinite(reach) ? reach : kInf;
+          } else {
+            r[j.dof] += dist;
+          }
+        }
+        dist += j.origin.translation().norm();
+        link = j.parent_link;
+      }
+    }
+  }
+}
+
+void CollisionChecker::Impl::SweepBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double* out) const {
+  const std::size_t ns = sx.size();
+  for (std::size_t k = 0; k < ns; ++k) {
+    const double* r = &lever[k * num_dofs];
+    double d = 0.0;
+    for (int i = 0; i < num_dofs; ++i) {
+      if (r[i] != 0.0) d += std::abs(b[i] - a[i]) * r[i];
+    }
+    out[k] = d;
+  }
+}
+
+namespace {
+constexpr int kMaxCertifiedStates = 20000;
+constexpr double kMinCertifiedStep = 1e-7;   // in s
+constexpr double kMinGridMargin = 1e-5;      // [m]
+constexpr double kMaxLinkGridMargin = 0.1;   // [m]
+constexpr double kInitialGridMargin = 0.02;  // [m]
+}  // namespace
+
+bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eigen::VectorXd& b,
+                                             CheckCounters* counters) const {
+  const std::size_t ns = sx.size();
+  const std::size_t nl = slinks.size();
+  std::vector<double> D(ns), Dl(nl, 0.0);
+  SweepBounds(a, b, D.data());
+  for (std::size_t li = 0; li < nl; ++li) {
+    for (int k = slinks[li].begin; k < slinks[li].end; ++k) Dl[li] = std::max(Dl[li], D[k]);
+  }
+  for (double d : D) {
+    if (!std::isfinite(d)) return false;
+  }
+  std::vector<double> w(3 * ns), lb(3 * nl);
+  std::vector<char> placed(nl);
+  std::vector<double> margin(ns * grids.size(), kInitialGridMargin);  // last grid margin that held
+  Scratch<Frame, 64> frames(num_links);
+  const Eigen::VectorXd delta = b - a;
+  Eigen::VectorXd q(a.size());
+  double s = 0.0;
+  for (int state = 0;; ++state) {
+    if (state >= kMaxCertifiedStates) return false;
+    if (counters != nullptr) ++counters->state_checks;
+    q = a + s * delta;
+    ComputeFk(q, &frames[0]);
+    for (std::size_t li = 0; li < nl; ++li) {
+      Apply(frames[slinks[li].link], slinks[li].bc, &lb[3 * li]);
+      placed[li] = 0;
+    }
+    const auto place = [&](std::size_t li) {
+      if (placed[li]) return;
+      placed[li] = 1;
+      const SphereLink& L = slinks[li];
+      const Frame& f = frames[L.link];
+      for (int k = L.begin; k < L.end; ++k) {
+        const double x[3] = {sx[k], sy[k], sz[k]};
+        Apply(f, x, &w[3 * k]);
+      }
+    };
+    double step = 1.0 - s;
+    // Scene primitives: exact clearances; a link whose bounding sphere is clear by more than
+    // step·(its fastest sphere's bound) cannot shorten the step.
+    for (const Prim& o : prims) {
+      for (std::size_t li = 0; li < nl; ++li) {
+        const SphereLink& L = slinks[li];
+        const double dl = SphereDistance(o, &lb[3 * li], L.br);
+        if (dl > 0.0 && dl >= step * Dl[li]) continue;
+        place(li);
+        for (int k = L.begin; k < L.end; ++k) {
+          const double d = SphereDistance(o, &w[3 * k], sr[k]);
+          if (d <= 0.0) return false;
+          if (d < step * D[k]) step = d / D[k];
+        }
+      }
+    }
+    // Self pairs: the centres approach at most at D_k + D_l.
+    for (const auto& pr : self_pairs) {
+      const SphereLink& A = slinks[pr.first];
+      const SphereLink& B = slinks[pr.second];
+      const double* ca = &lb[3 * pr.first];
+      const double* cb = &lb[3 * pr.second];
+      const double dl = std::sqrt((ca[0] - cb[0]) * (ca[0] - cb[0]) + (ca[1] - cb[1]) * (ca[1] - cb[1]) +
+                                  (ca[2] - cb[2]) * (ca[2] - cb[2])) -
+                        A.br - B.br;
+      if (dl > 0.0 && dl >= step * (Dl[pr.first] + Dl[pr.second])) continue;
+      place(pr.first);
+      place(pr.second);
+      for (int i = A.begin; i < A.end; ++i) {
+        const double* xi = &w[3 * i];
+        for (int k = B.begin; k < B.end; ++k) {
+          const double* xk = &w[3 * k];
+          const double e0 = xi[0] - xk[0], e1 = xi[1] - xk[1], e2 = xi[2] - xk[2];
+          const double d = std::sqrt(e0 * e0 + e1 * e1 + e2 * e2) - sr[i] - sr[k];
+          if (d <= 0.0) return false;
+          const double v = D[i] + D[k];
+          if (d < step * v) step = d / v;
+        }
+      }
+    }
+    // Occupancy grids: a lower bound m on the clearance — the sphere grown by m misses every
+    // occupied voxel — halving m from the last margin that held until it does.
+    for (const SceneGeom& g : scene_geoms) {
+      const detail::OccupancyGrid& grid = grids[g.grid];  // certifiable: every geom is a grid
+      if (grid.num_blocks() == 0) continue;
+      const double* gc = grid.center().data();
+      for (std::size_t li = 0; li < nl; ++li) {
+        const SphereLink& L = slinks[li];
+        const double* c = &lb[3 * li];
+        const double dg = std::sqrt((c[0] - gc[0]) * (c[0] - gc[0]) + (c[1] - gc[1]) * (c[1] - gc[1]) +
+                                    (c[2] - gc[2]) * (c[2] - gc[2])) -
+                          L.br - grid.radius();
+        if (dg > 0.0 && dg >= step * Dl[li]) continue;
+        if (Dl[li] > 0.0) {
+          const double ml = std::min(step * Dl[li], kMaxLinkGridMargin);
+          if (!grid.SphereHits(c, L.br + ml)) {
+            if (ml < step * Dl[li]) step = ml / Dl[li];
+            continue;
+          }
+        }
+        place(li);
+        for (int k = L.begin; k < L.end; ++k) {
+          const double* x = &w[3 * k];
+          const double need = step * D[k];
+          if (need <= 0.0) {  // this sphere does not move
+            if (grid.SphereHits(x, sr[k])) return false;
+            continue;
+          }
+          double& last = margin[static_cast<std::size_t>(g.grid) * ns + k];
+          double m = std::min(need, 2.0 * last);
+          while (grid.SphereHits(x, sr[k] + m)) {
+            if (m < kMinGridMargin) {
+              if (grid.SphereHits(x, sr[k])) return false;
+              m = 0.0;
+              break;
+            }
+            m *= 0.5;
+          }
+          last = std::max(m, kMinGridMargin);
+          if (m < need) step = m / D[k];
+        }
+      }
+    }
+    if (step >= 1.0 - s) return true;  // [s, 1] is clear; b was checked exactly
+    if (!(step >= kMinCertifiedStep)) return false;  // grazing (or NaN): reject conservatively
+    s += step;
+    if (s >= 1.0) return true;
+  }
+}
 
 void CollisionChecker::Impl::BuildFk() {
   num_links = robot->num_links();
@@ -780,6 +971,9 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
         if (!allowed(m.slinks[a].link, m.slinks[b].link)) m.self_pairs.emplace_back(a, b);
       }
     }
+    m.BuildLevers();
+    m.certifiable = true;
+    for (const SceneGeom& g : m.scene_geoms) m.certifiable = m.certifiable && g.octree && g.grid >= 0;
   } else {
     for (int l = 0; l < robot_->num_links(); ++l) {
       for (const Shape& s : links[l].collision) {
@@ -867,6 +1061,26 @@ bool CollisionChecker::IsMotionValid(const Eigen::VectorXd& a, const Eigen::Vect
     }
   }
   return true;
+}
+
+bool CollisionChecker::certifies_motion() const { return impl_->certifiable; }
+
+bool CollisionChecker::IsMotionCertified(const Eigen::VectorXd& a, const Eigen::VectorXd& b,
+                                         CheckCounters* counters) const {
+  CheckSize(*robot_, a, "a");
+  CheckSize(*robot_, b, "b");
+  if (!impl_->certifiable) return IsMotionValid(a, b, 0.005, counters);
+  if (!IsValid(b, counters) || !IsValid(a, counters)) return false;
+  return impl_->CertifiedMotion(a, b, counters);
+}
+
+std::vector<double> CollisionChecker::SweepBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const {
+  CheckSize(*robot_, a, "a");
+  CheckSize(*robot_, b, "b");
+  if (!impl_->certifiable) return {};
+  std::vector<double> out(impl_->sx.size());
+  impl_->SweepBounds(a, b, out.data());
+  return out;
 }
 
 double CollisionChecker::Clearance(const Eigen::VectorXd& q) const {
