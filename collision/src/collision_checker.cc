@@ -301,6 +301,7 @@ struct CollisionChecker::Impl {
   // geometry left to FCL (meshes, ungridded maps).
   int num_dofs = 0;
   std::vector<double> lever;
+  std::vector<std::vector<char>> slink_dofs;  // per sphere link: dofs in its chain (1/0)
   bool certifiable = false;
 
   // FCL path.
@@ -332,6 +333,14 @@ void CollisionChecker::Impl::BuildLevers() {
   num_dofs = robot->num_dofs();
   const std::size_t ns = sx.size();
   lever.assign(ns * static_cast<std::size_t>(num_dofs), 0.0);
+  slink_dofs.assign(slinks.size(), std::vector<char>(num_dofs, 0));
+  for (std::size_t li = 0; li < slinks.size(); ++li) {
+    for (int link = slinks[li].link; robot->links()[link].parent_joint >= 0;) {
+      const Joint& j = robot->joints()[robot->links()[link].parent_joint];
+      if (j.dof >= 0) slink_dofs[li][j.dof] = 1;
+      link = j.parent_link;
+    }
+  }
   for (const SphereLink& L : slinks) {
     for (int k = L.begin; k < L.end; ++k) {
       double* r = &lever[static_cast<std::size_t>(k) * num_dofs];
@@ -387,6 +396,29 @@ bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eig
   for (double d : D) {
     if (!std::isfinite(d)) return false;
   }
+  // Self pairs: joints in both links' chains move both spheres rigidly together and leave
+  // their distance unchanged (d/dt |x_k − x_l| = (x_k − x_l)·(ω × (x_k − x_l)) / |·| = 0), so
+  // the distance changes at most by the levers of the joints not shared, summed for both.
+  const std::size_t np = self_pairs.size();
+  std::vector<std::size_t> poff(np);
+  std::vector<double> PD, PDl(2 * np, 0.0);
+  for (std::size_t p = 0; p < np; ++p) {
+    poff[p] = PD.size();
+    for (int side = 0; side < 2; ++side) {
+      const std::size_t li = side == 0 ? self_pairs[p].first : self_pairs[p].second;
+      const std::vector<char>& other = slink_dofs[side == 0 ? self_pairs[p].second : self_pairs[p].first];
+      for (int k = slinks[li].begin; k < slinks[li].end; ++k) {
+        const double* r = &lever[static_cast<std::size_t>(k) * num_dofs];
+        double d = 0.0;
+        for (int i = 0; i < num_dofs; ++i) {
+          if (!other[i] && r[i] != 0.0) d += std::abs(b[i] - a[i]) * r[i];
+        }
+        if (!std::isfinite(d)) return false;
+        PD.push_back(d);
+        PDl[2 * p + side] = std::max(PDl[2 * p + side], d);
+      }
+    }
+  }
   std::vector<double> w(3 * ns), lb(3 * nl);
   std::vector<char> placed(nl);
   std::vector<double> margin(ns * grids.size(), kInitialGridMargin);  // last grid margin that held
@@ -429,8 +461,11 @@ bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eig
         }
       }
     }
-    // Self pairs: the centres approach at most at D_k + D_l.
-    for (const auto& pr : self_pairs) {
+    // Self pairs: the distance shrinks at most at PD_k + PD_l (unshared joints only).
+    for (std::size_t p = 0; p < np; ++p) {
+      const auto& pr = self_pairs[p];
+      const double* pa = &PD[poff[p]];
+      const double* pb = pa + (slinks[pr.first].end - slinks[pr.first].begin);
       const SphereLink& A = slinks[pr.first];
       const SphereLink& B = slinks[pr.second];
       const double* ca = &lb[3 * pr.first];
@@ -438,7 +473,7 @@ bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eig
       const double dl = std::sqrt((ca[0] - cb[0]) * (ca[0] - cb[0]) + (ca[1] - cb[1]) * (ca[1] - cb[1]) +
                                   (ca[2] - cb[2]) * (ca[2] - cb[2])) -
                         A.br - B.br;
-      if (dl > 0.0 && dl >= step * (Dl[pr.first] + Dl[pr.second])) continue;
+      if (dl > 0.0 && dl >= step * (PDl[2 * p] + PDl[2 * p + 1])) continue;
       place(pr.first);
       place(pr.second);
       for (int i = A.begin; i < A.end; ++i) {
@@ -448,7 +483,7 @@ bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eig
           const double e0 = xi[0] - xk[0], e1 = xi[1] - xk[1], e2 = xi[2] - xk[2];
           const double d = std::sqrt(e0 * e0 + e1 * e1 + e2 * e2) - sr[i] - sr[k];
           if (d <= 0.0) return false;
-          const double v = D[i] + D[k];
+          const double v = pa[i - A.begin] + pb[k - B.begin];
           if (d < step * v) step = d / v;
         }
       }

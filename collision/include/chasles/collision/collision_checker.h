@@ -74,7 +74,9 @@ class CollisionChecker {
   /// evaluated state the exact sphere–primitive clearances d_k, sphere–sphere self distances
   /// s_kl (both net of padding) and, for occupancy maps, a lower bound m on the clearance
   /// (the sphere grown by m misses every occupied voxel) give the next step
-  /// Δs = min(d_k / D_k, s_kl / (D_k + D_l)); a distance <= 0 is a collision. a and b are
+  /// Δs = min(d_k / D_k, s_kl / (D'_k + D'_l)), where D' sums only the joints not shared by
+  /// the two links' chains (shared joints move both spheres rigidly: their distance is
+  /// unchanged); a distance <= 0 is a collision. a and b are
   /// checked exactly with IsValid (joint limits included; the limit box is convex).
   /// Conservative: returns false when Δs falls below 1e-7 or more than 20000 states would be
   /// evaluated (a motion that grazes an obstacle within rounding is rejected), so false does not
