@@ -38,6 +38,14 @@ JointPath RemoveDuplicates(const JointPath& path) {
   return out;
 }
 
+/// A segment check: certified (no state on the segment collides) when the checker can,
+/// otherwise discrete at max_step.
+bool SegmentValid(const CollisionChecker& checker, const Eigen::VectorXd& a, const Eigen::VectorXd& b,
+                  double max_step, CheckCounters* counters) {
+  return checker.certifies_motion() ? checker.IsMotionCertified(a, b, counters)
+                                    : checker.IsMotionValid(a, b, max_step, counters);
+}
+
 /// Greedy vertex reduction: from each kept waypoint, jump to the farthest later waypoint that
 /// the straight segment reaches validly (and not longer than the polyline it replaces).
 JointPath ReduceVertices(const JointPath& path, const CollisionChecker& checker, double max_step,
@@ -55,7 +63,7 @@ JointPath ReduceVertices(const JointPath& path, const CollisionChecker& checker,
     for (int j = n - 1; j > i + 1; --j) {
       const double direct = (path[j] - path[i]).norm();
       if (direct > prefix[j] - prefix[i]) continue;  // rounding only; never lengthen
-      if (checker.IsMotionValid(path[i], path[j], max_step, counters)) {
+      if (SegmentValid(checker, path[i], path[j], max_step, counters)) {
         next = j;
         break;
       }
@@ -125,12 +133,12 @@ JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
     if (!(new_length < old_length * (1.0 - 1e-9))) continue;  // not meaningfully shorter
 
     // qa and qb lie on valid segments, but their pieces are new segments and are re-checked
-    // at max_step so the result's every segment passes IsMotionValid.
+    // (certified, or at max_step) so the result's every segment passes IsMotionValid.
     const bool head_needed = !(qa == current[i]);
     const bool tail_needed = !(qb == current[j + 1]);
-    if (!checker.IsMotionValid(qa, qb, options.max_step, counters)) continue;
-    if (head_needed && !checker.IsMotionValid(current[i], qa, options.max_step, counters)) continue;
-    if (tail_needed && !checker.IsMotionValid(qb, current[j + 1], options.max_step, counters)) continue;
+    if (!SegmentValid(checker, qa, qb, options.max_step, counters)) continue;
+    if (head_needed && !SegmentValid(checker, current[i], qa, options.max_step, counters)) continue;
+    if (tail_needed && !SegmentValid(checker, qb, current[j + 1], options.max_step, counters)) continue;
 
     JointPath next;
     next.reserve(current.size() + 2);

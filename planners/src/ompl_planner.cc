@@ -118,7 +118,8 @@ class ValidityChecker : public ob::StateValidityChecker {
   std::atomic<std::uint64_t>* checks_;
 };
 
-/// Discrete motion validation at the request's resolution, delegated to the checker.
+/// Motion validation delegated to the checker: certified (no state on the segment collides)
+/// when checker->certifies_motion(), otherwise discrete at the request's resolution.
 class MotionChecker : public ob::MotionValidator {
  public:
   MotionChecker(const ob::SpaceInformationPtr& si, std::shared_ptr<const CollisionChecker> checker,
@@ -131,7 +132,8 @@ class MotionChecker : public ob::MotionValidator {
     ToEigen(s1, n, &a);
     ToEigen(s2, n, &b);
     CheckCounters counters;
-    const bool ok = checker_->IsMotionValid(a, b, max_step_, &counters);
+    const bool ok = checker_->certifies_motion() ? checker_->IsMotionCertified(a, b, &counters)
+                                                 : checker_->IsMotionValid(a, b, max_step_, &counters);
     checks_->fetch_add(counters.state_checks, std::memory_order_relaxed);
     ok ? ++valid_ : ++invalid_;
     return ok;
@@ -144,6 +146,16 @@ class MotionChecker : public ob::MotionValidator {
     const int n = checker_->robot().num_dofs();
     ToEigen(s1, n, &a);
     ToEigen(s2, n, &b);
+    bool certified = false;
+    if (checker_->certifies_motion()) {
+      CheckCounters counters;
+      certified = checker_->IsMotionCertified(a, b, &counters);
+      checks_->fetch_add(counters.state_checks, std::memory_order_relaxed);
+      if (certified) {
+        ++valid_;
+        return true;
+      }
+    }
     const double span = (b - a).cwiseAbs().maxCoeff();
     const int steps = std::max(1, static_cast<int>(std::ceil(span / max_step_)));
     for (int k = 1; k <= steps; ++k) {
@@ -159,6 +171,14 @@ class MotionChecker : public ob::MotionValidator {
         ++invalid_;
         return false;
       }
+    }
+    if (checker_->certifies_motion()) {
+      // Every sample is valid but the certified check rejected the segment (a contact between
+      // samples, or a graze): keep only a.
+      if (last_valid.first != nullptr) FromEigen(a, last_valid.first);
+      last_valid.second = 0.0;
+      ++invalid_;
+      return false;
     }
     ++valid_;
     return true;
@@ -437,7 +457,10 @@ class OmplPlanner : public Planner {
       if ((g - last).norm() < (*goal - last).norm()) goal = &g;
     }
     if (last != *goal) {
-      if (problem_.checker->IsMotionValid(last, *goal, problem_.max_step, &counters)) {
+      const bool connects = problem_.checker->certifies_motion()
+                                ? problem_.checker->IsMotionCertified(last, *goal, &counters)
+                                : problem_.checker->IsMotionValid(last, *goal, problem_.max_step, &counters);
+      if (connects) {
         result->path.push_back(*goal);
       } else {
         result->status = PlanStatus::kApproximateSolution;

@@ -28,6 +28,8 @@ struct ShortcutOptions {
 /// not re-checked. Duplicate waypoints are removed, and collinear ones whenever the joining
 /// segment is valid. Randomness: std::mt19937_64(seed) with uniform doubles from its top 53
 /// bits, so the output is identical on every platform for the same input and seed.
+/// When checker.certifies_motion(), every new segment is checked with IsMotionCertified
+/// instead (no state on it collides; it then passes IsMotionValid at any step).
 /// Paths of fewer than 3 waypoints are returned unchanged.
 /// \throws Error(kInvalidArgument) for max_attempts < 0, max_step not finite and > 0, or a
 ///         waypoint whose size is not robot().num_dofs() or that holds a non-finite value.
