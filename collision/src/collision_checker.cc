@@ -313,6 +313,24 @@ struct CollisionChecker::Impl {
   void BuildFk();
   void ComputeFk(const Eigen::VectorXd& q, Frame* frames) const;
   bool FastCollide(const Frame* frames, CollisionResult* report) const;
+  /// World centres of every sphere link's bounding sphere into lb (3 per link); marks every
+  /// link's spheres as not yet placed.
+  void PlaceLinkBounds(const Frame* frames, double* lb, char* placed) const {
+    for (std::size_t li = 0; li < slinks.size(); ++li) {
+      Apply(frames[slinks[li].link], slinks[li].bc, &lb[3 * li]);
+      placed[li] = 0;
+    }
+  }
+  /// World centres of link li's spheres into w (3 per sphere), once per state.
+  void PlaceLinkSpheres(const Frame* frames, std::size_t li, double* w, char* placed) const {
+    if (placed[li]) return;
+    placed[li] = 1;
+    const SphereLink& L = slinks[li];
+    for (int k = L.begin; k < L.end; ++k) {
+      const double x[3] = {sx[k], sy[k], sz[k]};
+      Apply(frames[L.link], x, &w[3 * k]);
+    }
+  }
   double FastClearance(const Frame* frames) const;
   bool FclCollide(const Frame* frames, CollisionResult* report) const;
   double FclClearance(const Frame* frames) const;
@@ -432,20 +450,8 @@ bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eig
     if (counters != nullptr) ++counters->state_checks;
     q = a + s * delta;
     ComputeFk(q, &frames[0]);
-    for (std::size_t li = 0; li < nl; ++li) {
-      Apply(frames[slinks[li].link], slinks[li].bc, &lb[3 * li]);
-      placed[li] = 0;
-    }
-    const auto place = [&](std::size_t li) {
-      if (placed[li]) return;
-      placed[li] = 1;
-      const SphereLink& L = slinks[li];
-      const Frame& f = frames[L.link];
-      for (int k = L.begin; k < L.end; ++k) {
-        const double x[3] = {sx[k], sy[k], sz[k]};
-        Apply(f, x, &w[3 * k]);
-      }
-    };
+    PlaceLinkBounds(&frames[0], &lb[0], &placed[0]);
+    const auto place = [&](std::size_t li) { PlaceLinkSpheres(&frames[0], li, &w[0], &placed[0]); };
     double step = 1.0 - s;
     // Scene primitives: exact clearances; a link whose bounding sphere is clear by more than
     // step·(its fastest sphere's bound) cannot shorten the step.
@@ -615,20 +621,8 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
   Scratch<double, 1024> w(3 * ns);   // world sphere centres, filled per link on first use
   Scratch<double, 256> lb(3 * nl);   // world link bounding centres
   Scratch<char, 256> placed(nl);     // whether link li's sphere centres are in `w`
-  for (std::size_t li = 0; li < nl; ++li) {
-    Apply(frames[slinks[li].link], slinks[li].bc, &lb[3 * li]);
-    placed[li] = 0;
-  }
-  const auto place = [&](std::size_t li) {
-    if (placed[li]) return;
-    placed[li] = 1;
-    const SphereLink& L = slinks[li];
-    const Frame& f = frames[L.link];
-    for (int k = L.begin; k < L.end; ++k) {
-      const double x[3] = {sx[k], sy[k], sz[k]};
-      Apply(f, x, &w[3 * k]);
-    }
-  };
+  PlaceLinkBounds(frames, &lb[0], &placed[0]);
+  const auto place = [&](std::size_t li) { PlaceLinkSpheres(frames, li, &w[0], &placed[0]); };
   const auto hit = [&](int link, const std::string& other, bool self) {
     if (report != nullptr) {
       report->in_collision = true;
