@@ -14,13 +14,8 @@ namespace {
 // Panda: arm folded down onto the table top (checked: panda_hand touches table_top).
 const double kPandaOnTable[] = {0.0, 1.2, 0.0, -0.5, 0.0, 1.5, 0.785};
 
-class BadInput : public ::testing::Test {
+class BadInput : public SharedServerTest<> {
  protected:
-  static void SetUpTestSuite() { server_ = new LoopbackServer(); }
-  static void TearDownTestSuite() {
-    delete server_;
-    server_ = nullptr;
-  }
   void TearDown() override {
     // The server survives every bad input.
     v1::ListPlannersResponse planners;
@@ -45,9 +40,7 @@ class BadInput : public ::testing::Test {
 
   static v1::PlanRequest Planar() { return LoadRequest("planar_2r_posts"); }
 
-  static LoopbackServer* server_;
 };
-LoopbackServer* BadInput::server_ = nullptr;
 
 TEST_F(BadInput, MalformedUrdf) {
   v1::PlanRequest request = Planar();

@@ -58,16 +58,7 @@ void ExpectVerifiedTrajectory(const v1::PlanRequest& request, const v1::PlanResp
   EXPECT_GE(response.timings().total(), response.timings().plan());
 }
 
-class ExampleRequest : public ::testing::TestWithParam<std::string> {
- protected:
-  static void SetUpTestSuite() { server_ = new LoopbackServer(); }
-  static void TearDownTestSuite() {
-    delete server_;
-    server_ = nullptr;
-  }
-  static LoopbackServer* server_;
-};
-LoopbackServer* ExampleRequest::server_ = nullptr;
+class ExampleRequest : public SharedServerTest<::testing::TestWithParam<std::string>> {};
 
 TEST_P(ExampleRequest, RrtConnectReturnsAVerifiedTrajectory) {
   v1::PlanRequest request = LoadRequest(GetParam());
@@ -95,16 +86,7 @@ TEST(EveryPlanner, EveryPlannerIsInTheMatrix) {
   EXPECT_EQ(ids, kPlanners);
 }
 
-class EveryPlannerOnEveryRequest : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {
- protected:
-  static void SetUpTestSuite() { server_ = new LoopbackServer(); }
-  static void TearDownTestSuite() {
-    delete server_;
-    server_ = nullptr;
-  }
-  static LoopbackServer* server_;
-};
-LoopbackServer* EveryPlannerOnEveryRequest::server_ = nullptr;
+class EveryPlannerOnEveryRequest : public SharedServerTest<::testing::TestWithParam<std::tuple<std::string, std::string>>> {};
 
 TEST_P(EveryPlannerOnEveryRequest, ReturnsAVerifiedTrajectory) {
   const auto& [problem, planner] = GetParam();

@@ -71,16 +71,7 @@ int ResolvedLink(const RobotModel& robot, const std::string& name) { return Link
 const std::vector<std::string> kPoseRequests = {"panda_pose_table", "ur5_pose_table", "ur5_dh_pose", "ur5_poe_pose",
                                                 "puma560_dh_pose"};
 
-class PoseGoalExample : public ::testing::TestWithParam<std::string> {
- protected:
-  static void SetUpTestSuite() { server_ = new LoopbackServer(); }
-  static void TearDownTestSuite() {
-    delete server_;
-    server_ = nullptr;
-  }
-  static LoopbackServer* server_;
-};
-LoopbackServer* PoseGoalExample::server_ = nullptr;
+class PoseGoalExample : public SharedServerTest<::testing::TestWithParam<std::string>> {};
 
 TEST_P(PoseGoalExample, EndsExactlyAtAnIkSolutionWithinTheTolerances) {
   const v1::PlanRequest request = LoadRequest(GetParam());
@@ -123,8 +114,12 @@ TEST_P(PoseGoalExample, EndsExactlyAtAnIkSolutionWithinTheTolerances) {
 
   // Efforts: one per joint on every point exactly when every moving link has a mass.
   // The example Panda and UR5 (URDF) carry inertials; the PUMA 560 table has none.
-  if (GetParam() == "panda_pose_table" || GetParam() == "ur5_pose_table") EXPECT_TRUE(HasInertia(*robot));
-  if (GetParam() == "puma560_dh_pose") EXPECT_FALSE(HasInertia(*robot));
+  if (GetParam() == "panda_pose_table" || GetParam() == "ur5_pose_table") {
+    EXPECT_TRUE(HasInertia(*robot));
+  }
+  if (GetParam() == "puma560_dh_pose") {
+    EXPECT_FALSE(HasInertia(*robot));
+  }
   const int expected_efforts = HasInertia(*robot) ? dofs : 0;
   for (const v1::TrajectoryPoint& point : trajectory.points()) {
     ASSERT_EQ(point.efforts_size(), expected_efforts);
@@ -137,13 +132,8 @@ INSTANTIATE_TEST_SUITE_P(Examples, PoseGoalExample, ::testing::ValuesIn(kPoseReq
 
 // --- the InverseKinematics RPC --------------------------------------------------------------------
 
-class Ik : public ::testing::Test {
+class Ik : public SharedServerTest<> {
  protected:
-  static void SetUpTestSuite() { server_ = new LoopbackServer(); }
-  static void TearDownTestSuite() {
-    delete server_;
-    server_ = nullptr;
-  }
   void TearDown() override {
     v1::ListPlannersResponse planners;  // the server survives every request
     EXPECT_TRUE(server_->ListPlanners(&planners).ok());
@@ -163,9 +153,7 @@ class Ik : public ::testing::Test {
           << "'" << fragment << "' not in: " << status.error_message();
     }
   }
-  static LoopbackServer* server_;
 };
-LoopbackServer* Ik::server_ = nullptr;
 
 class IkExample : public Ik, public ::testing::WithParamInterface<std::string> {};
 
@@ -194,9 +182,13 @@ TEST_P(IkExample, SolutionsAreWithinTolerancesLimitsAndCollisionFree) {
     EXPECT_LE(PositionError(pose, target), position_tolerance + 1e-12) << "solution " << i;
     EXPECT_LE(OrientationError(pose, target), orientation_tolerance + 1e-12) << "solution " << i;
     EXPECT_NO_THROW(robot->ValidateConfiguration(q, "solution"));
-    if (request.collision_free()) EXPECT_TRUE(checker.IsValid(q)) << "solution " << i;
+    if (request.collision_free()) {
+      EXPECT_TRUE(checker.IsValid(q)) << "solution " << i;
+    }
     EXPECT_GE(response.manipulability(i), 0.0);
-    if (response.singular(i)) EXPECT_LT(response.manipulability(i), 1e-3) << "solution " << i;
+    if (response.singular(i)) {
+      EXPECT_LT(response.manipulability(i), 1e-3) << "solution " << i;
+    }
   }
   // Distinct solutions.
   for (int i = 0; i < response.solutions_size(); ++i) {

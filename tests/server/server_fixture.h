@@ -83,4 +83,17 @@ class LoopbackServer {
   std::unique_ptr<v1::Planning::Stub> stub_;
 };
 
+/// A suite whose tests share one loopback server, started once per suite. `Base` is
+/// ::testing::Test or a ::testing::TestWithParam<…>.
+template <typename Base = ::testing::Test>
+class SharedServerTest : public Base {
+ protected:
+  static void SetUpTestSuite() { server_ = new LoopbackServer(); }
+  static void TearDownTestSuite() {
+    delete server_;
+    server_ = nullptr;
+  }
+  static inline LoopbackServer* server_ = nullptr;
+};
+
 }  // namespace chasles::testing
