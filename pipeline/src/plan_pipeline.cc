@@ -58,6 +58,7 @@ const char* ToString(PlanOutcomeCode code) {
     case PlanOutcomeCode::kApproximateOnly: return "APPROXIMATE_ONLY";
     case PlanOutcomeCode::kCancelled: return "CANCELLED";
     case PlanOutcomeCode::kDeadlineExceeded: return "DEADLINE_EXCEEDED";
+    case PlanOutcomeCode::kLocalMinimum: return "LOCAL_MINIMUM";
   }
   return "UNKNOWN";
 }
@@ -89,7 +90,20 @@ void PlanQuery::Validate(const PlannerRegistry& registry) const {
   }
   if (!gravity.allFinite()) ThrowInvalid("gravity must be finite");
   CheckRange(goal_tolerance, 0.0, 0.1, "goal.tolerance");
-  ResolveParameters(registry.Spec(planner_id), parameters);  // throws NotFound / InvalidArgument
+  const PlannerSpec& spec = registry.Spec(planner_id);  // throws NotFound
+  ResolveParameters(spec, parameters);                   // throws InvalidArgument
+  if (!spec.Supports(robot.kind())) {
+    std::vector<std::string> alternatives;
+    for (const PlannerSpec& other : registry.List()) {
+      if (other.Supports(robot.kind())) alternatives.push_back(other.id);
+    }
+    CheckRobotKind(spec, robot, alternatives);  // throws FailedPrecondition
+  }
+  if (pose_goal && robot.kind() != RobotKind::kArm) {
+    throw Error(ErrorCode::kFailedPrecondition,
+                std::string("pose_goal: pose goals need inverse kinematics of an arm; robot '") + robot.name() +
+                    "' is a " + ToString(robot.kind()) + " robot — give its goal configuration in goal.positions");
+  }
   CheckRange(collision_resolution, 1e-4, 0.1, "collision_resolution");
   CheckRange(sample_period, 1e-4, 1.0, "trajectory.sample_period");
   if (shortcut_attempts < -1) {
@@ -198,11 +212,13 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
     case PlanStatus::kInvalidStart: return finish(PlanOutcomeCode::kStartInCollision, planned.message);
     case PlanStatus::kInvalidGoal: return finish(PlanOutcomeCode::kGoalInCollision, planned.message);
     case PlanStatus::kNoSolution: return finish(PlanOutcomeCode::kNoPathWithinBudget, planned.message);
+    case PlanStatus::kLocalMinimum: return finish(PlanOutcomeCode::kLocalMinimum, planned.message);
   }
+  out.suboptimality_bound = planned.suboptimality_bound;
 
   // 3. Shorten.
   t = Clock::now();
-  if (query.shortcut_attempts >= 0) {
+  if (query.shortcut_attempts >= 0 && !planned.keep_path_shape) {
     ShortcutOptions options;
     options.max_attempts = query.shortcut_attempts;
     options.max_step = query.collision_resolution;

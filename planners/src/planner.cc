@@ -14,6 +14,24 @@ const ParameterSpec* PlannerSpec::Find(const std::string& name) const {
   return nullptr;
 }
 
+bool PlannerSpec::Supports(RobotKind kind) const {
+  for (RobotKind k : robot_kinds) {
+    if (k == kind) return true;
+  }
+  return false;
+}
+
+void CheckRobotKind(const PlannerSpec& spec, const RobotModel& robot, const std::vector<std::string>& alternatives) {
+  if (spec.Supports(robot.kind())) return;
+  std::string message = "planner '" + spec.id + "' does not plan for " + ToString(robot.kind()) + " robots (robot '" +
+                        robot.name() + "'): " + spec.refusal_reason;
+  if (!alternatives.empty()) {
+    message += "; planners for " + std::string(ToString(robot.kind())) + ":";
+    for (size_t i = 0; i < alternatives.size(); ++i) message += (i == 0 ? " " : ", ") + alternatives[i];
+  }
+  throw Error(ErrorCode::kFailedPrecondition, message);
+}
+
 ParameterValues ResolveParameters(const PlannerSpec& spec, const ParameterValues& values) {
   ParameterValues resolved;
   for (const auto& p : spec.parameters) resolved[p.name] = p.default_value;
@@ -49,6 +67,7 @@ const char* ToString(PlanStatus status) {
     case PlanStatus::kInvalidGoal: return "invalid goal";
     case PlanStatus::kCancelled: return "cancelled";
     case PlanStatus::kDeadlineExceeded: return "deadline exceeded";
+    case PlanStatus::kLocalMinimum: return "local minimum";
   }
   return "unknown";
 }

@@ -38,4 +38,10 @@ std::vector<std::string> PlannerRegistry::Ids() const {
   return out;
 }
 
+void RegisterDefaultPlanners(PlannerRegistry* registry) {
+  RegisterOmplPlanners(registry);
+  RegisterSearchPlanners(registry);
+  RegisterFieldPlanners(registry);
+}
+
 }  // namespace chasles

@@ -37,6 +37,17 @@ bool AllowedCollisionMatrix::IsAllowed(int link_a, int link_b) const {
 // ---------------------------------------------------------------------------------------------
 // Construction
 
+const char* ToString(RobotKind kind) {
+  switch (kind) {
+    case RobotKind::kArm: return "arm";
+    case RobotKind::kPlanar: return "planar";
+    case RobotKind::kDubinsCar: return "dubins_car";
+    case RobotKind::kReedsSheppCar: return "reeds_shepp_car";
+    case RobotKind::kFreeFlyer: return "free_flyer";
+  }
+  return "unknown";
+}
+
 namespace {
 
 bool AllFinite(const Eigen::Isometry3d& t) { return t.matrix().allFinite(); }
@@ -49,7 +60,7 @@ std::string JointLabel(const std::string& robot, size_t index, const std::string
 
 std::shared_ptr<const RobotModel> RobotModel::FromTree(
     std::string name, std::vector<Link> links, std::vector<Joint> joints,
-    const std::vector<std::pair<std::string, std::string>>& allowed_pairs) {
+    const std::vector<std::pair<std::string, std::string>>& allowed_pairs, MotionModel motion) {
   const int num_links = static_cast<int>(links.size());
   if (num_links == 0) ThrowInvalid("robot '" + name + "': has no links");
 
@@ -157,6 +168,7 @@ std::shared_ptr<const RobotModel> RobotModel::FromTree(
   model->links_ = std::move(links);
   model->joints_ = std::move(joints);
   model->root_ = root;
+  model->motion_ = motion;
   model->Finalize(allowed_pairs);
   return model;
 }

@@ -14,6 +14,7 @@
 #include "chasles/optimizers/shortcut.h"
 #include "chasles/robot/error.h"
 #include "chasles/robot/kinematics.h"
+#include "chasles/robot/mobile.h"
 #include "chasles/server/content_hash.h"
 
 namespace chasles {
@@ -320,7 +321,39 @@ PoeDescription PoeFromProto(const v1::PoeRobot& poe, const std::string& field) {
   return out;
 }
 
+MobileDescription MobileFromProto(const v1::MobileRobot& mobile, const std::string& field) {
+  MobileDescription out;
+  out.name = mobile.name();
+  switch (mobile.kind()) {
+    case v1::MobileRobot::KIND_UNSPECIFIED:
+    case v1::MobileRobot::PLANAR: out.kind = RobotKind::kPlanar; break;
+    case v1::MobileRobot::DUBINS_CAR: out.kind = RobotKind::kDubinsCar; break;
+    case v1::MobileRobot::REEDS_SHEPP_CAR: out.kind = RobotKind::kReedsSheppCar; break;
+    case v1::MobileRobot::FREE_FLYER: out.kind = RobotKind::kFreeFlyer; break;
+    default:
+      ThrowInvalid(field + ".kind = " + std::to_string(static_cast<int>(mobile.kind())) +
+                   " is not PLANAR, DUBINS_CAR, REEDS_SHEPP_CAR or FREE_FLYER");
+  }
+  out.workspace_min = VectorFromProto(mobile.workspace_min(), field + ".workspace_min");
+  out.workspace_max = VectorFromProto(mobile.workspace_max(), field + ".workspace_max");
+  out.turning_radius = mobile.turning_radius();
+  if (mobile.max_tilt() != 0.0) out.max_tilt = mobile.max_tilt();
+  out.linear_velocity = mobile.linear_velocity() == 0.0 ? 1.0 : mobile.linear_velocity();
+  out.angular_velocity = mobile.angular_velocity() == 0.0 ? 1.0 : mobile.angular_velocity();
+  out.body = LinkPropertiesFromProto(mobile.body(), field + ".body");
+  return out;
+}
+
 std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, const std::string& field) {
+  if (robot.description_case() == v1::RobotModel::kMobile) {
+    MobileDescription mobile = MobileFromProto(robot.mobile(), field + ".mobile");
+    if (mobile.name.empty()) mobile.name = robot.name();
+    try {
+      return RobotFromMobile(mobile);
+    } catch (const Error& e) {
+      RethrowWithField(e, field + ".mobile", "mobile");
+    }
+  }
   if (robot.description_case() == v1::RobotModel::kDh) {
     DhDescription dh = DhFromProto(robot.dh(), field + ".dh");
     if (dh.name.empty()) dh.name = robot.name();
@@ -340,7 +373,8 @@ std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, co
     }
   }
   if (robot.description_case() != v1::RobotModel::kUrdf) {
-    ThrowInvalid(field + " has no description: set " + field + ".urdf, " + field + ".dh or " + field + ".poe");
+    ThrowInvalid(field + " has no description: set " + field + ".urdf, " + field + ".dh, " + field + ".poe or " +
+                 field + ".mobile");
   }
   const v1::UrdfRobot& urdf = robot.urdf();
   if (urdf.urdf().empty()) ThrowInvalid(field + ".urdf.urdf is empty: it must hold the URDF XML text");
@@ -593,6 +627,7 @@ v1::PlanOutcome OutcomeToProto(PlanOutcomeCode code) {
     case PlanOutcomeCode::kGoalUnreachable: return v1::GOAL_UNREACHABLE;
     case PlanOutcomeCode::kVerificationFailed: return v1::VERIFICATION_FAILED;
     case PlanOutcomeCode::kApproximateOnly: return v1::APPROXIMATE_ONLY;
+    case PlanOutcomeCode::kLocalMinimum: return v1::LOCAL_MINIMUM;
     case PlanOutcomeCode::kCancelled:
     case PlanOutcomeCode::kDeadlineExceeded: return v1::PLAN_OUTCOME_UNSPECIFIED;
   }
@@ -617,6 +652,7 @@ void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::
   stats->set_collision_checks(outcome.state_checks);
   stats->set_raw_waypoints(static_cast<std::uint32_t>(outcome.raw_path.size()));
   stats->set_path_length(outcome.path.empty() ? 0.0 : PathLength(outcome.path));
+  stats->set_suboptimality_bound(outcome.suboptimality_bound);
 
   v1::Verification* verification = response->mutable_verification();
   verification->set_states_checked(static_cast<std::uint32_t>(std::max(0, outcome.verification.states_checked)));
@@ -647,6 +683,7 @@ void PlannerSpecToProto(const PlannerSpec& spec, v1::PlannerDescription* descrip
   description->set_id(spec.id);
   description->set_description(spec.description);
   description->set_optimizing(spec.optimizing);
+  for (RobotKind kind : spec.robot_kinds) description->add_robot_kinds(ToString(kind));
   for (const ParameterSpec& param : spec.parameters) {
     v1::ParameterDescription* out = description->add_parameters();
     out->set_name(param.name);

@@ -47,7 +47,7 @@ struct PlanQuery {
   Eigen::VectorXd max_velocity;       ///< empty = model limits; else > 0 and capped at the model's
   Eigen::VectorXd max_acceleration;   ///< empty = 2 × velocity limits
   double sample_period = 0.01;        ///< [s], in [1e-4, 1]
-  int shortcut_attempts = 100;        ///< -1 = off
+  int shortcut_attempts = 100;        ///< -1 = off; never applied to a car's path (its shape is kept)
 
   /// \throws Error(kInvalidArgument/kNotFound) naming the field (proto field names), e.g.
   /// `start.positions[2] = nan must be finite`, `goal.tolerance = 0.5 must be within [0, 0.1]`.
@@ -65,6 +65,7 @@ enum class PlanOutcomeCode {
   kApproximateOnly,
   kCancelled,
   kDeadlineExceeded,
+  kLocalMinimum,      ///< a descent planner (potential field) stopped in a local minimum
 };
 const char* ToString(PlanOutcomeCode code);
 
@@ -87,6 +88,7 @@ struct PlanOutcome {
   StageSeconds seconds;
   std::uint64_t graph_states = 0;
   std::uint64_t state_checks = 0;      ///< all stages
+  double suboptimality_bound = 0.0;    ///< the planner's proven cost bound (weighted A*: ε); 0 = none
 };
 
 class PlanningPipeline {

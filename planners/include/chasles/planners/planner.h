@@ -34,8 +34,19 @@ struct PlannerSpec {
   std::string description;
   bool optimizing = false;  ///< anytime: improves the path until its termination
   std::vector<ParameterSpec> parameters;
+  /// The robot kinds the planner plans for; others are refused (CheckRobotKind).
+  std::vector<RobotKind> robot_kinds = {RobotKind::kArm, RobotKind::kPlanar, RobotKind::kFreeFlyer};
+  /// Why the other kinds are refused (completes "planner 'x' does not plan for <kind> robots: …").
+  std::string refusal_reason = "its motions ignore a car's minimum turning radius";
   const ParameterSpec* Find(const std::string& name) const;
+  bool Supports(RobotKind kind) const;
 };
+
+/// \throws Error(kFailedPrecondition) when `spec` does not plan for robot's kind, e.g.
+/// `planner 'astar' does not plan for dubins_car robots (robot 'car'): its lattice moves ignore a
+/// car's minimum turning radius; planners for dubins_car: rrt, rrt_connect, rrt_star`.
+/// `alternatives` lists the registry's planners for that kind (may be empty).
+void CheckRobotKind(const PlannerSpec& spec, const RobotModel& robot, const std::vector<std::string>& alternatives = {});
 
 /// Parameter values by name; missing ones take their defaults.
 using ParameterValues = std::map<std::string, double>;
@@ -70,6 +81,8 @@ enum class PlanStatus {
   kInvalidGoal,          ///< goal in collision or outside limits
   kCancelled,
   kDeadlineExceeded,
+  kLocalMinimum,         ///< a descent planner stopped in a local minimum of its potential;
+                         ///< `path` is empty (no wrong path is returned), the message says where
 };
 const char* ToString(PlanStatus status);
 
@@ -81,6 +94,12 @@ struct PlannerResult {
   std::uint64_t graph_states = 0; ///< vertices in the planner's tree/graph
   std::uint64_t state_checks = 0; ///< state validity checks (motion checks count their states)
   double solve_seconds = 0.0;
+  /// Proven bound on cost / optimal cost in the planner's own search space (weighted A*: ε);
+  /// 0 = no bound claimed.
+  double suboptimality_bound = 0.0;
+  /// The path's segments are chords of curves the robot must follow (a car's turns): later
+  /// stages must not shortcut or otherwise reshape it.
+  bool keep_path_shape = false;
 };
 
 class Planner {

@@ -33,8 +33,15 @@ class PlannerRegistry {
   std::map<std::string, Entry> entries_;
 };
 
-/// Registers the OMPL planners: prm, prm_star, lazy_prm_star, rrt, rrt_star,
-/// informed_rrt_star, rrt_connect, bit_star.
+/// planners/ompl: prm, prm_star, lazy_prm_star, rrt, rrt_star, informed_rrt_star, rrt_connect,
+/// bit_star (sampling planners through OMPL; cars through OMPL's Dubins / Reeds–Shepp spaces).
+void RegisterOmplPlanners(PlannerRegistry* registry);
+/// planners/search: astar (weighted A* over a C-space lattice with lazy edge validation).
+void RegisterSearchPlanners(PlannerRegistry* registry);
+/// planners/field: potential_field (attractive + repulsive potential, gradient descent with
+/// random-walk escapes) and wavefront (navigation function on a grid of at most 3 coordinates).
+void RegisterFieldPlanners(PlannerRegistry* registry);
+/// Every family above.
 void RegisterDefaultPlanners(PlannerRegistry* registry);
 
 }  // namespace chasles

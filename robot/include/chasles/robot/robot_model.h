@@ -44,6 +44,25 @@ struct Joint {
   int dof = -1;  ///< index into the configuration vector, -1 for fixed joints
 };
 
+/// What kind of robot a model is: which motions its configuration coordinates describe, and so
+/// which planners apply (an arm's joints move freely; a car's (x, y, θ) do not).
+enum class RobotKind {
+  kArm,            ///< a kinematic tree on a fixed base (URDF, DH, PoE)
+  kPlanar,         ///< a rigid body in SE(2), holonomic: (x, y, θ)
+  kDubinsCar,      ///< a car-like SE(2) body that drives forwards only: (x, y, θ), turning radius
+  kReedsSheppCar,  ///< a car-like SE(2) body that drives forwards and backwards
+  kFreeFlyer,      ///< a rigid body in SE(3) (a drone): (x, y, z, yaw, pitch, roll)
+};
+/// "arm", "planar", "dubins_car", "reeds_shepp_car", "free_flyer".
+const char* ToString(RobotKind kind);
+inline bool IsCar(RobotKind kind) { return kind == RobotKind::kDubinsCar || kind == RobotKind::kReedsSheppCar; }
+
+/// Motion constraints beyond joint limits.
+struct MotionModel {
+  RobotKind kind = RobotKind::kArm;
+  double turning_radius = 0.0;  ///< cars: minimum turning radius [m] > 0
+};
+
 /// Mass properties of a link, expressed in the link frame.
 struct Inertial {
   double mass = 0.0;                                   ///< [kg]
@@ -106,6 +125,8 @@ class RobotModel {
   const Eigen::VectorXd& velocity_limits() const { return velocity_; }
   const Eigen::VectorXd& effort_limits() const { return effort_; }
   const AllowedCollisionMatrix& allowed_collisions() const { return acm_; }
+  const MotionModel& motion() const { return motion_; }
+  RobotKind kind() const { return motion_.kind; }
   /// Index of the root link (the base frame of every pose). FromUrdf puts it at 0.
   int root_link() const { return root_; }
   /// Index of a link by name, or -1.
@@ -138,7 +159,8 @@ class RobotModel {
   /// earlier joint). \throws Error(kInvalidArgument) when the tree is malformed.
   static std::shared_ptr<const RobotModel> FromTree(std::string name, std::vector<Link> links,
                                                     std::vector<Joint> joints,
-                                                    const std::vector<std::pair<std::string, std::string>>& allowed_pairs = {});
+                                                    const std::vector<std::pair<std::string, std::string>>& allowed_pairs = {},
+                                                    MotionModel motion = {});
 
  private:
   RobotModel() = default;
@@ -151,6 +173,7 @@ class RobotModel {
   std::vector<std::string> dof_names_;
   Eigen::VectorXd lower_, upper_, velocity_, effort_;
   AllowedCollisionMatrix acm_;
+  MotionModel motion_;
   std::vector<Eigen::Matrix<double, 6, 1>> screws_;
   std::vector<Eigen::Isometry3d> home_;
   std::vector<std::vector<int>> chains_;

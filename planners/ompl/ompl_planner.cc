@@ -485,14 +485,24 @@ class OmplPlanner : public Planner {
   mutable std::atomic<std::uint64_t> checks_{0};
 };
 
+/// Every OMPL planner plans for arms, planar bodies and free flyers (a real vector space), and
+/// for cars in OMPL's Dubins / Reeds–Shepp state spaces when the planner's assumptions hold:
+/// roadmaps and BIT* join states in either direction, so they need a symmetric steering
+/// function (Reeds–Shepp), not Dubins, whose curve from a to b is not the curve from b to a.
 void Add(PlannerRegistry* registry, Kind kind, PlannerSpec spec) {
+  const bool tree = kind == Kind::kRrt || kind == Kind::kRrtStar || kind == Kind::kInformedRrtStar ||
+                    kind == Kind::kRrtConnect;
+  spec.robot_kinds = {RobotKind::kArm, RobotKind::kPlanar, RobotKind::kFreeFlyer, RobotKind::kReedsSheppCar};
+  if (tree) spec.robot_kinds.push_back(RobotKind::kDubinsCar);
+  spec.refusal_reason = "its roadmap joins states in both directions, but a Dubins car's curve from a to b is not "
+                        "the reverse of its curve from b to a";
   PlannerSpec copy = spec;
   registry->Register(std::move(spec), [kind, copy] { return std::make_unique<OmplPlanner>(kind, copy); });
 }
 
 }  // namespace
 
-void RegisterDefaultPlanners(PlannerRegistry* registry) {
+void RegisterOmplPlanners(PlannerRegistry* registry) {
   ompl::msg::setLogLevel(ompl::msg::LOG_WARN);
   Add(registry, Kind::kRrtConnect,
       {"rrt_connect", "RRT-Connect (OMPL): bidirectional RRT, returns at the first solution", false,

@@ -1,0 +1,1 @@
+#include "chasles/collision/scene.h"
