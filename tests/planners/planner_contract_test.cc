@@ -155,14 +155,16 @@ TEST_P(PlannerContractTest, SeededRunsAreReproducible) {
 
 INSTANTIATE_TEST_SUITE_P(AllPlanners, PlannerContractTest,
                          ::testing::Values("rrt_connect", "rrt", "rrt_star", "informed_rrt_star", "prm",
-                                           "prm_star", "lazy_prm_star", "bit_star"),
+                                           "prm_star", "lazy_prm_star", "bit_star", "astar", "potential_field",
+                                           "wavefront"),
                          [](const auto& info) { return info.param; });
 
 TEST(PlannerRegistryTest, EveryDefaultPlannerIsCoveredByTheContractTest) {
   PlannerRegistry registry;
   RegisterDefaultPlanners(&registry);
-  const std::vector<std::string> expected = {"bit_star", "informed_rrt_star", "lazy_prm_star", "prm",
-                                             "prm_star", "rrt", "rrt_connect", "rrt_star"};
+  const std::vector<std::string> expected = {"astar", "bit_star", "informed_rrt_star", "lazy_prm_star",
+                                             "potential_field", "prm", "prm_star", "rrt", "rrt_connect",
+                                             "rrt_star", "wavefront"};
   EXPECT_EQ(registry.Ids(), expected);
 }
 
@@ -175,8 +177,8 @@ TEST(PlannerRegistryTest, UnknownPlannerIsNotFoundAndListsKnownIds) {
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kNotFound);
     EXPECT_EQ(std::string(e.what()),
-              "planner.planner_id = 'rrt_sharp' is unknown (known: bit_star, informed_rrt_star, lazy_prm_star, "
-              "prm, prm_star, rrt, rrt_connect, rrt_star)");
+              "planner.planner_id = 'rrt_sharp' is unknown (known: astar, bit_star, informed_rrt_star, "
+              "lazy_prm_star, potential_field, prm, prm_star, rrt, rrt_connect, rrt_star, wavefront)");
   }
 }
 
