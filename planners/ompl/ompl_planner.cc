@@ -9,6 +9,7 @@
 // slices (SingleThreadPrm), and the direct informed sampler keeps a private clock-seeded RNG
 // (SeededPathLengthObjective samples the informed set by rejection from our seeded stream).
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -27,7 +28,9 @@
 #include <ompl/base/goals/GoalStates.h>
 #include <ompl/base/objectives/PathLengthOptimizationObjective.h>
 #include <ompl/base/samplers/informed/RejectionInfSampler.h>
+#include <ompl/base/spaces/DubinsStateSpace.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
+#include <ompl/base/spaces/ReedsSheppStateSpace.h>
 #include <ompl/geometric/PathGeometric.h>
 #include <ompl/geometric/planners/informedtrees/BITstar.h>
 #include <ompl/geometric/planners/prm/LazyPRMstar.h>
@@ -90,31 +93,104 @@ class SeededPathLengthObjective : public ob::PathLengthOptimizationObjective {
   }
 };
 
-void ToEigen(const ob::State* state, int n, Eigen::VectorXd* q) {
-  const double* v = state->as<ob::RealVectorStateSpace::StateType>()->values;
-  q->resize(n);
-  for (int i = 0; i < n; ++i) (*q)[i] = v[i];
+constexpr double kPi = 3.14159265358979323846;
+
+/// x into (-π, π].
+double WrapAngle(double x) {
+  x = std::remainder(x, 2.0 * kPi);
+  return x <= -kPi ? x + 2.0 * kPi : x;
 }
 
-void FromEigen(const Eigen::VectorXd& q, ob::State* state) {
-  double* v = state->as<ob::RealVectorStateSpace::StateType>()->values;
-  for (int i = 0; i < q.size(); ++i) v[i] = q[i];
-}
+/// How OMPL states map to configuration vectors: a real vector state is the configuration; a
+/// car's SE(2) state (x, y, yaw) is (x, y, θ) with θ = yaw in (-π, π] (callers unwrap paths).
+struct StateMap {
+  int n = 0;
+  bool se2 = false;
+
+  void ToEigen(const ob::State* state, Eigen::VectorXd* q) const {
+    q->resize(n);
+    if (se2) {
+      const auto* s = state->as<ob::SE2StateSpace::StateType>();
+      (*q)[0] = s->getX();
+      (*q)[1] = s->getY();
+      (*q)[2] = s->getYaw();
+      return;
+    }
+    const double* v = state->as<ob::RealVectorStateSpace::StateType>()->values;
+    for (int i = 0; i < n; ++i) (*q)[i] = v[i];
+  }
+  void FromEigen(const Eigen::VectorXd& q, ob::State* state) const {
+    if (se2) {
+      auto* s = state->as<ob::SE2StateSpace::StateType>();
+      s->setXY(q[0], q[1]);
+      s->setYaw(WrapAngle(q[2]));
+      return;
+    }
+    double* v = state->as<ob::RealVectorStateSpace::StateType>()->values;
+    for (int i = 0; i < q.size(); ++i) v[i] = q[i];
+  }
+};
+
+/// Uniform SE(2) samples (x, y in the bounds, yaw in [-π, π)) from the request seed; OMPL's
+/// compound sampler would give each component a generator seeded from the clock.
+class SeededSe2Sampler : public ob::StateSampler {
+ public:
+  SeededSe2Sampler(const ob::StateSpace* space, std::uint32_t seed) : ob::StateSampler(space) {
+    rng_.setLocalSeed(seed);
+  }
+  void sampleUniform(ob::State* state) override {
+    const ob::RealVectorBounds& b = space_->as<ob::SE2StateSpace>()->getBounds();
+    auto* s = state->as<ob::SE2StateSpace::StateType>();
+    s->setXY(rng_.uniformReal(b.low[0], b.high[0]), rng_.uniformReal(b.low[1], b.high[1]));
+    s->setYaw(rng_.uniformReal(-kPi, kPi));
+  }
+  void sampleUniformNear(ob::State* state, const ob::State* near, double distance) override {
+    const ob::RealVectorBounds& b = space_->as<ob::SE2StateSpace>()->getBounds();
+    const auto* c = near->as<ob::SE2StateSpace::StateType>();
+    auto* s = state->as<ob::SE2StateSpace::StateType>();
+    s->setXY(std::clamp(rng_.uniformReal(c->getX() - distance, c->getX() + distance), b.low[0], b.high[0]),
+             std::clamp(rng_.uniformReal(c->getY() - distance, c->getY() + distance), b.low[1], b.high[1]));
+    s->setYaw(WrapAngle(rng_.uniformReal(c->getYaw() - distance, c->getYaw() + distance)));
+  }
+  void sampleGaussian(ob::State* state, const ob::State* mean, double std_dev) override {
+    const ob::RealVectorBounds& b = space_->as<ob::SE2StateSpace>()->getBounds();
+    const auto* c = mean->as<ob::SE2StateSpace::StateType>();
+    auto* s = state->as<ob::SE2StateSpace::StateType>();
+    s->setXY(std::clamp(rng_.gaussian(c->getX(), std_dev), b.low[0], b.high[0]),
+             std::clamp(rng_.gaussian(c->getY(), std_dev), b.low[1], b.high[1]));
+    s->setYaw(WrapAngle(rng_.gaussian(c->getYaw(), std_dev)));
+  }
+};
+
+/// A car's state space (OMPL's Dubins or Reeds–Shepp SE(2) space) with seeded samplers.
+template <class Base>
+class CarSpace : public Base {
+ public:
+  CarSpace(double turning_radius, std::uint64_t seed) : Base(turning_radius), seed_(seed) {}
+  ob::StateSamplerPtr allocDefaultStateSampler() const override {
+    return std::make_shared<SeededSe2Sampler>(this, MixSeed(seed_ + 0x100 + counter_++));
+  }
+
+ private:
+  std::uint64_t seed_;
+  mutable std::atomic<std::uint64_t> counter_{0};
+};
 
 class ValidityChecker : public ob::StateValidityChecker {
  public:
   ValidityChecker(const ob::SpaceInformationPtr& si, std::shared_ptr<const CollisionChecker> checker,
-                  std::atomic<std::uint64_t>* checks)
-      : ob::StateValidityChecker(si), checker_(std::move(checker)), checks_(checks) {}
+                  StateMap map, std::atomic<std::uint64_t>* checks)
+      : ob::StateValidityChecker(si), checker_(std::move(checker)), map_(map), checks_(checks) {}
   bool isValid(const ob::State* state) const override {
     thread_local Eigen::VectorXd q;
-    ToEigen(state, checker_->robot().num_dofs(), &q);
+    map_.ToEigen(state, &q);
     checks_->fetch_add(1, std::memory_order_relaxed);
     return checker_->IsValid(q);
   }
 
  private:
   std::shared_ptr<const CollisionChecker> checker_;
+  StateMap map_;
   std::atomic<std::uint64_t>* checks_;
 };
 
@@ -123,14 +199,13 @@ class ValidityChecker : public ob::StateValidityChecker {
 class MotionChecker : public ob::MotionValidator {
  public:
   MotionChecker(const ob::SpaceInformationPtr& si, std::shared_ptr<const CollisionChecker> checker,
-                double max_step, std::atomic<std::uint64_t>* checks)
-      : ob::MotionValidator(si), checker_(std::move(checker)), max_step_(max_step), checks_(checks) {}
+                double max_step, StateMap map, std::atomic<std::uint64_t>* checks)
+      : ob::MotionValidator(si), checker_(std::move(checker)), max_step_(max_step), map_(map), checks_(checks) {}
 
   bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
     thread_local Eigen::VectorXd a, b;
-    const int n = checker_->robot().num_dofs();
-    ToEigen(s1, n, &a);
-    ToEigen(s2, n, &b);
+    map_.ToEigen(s1, &a);
+    map_.ToEigen(s2, &b);
     CheckCounters counters;
     const bool ok = checker_->certifies_motion() ? checker_->IsMotionCertified(a, b, &counters)
                                                  : checker_->IsMotionValid(a, b, max_step_, &counters);
@@ -143,9 +218,8 @@ class MotionChecker : public ob::MotionValidator {
   bool checkMotion(const ob::State* s1, const ob::State* s2,
                    std::pair<ob::State*, double>& last_valid) const override {
     thread_local Eigen::VectorXd a, b, q;
-    const int n = checker_->robot().num_dofs();
-    ToEigen(s1, n, &a);
-    ToEigen(s2, n, &b);
+    map_.ToEigen(s1, &a);
+    map_.ToEigen(s2, &b);
     bool certified = false;
     if (checker_->certifies_motion()) {
       CheckCounters counters;
@@ -165,7 +239,7 @@ class MotionChecker : public ob::MotionValidator {
       if (!checker_->IsValid(q)) {
         const double s_last = static_cast<double>(k - 1) / steps;
         if (last_valid.first != nullptr) {
-          FromEigen(Eigen::VectorXd(a + s_last * (b - a)), last_valid.first);
+          map_.FromEigen(Eigen::VectorXd(a + s_last * (b - a)), last_valid.first);
         }
         last_valid.second = s_last;
         ++invalid_;
@@ -175,7 +249,7 @@ class MotionChecker : public ob::MotionValidator {
     if (checker_->certifies_motion()) {
       // Every sample is valid but the certified check rejected the segment (a contact between
       // samples, or a graze): keep only a.
-      if (last_valid.first != nullptr) FromEigen(a, last_valid.first);
+      if (last_valid.first != nullptr) map_.FromEigen(a, last_valid.first);
       last_valid.second = 0.0;
       ++invalid_;
       return false;
@@ -187,6 +261,53 @@ class MotionChecker : public ob::MotionValidator {
  private:
   std::shared_ptr<const CollisionChecker> checker_;
   double max_step_;
+  StateMap map_;
+  std::atomic<std::uint64_t>* checks_;
+};
+
+/// A car's motions follow its Dubins / Reeds–Shepp curve: states along the curve no more than
+/// `max_step` apart (in metres of arc and radians of heading) must be valid.
+class CarMotionChecker : public ob::MotionValidator {
+ public:
+  CarMotionChecker(const ob::SpaceInformationPtr& si, std::shared_ptr<const CollisionChecker> checker,
+                   double max_step, double turning_radius, StateMap map, std::atomic<std::uint64_t>* checks)
+      : ob::MotionValidator(si),
+        checker_(std::move(checker)),
+        step_(max_step * std::min(1.0, turning_radius)),  // heading changes by at most arc / radius
+        map_(map),
+        checks_(checks) {}
+
+  bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
+    std::pair<ob::State*, double> unused(nullptr, 0.0);
+    return checkMotion(s1, s2, unused);
+  }
+
+  bool checkMotion(const ob::State* s1, const ob::State* s2,
+                   std::pair<ob::State*, double>& last_valid) const override {
+    thread_local Eigen::VectorXd q;
+    const int steps = std::max(1, static_cast<int>(std::ceil(si_->distance(s1, s2) / step_)));
+    ob::State* s = si_->allocState();
+    bool ok = true;
+    for (int k = 1; k <= steps && ok; ++k) {
+      si_->getStateSpace()->interpolate(s1, s2, static_cast<double>(k) / steps, s);
+      map_.ToEigen(s, &q);
+      checks_->fetch_add(1, std::memory_order_relaxed);
+      if (!checker_->IsValid(q)) {
+        ok = false;
+        const double t_last = static_cast<double>(k - 1) / steps;
+        if (last_valid.first != nullptr) si_->getStateSpace()->interpolate(s1, s2, t_last, last_valid.first);
+        last_valid.second = t_last;
+      }
+    }
+    si_->freeState(s);
+    ok ? ++valid_ : ++invalid_;
+    return ok;
+  }
+
+ private:
+  std::shared_ptr<const CollisionChecker> checker_;
+  double step_;
+  StateMap map_;
   std::atomic<std::uint64_t>* checks_;
 };
 
@@ -282,24 +403,53 @@ class OmplPlanner : public Planner {
     problem_ = problem;
     const ParameterValues params = ResolveParameters(spec_, problem.parameters);
     const RobotModel& robot = problem.checker->robot();
+    CheckRobotKind(spec_, robot);
     const int n = robot.num_dofs();
 
-    auto space = std::make_shared<JointSpace>(n, problem.seed);
-    ob::RealVectorBounds bounds(n);
-    for (int i = 0; i < n; ++i) {
-      bounds.setLow(i, robot.lower_limits()[i]);
-      bounds.setHigh(i, robot.upper_limits()[i]);
+    map_.n = n;
+    map_.se2 = IsCar(robot.kind());
+    ob::StateSpacePtr space;
+    if (map_.se2) {
+      // A car: OMPL's SE(2) curve spaces over the workspace bounds of (x, y); the heading is an
+      // SO(2) angle there (its joint range only bounds the unwrapped path).
+      const double rho = robot.motion().turning_radius;
+      std::shared_ptr<ob::SE2StateSpace> se2;
+      if (robot.kind() == RobotKind::kDubinsCar) {
+        se2 = std::make_shared<CarSpace<ob::DubinsStateSpace>>(rho, problem.seed);
+      } else {
+        se2 = std::make_shared<CarSpace<ob::ReedsSheppStateSpace>>(rho, problem.seed);
+      }
+      ob::RealVectorBounds bounds(2);
+      for (int i = 0; i < 2; ++i) {
+        bounds.setLow(i, robot.lower_limits()[i]);
+        bounds.setHigh(i, robot.upper_limits()[i]);
+      }
+      se2->setBounds(bounds);
+      space = se2;
+    } else {
+      auto joints = std::make_shared<JointSpace>(n, problem.seed);
+      ob::RealVectorBounds bounds(n);
+      for (int i = 0; i < n; ++i) {
+        bounds.setLow(i, robot.lower_limits()[i]);
+        bounds.setHigh(i, robot.upper_limits()[i]);
+      }
+      joints->setBounds(bounds);
+      space = joints;
     }
-    space->setBounds(bounds);
     si_ = std::make_shared<ob::SpaceInformation>(space);
-    si_->setStateValidityChecker(std::make_shared<ValidityChecker>(si_, problem.checker, &checks_));
-    si_->setMotionValidator(std::make_shared<MotionChecker>(si_, problem.checker, problem.max_step, &checks_));
+    si_->setStateValidityChecker(std::make_shared<ValidityChecker>(si_, problem.checker, map_, &checks_));
+    if (map_.se2) {
+      si_->setMotionValidator(std::make_shared<CarMotionChecker>(si_, problem.checker, problem.max_step,
+                                                                 robot.motion().turning_radius, map_, &checks_));
+    } else {
+      si_->setMotionValidator(std::make_shared<MotionChecker>(si_, problem.checker, problem.max_step, map_, &checks_));
+    }
     si_->setup();
 
     pdef_ = std::make_shared<ob::ProblemDefinition>(si_);
     ob::ScopedState<> start(space), goal(space);
-    FromEigen(problem.start, start.get());
-    FromEigen(problem.goal, goal.get());
+    map_.FromEigen(problem.start, start.get());
+    map_.FromEigen(problem.goal, goal.get());
     pdef_->addStartState(start);
     if (problem.additional_goals.empty()) {
       pdef_->setGoalState(goal, std::max(problem.goal_tolerance, 1e-9));
@@ -308,7 +458,7 @@ class OmplPlanner : public Planner {
       goals->addState(goal);
       for (const Eigen::VectorXd& q : problem.additional_goals) {
         ob::ScopedState<> g(space);
-        FromEigen(q, g.get());
+        map_.FromEigen(q, g.get());
         goals->addState(g);
       }
       goals->setThreshold(std::max(problem.goal_tolerance, 1e-9));
@@ -401,18 +551,21 @@ class OmplPlanner : public Planner {
 
     const bool exact = status == ob::PlannerStatus::EXACT_SOLUTION;
     const bool approximate = status == ob::PlannerStatus::APPROXIMATE_SOLUTION;
-    if (exact || approximate) {
-      auto* path = pdef_->getSolutionPath()->as<og::PathGeometric>();
-      const int n = problem_.checker->robot().num_dofs();
-      for (const ob::State* s : path->getStates()) {
+    if (exact && map_.se2) {
+      FinishCarPath(*pdef_->getSolutionPath()->as<og::PathGeometric>(), &result);
+    } else if (exact) {
+      for (const ob::State* s : pdef_->getSolutionPath()->as<og::PathGeometric>()->getStates()) {
         Eigen::VectorXd q;
-        ToEigen(s, n, &q);
+        map_.ToEigen(s, &q);
         result.path.push_back(std::move(q));
       }
-    }
-    if (exact) {
       FinishAtGoal(&result);
     } else if (approximate) {
+      for (const ob::State* s : pdef_->getSolutionPath()->as<og::PathGeometric>()->getStates()) {
+        Eigen::VectorXd q;
+        map_.ToEigen(s, &q);
+        result.path.push_back(std::move(q));
+      }
       result.status = PlanStatus::kApproximateSolution;
       result.message = spec_.id + " found only an approximate solution, " +
                        std::to_string(pdef_->getSolutionDifference()) + " rad from the goal";
@@ -446,6 +599,135 @@ class OmplPlanner : public Planner {
   }
 
  private:
+  /// A car's path: its states joined by the car's curves. Connects the exact goal along a curve,
+  /// drops states the curves can skip (greedy: from each kept state the farthest state joined by a
+  /// valid curve), then samples each curve into chords (every 5 degrees of heading, halved until
+  /// the chord itself is a valid straight motion or no longer than max_step) and unwraps the
+  /// heading from the start's. Later stages must keep this shape (keep_path_shape).
+  void FinishCarPath(og::PathGeometric& solved, PlannerResult* result) const {
+    std::vector<ob::State*> states;
+    for (const ob::State* s : solved.getStates()) states.push_back(si_->cloneState(s));
+    const auto free_states = [this, &states] {
+      for (ob::State* s : states) si_->freeState(s);
+    };
+    // The exact goal: the nearest acceptable one, joined along a curve.
+    std::vector<Eigen::VectorXd> goals = problem_.additional_goals;
+    goals.insert(goals.begin(), problem_.goal);
+    Eigen::VectorXd last;
+    map_.ToEigen(states.back(), &last);
+    const Eigen::VectorXd* goal = &goals.front();
+    ob::State* goal_state = si_->allocState();
+    double best = std::numeric_limits<double>::infinity();
+    for (const Eigen::VectorXd& g : goals) {
+      map_.FromEigen(g, goal_state);
+      const double d = si_->distance(states.back(), goal_state);
+      if (d < best) {
+        best = d;
+        goal = &g;
+      }
+    }
+    map_.FromEigen(*goal, goal_state);
+    if (best > 0.0) {
+      if (!si_->checkMotion(states.back(), goal_state)) {
+        si_->freeState(goal_state);
+        free_states();
+        result->status = PlanStatus::kApproximateSolution;
+        result->message = spec_.id + " reached the goal region but the car's curve to the exact goal collides";
+        return;
+      }
+      states.push_back(goal_state);
+    } else {
+      si_->freeState(states.back());
+      states.back() = goal_state;
+    }
+    // Greedy vertex reduction along valid curves (deterministic).
+    std::vector<ob::State*> kept = {states.front()};
+    for (size_t i = 0; i + 1 < states.size();) {
+      size_t j = states.size() - 1;
+      while (j > i + 1 && !si_->checkMotion(states[i], states[j])) --j;
+      kept.push_back(states[j]);
+      i = j;
+    }
+    // Chords along each curve, heading unwrapped.
+    const double rho = problem_.checker->robot().motion().turning_radius;
+    constexpr double kChordHeading = 5.0 * kPi / 180.0;
+    const CollisionChecker& checker = *problem_.checker;
+    CheckCounters counters;
+    result->path.clear();
+    result->path.push_back(problem_.start);
+    Eigen::VectorXd raw_prev = problem_.start, q;
+    ob::State* s = si_->allocState();
+    const auto add = [&](const ob::State* state) {
+      map_.ToEigen(state, &q);
+      const double raw = q[2];
+      q[2] = result->path.back()[2] + WrapAngle(raw - raw_prev[2]);
+      raw_prev = q;
+      raw_prev[2] = raw;
+      result->path.push_back(q);
+    };
+    for (size_t k = 0; k + 1 < kept.size(); ++k) {
+      const ob::State* a = kept[k];
+      const ob::State* b = kept[k + 1];
+      const int pieces = std::max(1, static_cast<int>(std::ceil(si_->distance(a, b) / rho / kChordHeading)));
+      // Stack of curve parameters still to reach, from the far end.
+      std::vector<double> targets;
+      for (int i = pieces; i >= 1; --i) targets.push_back(static_cast<double>(i) / pieces);
+      double t_done = 0.0;
+      while (!targets.empty()) {
+        const double t = targets.back();
+        si_->getStateSpace()->interpolate(a, b, t, s);
+        Eigen::VectorXd from = result->path.back(), to;
+        map_.ToEigen(s, &to);
+        to[2] = from[2] + WrapAngle(to[2] - raw_prev[2]);
+        const bool short_chord = (to - from).cwiseAbs().maxCoeff() <= problem_.max_step;
+        const bool chord_ok = short_chord || (checker.certifies_motion()
+                                                  ? checker.IsMotionCertified(from, to, &counters)
+                                                  : checker.IsMotionValid(from, to, problem_.max_step, &counters));
+        if (chord_ok) {
+          add(s);
+          targets.pop_back();
+          t_done = t;
+        } else {
+          targets.push_back(0.5 * (t_done + t));
+        }
+      }
+    }
+    si_->freeState(s);
+    checks_.fetch_add(counters.state_checks);
+    for (ob::State* st : kept) si_->freeState(st);
+    for (ob::State* st : states) {
+      if (std::find(kept.begin(), kept.end(), st) == kept.end()) si_->freeState(st);
+    }
+    // The last state is the goal: exact x, y; the heading equals the goal's modulo 2π.
+    Eigen::VectorXd& end = result->path.back();
+    end[0] = (*goal)[0];
+    end[1] = (*goal)[1];
+    if (std::abs(WrapAngle(end[2] - (*goal)[2])) < 1e-9) end[2] = (*goal)[2] + std::round((end[2] - (*goal)[2]) / (2 * kPi)) * 2 * kPi;
+    RemoveCollinear(&result->path);
+    result->keep_path_shape = true;
+    result->status = PlanStatus::kExactSolution;
+    result->message = spec_.id + " found a car path through " + std::to_string(kept.size()) +
+                      " states, followed by " + std::to_string(result->path.size() - 1) + " chords";
+  }
+
+  /// Drops waypoints that lie on the straight segment between their neighbours (a car's
+  /// straight runs); the motion is unchanged.
+  static void RemoveCollinear(JointPath* path) {
+    if (path->size() < 3) return;
+    JointPath out = {path->front()};
+    for (size_t i = 1; i + 1 < path->size(); ++i) {
+      const Eigen::VectorXd& a = out.back();
+      const Eigen::VectorXd& b = (*path)[i];
+      const Eigen::VectorXd& c = (*path)[i + 1];
+      const Eigen::VectorXd ab = b - a, ac = c - a;
+      const double t = ab.dot(ac) / std::max(ac.squaredNorm(), 1e-300);
+      const bool on_segment = t > 0.0 && t < 1.0 && (ab - t * ac).norm() <= 1e-12 * std::max(1.0, ac.norm());
+      if (!on_segment) out.push_back(b);
+    }
+    out.push_back(path->back());
+    *path = std::move(out);
+  }
+
   /// The goal test accepts states within the tolerance; the returned path ends exactly at
   /// the requested goal, so connect it when the last state is not the goal itself.
   void FinishAtGoal(PlannerResult* result) const {
@@ -482,6 +764,7 @@ class OmplPlanner : public Planner {
   ob::ProblemDefinitionPtr pdef_;
   ob::PlannerPtr planner_;
   std::uint64_t max_iterations_ = 0;
+  StateMap map_;
   mutable std::atomic<std::uint64_t> checks_{0};
 };
 
