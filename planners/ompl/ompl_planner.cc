@@ -649,7 +649,6 @@ class OmplPlanner : public Planner {
       i = j;
     }
     // Chords along each curve, heading unwrapped.
-    const double rho = problem_.checker->robot().motion().turning_radius;
     constexpr double kChordHeading = 5.0 * kPi / 180.0;
     const CollisionChecker& checker = *problem_.checker;
     CheckCounters counters;
@@ -668,10 +667,22 @@ class OmplPlanner : public Planner {
     for (size_t k = 0; k + 1 < kept.size(); ++k) {
       const ob::State* a = kept[k];
       const ob::State* b = kept[k + 1];
-      const int pieces = std::max(1, static_cast<int>(std::ceil(si_->distance(a, b) / rho / kChordHeading)));
-      // Stack of curve parameters still to reach, from the far end.
+      // Stack of curve parameters still to reach, from the far end: each straight piece of the
+      // curve whole, each arc every kChordHeading of heading (chords never straddle two pieces).
       std::vector<double> targets;
-      for (int i = pieces; i >= 1; --i) targets.push_back(static_cast<double>(i) / pieces);
+      const std::vector<std::pair<double, bool>> pieces = CurvePieces(a, b);
+      double total = 0.0;
+      for (const auto& piece : pieces) total += piece.first;
+      double before = 0.0;
+      std::vector<double> forward;
+      for (const auto& [length, arc] : pieces) {
+        const int cuts = arc ? std::max(1, static_cast<int>(std::ceil(length / kChordHeading))) : 1;
+        for (int i = 1; i <= cuts; ++i) forward.push_back((before + length * i / cuts) / total);
+        before += length;
+      }
+      if (forward.empty()) forward.push_back(1.0);
+      forward.back() = 1.0;
+      targets.assign(forward.rbegin(), forward.rend());
       double t_done = 0.0;
       while (!targets.empty()) {
         const double t = targets.back();
@@ -708,6 +719,26 @@ class OmplPlanner : public Planner {
     result->status = PlanStatus::kExactSolution;
     result->message = spec_.id + " found a car path through " + std::to_string(kept.size()) +
                       " states, followed by " + std::to_string(result->path.size() - 1) + " chords";
+  }
+
+  /// The pieces of the car's shortest curve a → b: (length in turning radii — for an arc its turn
+  /// in radians —, is an arc), in order; zero-length pieces left out.
+  std::vector<std::pair<double, bool>> CurvePieces(const ob::State* a, const ob::State* b) const {
+    std::vector<std::pair<double, bool>> pieces;
+    const auto add = [&pieces](double length, bool arc) {
+      if (std::abs(length) > 1e-12) pieces.emplace_back(std::abs(length), arc);
+    };
+    if (const auto* dubins = dynamic_cast<const ob::DubinsStateSpace*>(si_->getStateSpace().get())) {
+      const ob::DubinsStateSpace::DubinsPath path = dubins->dubins(a, b);
+      for (int i = 0; i < 3; ++i) add(path.length_[i], path.type_[i] != ob::DubinsStateSpace::DUBINS_STRAIGHT);
+    } else {
+      const auto* rs = si_->getStateSpace()->as<ob::ReedsSheppStateSpace>();
+      const ob::ReedsSheppStateSpace::ReedsSheppPath path = rs->reedsShepp(a, b);
+      for (int i = 0; i < 5 && path.type_[i] != ob::ReedsSheppStateSpace::RS_NOP; ++i) {
+        add(path.length_[i], path.type_[i] != ob::ReedsSheppStateSpace::RS_STRAIGHT);
+      }
+    }
+    return pieces;
   }
 
   /// Drops waypoints that lie on the straight segment between their neighbours (a car's
