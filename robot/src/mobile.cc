@@ -35,7 +35,7 @@ std::shared_ptr<const RobotModel> RobotFromMobile(const MobileDescription& mobil
                    " = " + FormatNumber(hi) + " must be finite");
     }
     if (!(lo < hi)) {
-      ThrowInvalid("mobile.workspace_min." + a + " = " + FormatNumber(lo) + " must be < mobile.workspace_max." +
+      ThrowInvalid("mobile.workspace_min." + a + " = " + FormatNumber(lo) + " must be < workspace_max." +
                    a + " = " + FormatNumber(hi));
     }
   }

@@ -89,7 +89,7 @@ TEST(MobileRobotTest, MalformedDescriptionsGetNamedErrors) {
   using testing::ExpectInvalid;
   MobileDescription d = Base(RobotKind::kPlanar);
   d.workspace_min.x() = 9;
-  ExpectInvalid([&] { RobotFromMobile(d); }, "mobile.workspace_min.x = 9 must be < mobile.workspace_max.x = 8");
+  ExpectInvalid([&] { RobotFromMobile(d); }, "mobile.workspace_min.x = 9 must be < workspace_max.x = 8");
   d = Base(RobotKind::kDubinsCar);
   d.turning_radius = 0;
   ExpectInvalid([&] { RobotFromMobile(d); }, "mobile.turning_radius = 0 must be > 0 and finite");

@@ -43,7 +43,7 @@ struct MobileDescription {
 /// Builds the model: links `world` (root), one massless intermediate link per coordinate but the
 /// last, and `body`; joints named x, y, (z,) theta / yaw, pitch, roll.
 /// \throws Error(kInvalidArgument) naming the field (`mobile.` prefix), e.g.
-/// `mobile.workspace_min.x = 2 must be < mobile.workspace_max.x = 1`,
+/// `mobile.workspace_min.x = 2 must be < workspace_max.x = 1`,
 /// `mobile.turning_radius = 0 must be > 0 for a car`, `mobile.body has no collision geometry`,
 /// `mobile.kind must be planar, dubins_car, reeds_shepp_car or free_flyer (got arm)`.
 std::shared_ptr<const RobotModel> RobotFromMobile(const MobileDescription& mobile);
