@@ -2,9 +2,10 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|grpc|kinematics|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|families|grpc|kinematics|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
+//                 [--problems maze,office,drone_course,panda_shelf]
 
 #include <algorithm>
 #include <chrono>
@@ -29,6 +30,7 @@
 #include "chasles/robot/inverse_kinematics.h"
 #include "chasles/robot/kinematics.h"
 #include "chasles/robot/lie_group.h"
+#include "chasles/robot/mobile.h"
 #include "chasles/server/convert.h"
 #include "chasles/server/planning_server.h"
 #include "chasles/v1/chasles.grpc.pb.h"
@@ -50,6 +52,7 @@ struct Options {
   int shortcut_attempts = 100;
   int ik_poses = 1000;
   double resolution = 0.005;  // motion-check resolution of the planning queries [rad]
+  std::vector<std::string> problems = {"maze", "office", "drone_course", "panda_shelf"};
 };
 
 std::string ReadFile(const std::string& path) {
@@ -189,7 +192,11 @@ void BenchPlanning(const Options& options) {
   PlannerRegistry registry;
   RegisterDefaultPlanners(&registry);
   const PlanningPipeline pipeline(registry);
-  std::vector<std::string> planners = options.planners.empty() ? registry.Ids() : options.planners;
+  // The sampling (OMPL) family; the search and field families have their own section.
+  std::vector<std::string> planners = options.planners;
+  if (planners.empty()) {
+    planners = {"bit_star", "informed_rrt_star", "lazy_prm_star", "prm", "prm_star", "rrt", "rrt_connect", "rrt_star"};
+  }
   // RRT-Connect first: it is the baseline every other figure is compared with.
   std::stable_partition(planners.begin(), planners.end(), [](const std::string& id) { return id == "rrt_connect"; });
   auto robot = LoadRobot("panda");
@@ -254,6 +261,141 @@ void BenchPlanning(const Options& options) {
                   id.c_str(), solved, queries.size(), unsolved.c_str(), median, Quantile(plan_ms, 0.95), median / baseline_median,
                   Quantile(total_ms, 0.5), Quantile(shortcut_ms, 0.5), Quantile(verify_ms, 0.5),
                   Quantile(raw_length, 0.5), Quantile(length, 0.5));
+      std::fflush(stdout);
+    }
+  }
+}
+
+
+// ---------------------------------------------------------------------------------------------
+// Planner families (issue 4): A*, potential field and wavefront against RRT-Connect and RRT* on
+// the same queries, per problem: mobile bases, a drone and arms.
+
+std::shared_ptr<const RobotModel> LoadMobileRobot(const std::string& name, const Eigen::Vector3d* lo = nullptr,
+                                                  const Eigen::Vector3d* hi = nullptr) {
+  v1::RobotModel robot;
+  const auto status = google::protobuf::util::JsonStringToMessage(
+      ReadFile(examples_dir + "/robots/" + name + ".json"), robot.mutable_mobile());
+  if (!status.ok()) throw std::runtime_error(name + ".json: " + status.ToString());
+  if (lo != nullptr) {
+    robot.mutable_mobile()->mutable_workspace_min()->set_x(lo->x());
+    robot.mutable_mobile()->mutable_workspace_min()->set_y(lo->y());
+    robot.mutable_mobile()->mutable_workspace_max()->set_x(hi->x());
+    robot.mutable_mobile()->mutable_workspace_max()->set_y(hi->y());
+  }
+  return RobotFromProto(robot, "robot");
+}
+
+struct FamilyProblem {
+  std::string name;
+  std::shared_ptr<const RobotModel> robot;
+  std::string scene;
+};
+
+FamilyProblem LoadFamilyProblem(const std::string& name) {
+  if (name == "maze") {
+    const Eigen::Vector3d lo(0, 0, 0), hi(8, 8, 0);
+    return {name, LoadMobileRobot("mobile_base", &lo, &hi), "maze_octomap"};
+  }
+  if (name == "office") return {name, LoadMobileRobot("mobile_base"), "office_octomap"};
+  if (name == "drone_course") return {name, LoadMobileRobot("drone"), "drone_course_octomap"};
+  const auto underscore = name.find('_', name.find("planar_2r") == 0 ? 9 : 0);
+  if (underscore == std::string::npos) throw std::runtime_error("unknown problem '" + name + "'");
+  return {name, LoadRobot(name.substr(0, underscore)), name.substr(underscore + 1)};
+}
+
+/// Seeded valid start/goal pairs whose straight segment collides. Mobile robots keep their
+/// heading (and a drone stays level), as a base or drone usually does between waypoints; the
+/// planners still search every coordinate except the wavefront, which holds equal ones fixed.
+std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>> MakeFamilyQueries(const CollisionChecker& checker, int n,
+                                                                           std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const RobotModel& robot = checker.robot();
+  const int translations = robot.kind() == RobotKind::kFreeFlyer ? 3 : 2;
+  std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>> out;
+  int attempts = 0;
+  while (static_cast<int>(out.size()) < n && ++attempts < 1000000) {
+    Eigen::VectorXd a = RandomConfiguration(robot, &rng);
+    Eigen::VectorXd b = RandomConfiguration(robot, &rng);
+    if (robot.kind() != RobotKind::kArm) {
+      for (int i = translations; i < a.size(); ++i) {
+        a[i] = robot.kind() == RobotKind::kFreeFlyer && i > translations ? 0.0 : a[i];
+        b[i] = a[i];
+      }
+    }
+    if (checker.IsValid(a) && checker.IsValid(b) && !checker.IsMotionValid(a, b, 0.005)) {
+      out.emplace_back(std::move(a), std::move(b));
+    }
+  }
+  return out;
+}
+
+void BenchFamilies(const Options& options) {
+  PlannerRegistry registry;
+  RegisterDefaultPlanners(&registry);
+  const PlanningPipeline pipeline(registry);
+  std::vector<std::string> planners = options.planners;
+  if (planners.empty()) planners = {"rrt_connect", "rrt_star", "astar", "potential_field", "wavefront"};
+  std::printf("\n## Planner families, %d seeded queries per problem whose straight line collides\n\n", options.queries);
+  std::printf("Budget %.2g s per query (rrt_star, anytime: %.2g s). No shortcutting: the lengths are the planners' own "
+              "paths (C-space length, [m] and [rad] summed as the configuration norm). Ratios are against rrt_connect on "
+              "the same queries in the same run; every returned path is re-checked at 0.001.\n\n",
+              options.budget, options.anytime_budget);
+  std::printf("| problem | planner | solved | plan median [ms] | plan p95 [ms] | time vs rrt_connect | length median | "
+              "length vs rrt_connect | other outcomes |\n|---|---|---|---|---|---|---|---|---|\n");
+  for (const std::string& name : options.problems) {
+    const FamilyProblem problem = LoadFamilyProblem(name);
+    auto checker = std::make_shared<const CollisionChecker>(problem.robot, LoadScene(problem.scene));
+    const auto queries = MakeFamilyQueries(*checker, options.queries, options.seed);
+    double base_time = std::nan(""), base_length = std::nan("");
+    for (const std::string& id : planners) {
+      const bool optimizing = registry.Spec(id).optimizing;
+      std::vector<double> plan_ms, length;
+      int solved = 0, collide = 0;
+      std::map<std::string, int> failures;
+      for (size_t k = 0; k < queries.size(); ++k) {
+        PlanQuery query;
+        query.checker = checker;
+        query.start = queries[k].first;
+        query.goal = queries[k].second;
+        query.planner_id = id;
+        query.seed = options.seed + k;
+        query.shortcut_attempts = -1;
+        query.collision_resolution = options.resolution;
+        PlanOutcome out;
+        try {
+          out = pipeline.Plan(query, Termination::After(std::chrono::duration<double>(
+                                         optimizing ? options.anytime_budget : options.budget)));
+        } catch (const Error& e) {
+          ++failures[e.code() == ErrorCode::kFailedPrecondition ? "refused" : "error"];
+          continue;
+        }
+        if (out.code != PlanOutcomeCode::kSuccess) {
+          ++failures[ToString(out.code)];
+          continue;
+        }
+        ++solved;
+        for (size_t i = 0; i + 1 < out.path.size(); ++i) {
+          if (!checker->IsMotionValid(out.path[i], out.path[i + 1], 0.001)) {
+            ++collide;
+            break;
+          }
+        }
+        plan_ms.push_back(1e3 * out.seconds.plan);
+        double l = 0;
+        for (size_t i = 1; i < out.path.size(); ++i) l += (out.path[i] - out.path[i - 1]).norm();
+        length.push_back(l);
+      }
+      const double t = Quantile(plan_ms, 0.5), l = Quantile(length, 0.5);
+      if (id == "rrt_connect") {
+        base_time = t;
+        base_length = l;
+      }
+      std::string other;
+      for (const auto& [code, count] : failures) other += (other.empty() ? "" : ", ") + code + " " + std::to_string(count);
+      if (collide > 0) other += (other.empty() ? "" : "; ") + std::to_string(collide) + " collide at the re-check";
+      std::printf("| %s | %s | %d/%zu | %.2f | %.2f | %.2f× | %.3f | %.2f× | %s |\n", name.c_str(), id.c_str(), solved,
+                  queries.size(), t, Quantile(plan_ms, 0.95), t / base_time, l, l / base_length, other.c_str());
       std::fflush(stdout);
     }
   }
@@ -513,16 +655,19 @@ int Main(int argc, char** argv) {
     else if (arg == "--shortcut-attempts") options.shortcut_attempts = std::stoi(value());
     else if (arg == "--resolution") options.resolution = std::stod(value());
     else if (arg == "--ik-poses") options.ik_poses = std::stoi(value());
+    else if (arg == "--problems") options.problems = Split(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|grpc|kinematics|all] [--queries N] [--seed S]\n"
+                   "usage: chasles-bench [--section checks|plan|families|grpc|kinematics|all] [--queries N] [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
-                   "                     [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]\n");
+                   "                     [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]\n"
+                   "                     [--problems maze,office,drone_course,panda_shelf]\n");
       return arg == "--help" ? 0 : 2;
     }
   }
   if (options.section == "checks" || options.section == "all") BenchChecks(options);
   if (options.section == "plan" || options.section == "all") BenchPlanning(options);
+  if (options.section == "families" || options.section == "all") BenchFamilies(options);
   if (options.section == "grpc" || options.section == "all") BenchGrpc(options);
   if (options.section == "kinematics" || options.section == "all") BenchKinematics(options);
   return 0;
