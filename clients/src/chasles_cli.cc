@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
@@ -47,6 +48,13 @@ const char kUsage[] =
     "                                  store a robot (URDF, or a chasles.v1.DhRobot / PoeRobot in\n"
     "                                  protobuf JSON) on the server; prints its robot_id\n"
     "  upload-scene SCENE.json         store a chasles.v1.Scene (protobuf JSON); prints its scene_id\n"
+    "  update-scene [--scene-id ID] [--octomap NAME] --points FILE --origin X,Y,Z\n"
+    "               [--max-range R] [--resolution R]\n"
+    "                                  insert a point cloud (world frame [m]; FILE holds x y z per line,\n"
+    "                                  or a .json list of [x, y, z] triples or of flat numbers) into a\n"
+    "                                  stored scene's OctoMap by ray casting from the sensor origin;\n"
+    "                                  prints the updated scene_id (default scene: the server's own;\n"
+    "                                  --max-range 0 = unlimited; --resolution of a new map, 0 = 0.05)\n"
     "\n"
     "Options:\n"
     "  --server ADDR   server address (default 127.0.0.1:50051)\n"
@@ -61,6 +69,13 @@ struct Options {
   std::string dh;   // DhRobot JSON file
   std::string poe;  // PoeRobot JSON file
   std::vector<std::string> meshes;  // NAME=FILE
+  // update-scene
+  std::string scene_id;
+  std::string octomap;
+  std::string points;  // point file
+  std::string origin;  // X,Y,Z
+  std::string max_range;
+  std::string resolution;
   std::vector<std::string> positional;
 };
 
@@ -385,6 +400,97 @@ int UploadScene(const Options& options) {
   return kExitOk;
 }
 
+// --- update-scene ------------------------------------------------------------------------------
+
+/// Parses a number or exits naming `what`.
+double ParseNumberOrExit(const std::string& text, const std::string& what) {
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || end == text.c_str() || *end != '\0') UsageError(what + " '" + text + "' is not a number");
+  return value;
+}
+
+/// Reads a point file: `x y z` per line (commas also separate; blank lines and `#` comments are
+/// skipped), or, for a .json file, a JSON list of [x, y, z] triples or of flat numbers.
+std::vector<double> ReadPointsOrExit(const std::string& path) {
+  const std::string text = ReadFileOrExit(path, "point");
+  std::vector<double> points;
+  if (EndsWith(path, ".json")) {
+    google::protobuf::ListValue list;
+    const auto status = google::protobuf::util::JsonStringToMessage(text, &list);
+    if (!status.ok()) {
+      UsageError("'" + path + "' is not a JSON list of points: " + status.ToString());
+    }
+    for (int i = 0; i < list.values_size(); ++i) {
+      const google::protobuf::Value& v = list.values(i);
+      if (v.kind_case() == google::protobuf::Value::kNumberValue) {
+        points.push_back(v.number_value());
+        continue;
+      }
+      bool ok = v.kind_case() == google::protobuf::Value::kListValue && v.list_value().values_size() == 3;
+      for (int k = 0; ok && k < 3; ++k) {
+        ok = v.list_value().values(k).kind_case() == google::protobuf::Value::kNumberValue;
+        if (ok) points.push_back(v.list_value().values(k).number_value());
+      }
+      if (!ok) UsageError("'" + path + "' entry " + std::to_string(i) + " is neither a number nor an [x, y, z] list");
+    }
+    return points;
+  }
+  std::istringstream in(text);
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.erase(hash);
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream fields(line);
+    std::vector<std::string> tokens;
+    for (std::string token; fields >> token;) tokens.push_back(token);
+    if (tokens.empty()) continue;
+    if (tokens.size() != 3) {
+      UsageError("'" + path + "' line " + std::to_string(number) + " has " + std::to_string(tokens.size()) +
+                 " values, expected x y z");
+    }
+    for (const std::string& token : tokens) {
+      points.push_back(ParseNumberOrExit(token, "'" + path + "' line " + std::to_string(number) + ": value"));
+    }
+  }
+  return points;
+}
+
+int UpdateScene(const Options& options) {
+  if (options.positional.size() != 1) UsageError("update-scene takes no positional arguments (use --points FILE)");
+  if (options.points.empty()) UsageError("update-scene needs --points FILE");
+  if (options.origin.empty()) UsageError("update-scene needs --origin X,Y,Z (the sensor position, world frame [m])");
+  v1::UpdateSceneRequest request;
+  request.set_scene_id(options.scene_id);
+  request.set_octomap(options.octomap);
+  std::vector<std::string> parts;
+  {
+    std::istringstream in(options.origin);
+    for (std::string part; std::getline(in, part, ',');) parts.push_back(part);
+  }
+  if (parts.size() != 3) UsageError("--origin '" + options.origin + "' must be X,Y,Z");
+  request.mutable_sensor_origin()->set_x(ParseNumberOrExit(parts[0], "--origin x"));
+  request.mutable_sensor_origin()->set_y(ParseNumberOrExit(parts[1], "--origin y"));
+  request.mutable_sensor_origin()->set_z(ParseNumberOrExit(parts[2], "--origin z"));
+  if (!options.max_range.empty()) request.set_max_range(ParseNumberOrExit(options.max_range, "--max-range"));
+  if (!options.resolution.empty()) request.set_resolution(ParseNumberOrExit(options.resolution, "--resolution"));
+  for (double value : ReadPointsOrExit(options.points)) request.add_points(value);
+
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : 60.0);
+  v1::UpdateSceneResponse response;
+  const grpc::Status status = stub->UpdateScene(&context, request, &response);
+  if (!status.ok()) return ReportRpcError("UpdateScene", options, status);
+  std::printf("scene_id %s\n", response.scene_id().c_str());
+  std::printf("octomap  %s (resolution %.4g m)\n", response.octomap().c_str(), response.resolution());
+  std::printf("points   %llu inserted in %.2f ms; %llu occupied leaves\n",
+              static_cast<unsigned long long>(response.points_inserted()), 1e3 * response.seconds(),
+              static_cast<unsigned long long>(response.occupied_leaves()));
+  return kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -417,6 +523,18 @@ int main(int argc, char** argv) {
       options.poe = value();
     } else if (arg == "--mesh") {
       options.meshes.push_back(value());
+    } else if (arg == "--scene-id") {
+      options.scene_id = value();
+    } else if (arg == "--octomap") {
+      options.octomap = value();
+    } else if (arg == "--points") {
+      options.points = value();
+    } else if (arg == "--origin") {
+      options.origin = value();
+    } else if (arg == "--max-range") {
+      options.max_range = value();
+    } else if (arg == "--resolution") {
+      options.resolution = value();
     } else if (arg.size() > 1 && arg[0] == '-') {
       UsageError("unknown option '" + arg + "'");
     } else {
@@ -433,5 +551,6 @@ int main(int argc, char** argv) {
   if (command == "ik") return InverseKinematics(options);
   if (command == "upload-robot") return UploadRobot(options);
   if (command == "upload-scene") return UploadScene(options);
+  if (command == "update-scene") return UpdateScene(options);
   UsageError("unknown command '" + command + "'");
 }

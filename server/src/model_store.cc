@@ -28,6 +28,11 @@ StoredScene ModelStore::AddScene(const v1::Scene& scene, const std::string& fiel
   return {std::move(id), std::move(stored)};
 }
 
+StoredScene ModelStore::PutScene(const std::string& id, std::shared_ptr<const Scene> scene) {
+  if (id == default_scene_.id) return default_scene_;
+  return {id, scenes_.Put(id, std::move(scene))};
+}
+
 StoredRobot ModelStore::FindRobot(const std::string& id) const {
   if (id == default_robot_.id) return default_robot_;
   if (auto model = robots_.Get(id)) return {id, model};

@@ -159,6 +159,38 @@ class PlanningService final : public v1::Planning::CallbackService {
     });
   }
 
+  grpc::ServerUnaryReactor* UpdateScene(grpc::CallbackServerContext* context, const v1::UpdateSceneRequest* request,
+                                        v1::UpdateSceneResponse* response) override {
+    return RunOnPool("update-scene", [this, request, response](const PoolReactor&) {
+      const Clock::time_point start = Clock::now();
+      const StoredScene base =
+          request->scene_id().empty() ? store_->default_scene() : store_->FindScene(request->scene_id());
+      PointCloudInsertion insertion;
+      insertion.octomap = request->octomap();
+      insertion.points.assign(request->points().begin(), request->points().end());
+      const v1::Vector3& origin = request->sensor_origin();
+      insertion.sensor_origin = Eigen::Vector3d(origin.x(), origin.y(), origin.z());
+      insertion.max_range = request->max_range();
+      insertion.resolution = request->resolution();
+      PointCloudInsertionStats stats;
+      auto updated = std::make_shared<const Scene>(base.scene->InsertPointCloud(insertion, &stats));
+      // Content id: the base scene's id and the update (the same update of the same scene gives
+      // the same id).
+      v1::UpdateSceneRequest key = *request;
+      key.set_scene_id(base.id);
+      const StoredScene scene = store_->PutScene(ProtoContentId(key), std::move(updated));
+      response->set_scene_id(scene.id);
+      response->set_octomap(stats.octomap);
+      response->set_points_inserted(stats.points_inserted);
+      response->set_occupied_leaves(stats.occupied_leaves);
+      response->set_resolution(stats.resolution);
+      response->set_seconds(stats.seconds);
+      Log("update-scene scene=%s->%s map=%s%s points=%zu occupied=%zu status=OK ms=%.1f", IdPrefix(base.id).c_str(),
+          IdPrefix(scene.id).c_str(), stats.octomap.c_str(), stats.created ? " (new)" : "", stats.points_inserted,
+          stats.occupied_leaves, 1e3 * SecondsSince(start));
+    });
+  }
+
   grpc::ServerUnaryReactor* InverseKinematics(grpc::CallbackServerContext* context,
                                               const v1::InverseKinematicsRequest* request,
                                               v1::InverseKinematicsResponse* response) override {

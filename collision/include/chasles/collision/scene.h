@@ -3,6 +3,7 @@
 /// Scene: the static environment — primitives, triangle meshes and OctoMap occupancy maps,
 /// all posed in the world (robot base) frame. SI units.
 
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <vector>
@@ -30,6 +31,30 @@ struct OccupancyMap {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
 };
 
+/// A point cloud to insert into one of a scene's OctoMaps (Scene::InsertPointCloud).
+struct PointCloudInsertion {
+  /// The map to update; empty = the scene's only map, or a new map "points" when it has none.
+  std::string octomap;
+  /// Points in the world frame [m], flattened: x0, y0, z0, x1, … (a multiple of 3, finite).
+  std::vector<double> points;
+  /// Where the rays start, world frame [m]; finite.
+  Eigen::Vector3d sensor_origin = Eigen::Vector3d::Zero();
+  /// [m] rays are cut at this length (their end cells then stay unmarked); 0 = unlimited; >= 0.
+  double max_range = 0.0;
+  /// [m] voxel size of a new map; 0 = 0.05; otherwise within [0.001, 10]. Ignored by existing maps.
+  double resolution = 0.0;
+};
+
+/// What Scene::InsertPointCloud did.
+struct PointCloudInsertionStats {
+  std::string octomap;              ///< the map that was updated (or created)
+  bool created = false;             ///< true when the map was created by this insertion
+  std::size_t points_inserted = 0;  ///< rays cast (one per point)
+  std::size_t occupied_leaves = 0;  ///< occupied leaves of the updated map (pruned leaves count once)
+  double resolution = 0.0;          ///< [m] of the updated map
+  double seconds = 0.0;             ///< [s] wall time of the insertion (copy, ray casting, counting)
+};
+
 /// A value type; cheap to copy (shared immutable maps and meshes).
 class Scene {
  public:
@@ -41,6 +66,17 @@ class Scene {
   void AddOctoMap(const std::string& name, const std::string& bytes, const Eigen::Isometry3d& pose,
                   const std::string& field = "scene.octomaps");
   void AddOccupancyMap(OccupancyMap map);
+
+  /// Returns a copy of this scene whose map `insertion.octomap` holds the point cloud, inserted
+  /// with OctoMap's ray casting (OcTree::insertPointCloud): the cells along each ray from the
+  /// sensor become freer, the end cells more occupied. Points and origin are moved into the
+  /// map's frame (its pose inverse). The map's tree is copied; this scene, its trees and every
+  /// scene sharing them stay unchanged. Fills `stats` when given.
+  /// \throws Error(kInvalidArgument) naming the field, index, value and rule when a value is
+  ///         malformed or a point lies outside the map's key range, or when `octomap` is empty
+  ///         and the scene has several maps; Error(kNotFound) listing the scene's maps when
+  ///         `octomap` names none of them.
+  Scene InsertPointCloud(const PointCloudInsertion& insertion, PointCloudInsertionStats* stats = nullptr) const;
 
   const std::vector<SceneObject>& objects() const { return objects_; }
   const std::vector<OccupancyMap>& occupancy_maps() const { return maps_; }

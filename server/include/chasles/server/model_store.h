@@ -32,6 +32,9 @@ class ModelStore {
   /// Parses (unless its id is already stored) and stores a robot. \throws Error naming `field`.
   StoredRobot AddRobot(const v1::RobotModel& robot, const std::string& field = "robot");
   StoredScene AddScene(const v1::Scene& scene, const std::string& field = "scene");
+  /// Stores a scene made on the server (UpdateScene) under its content id `id`. When `id` is
+  /// stored already, keeps and returns the stored scene (same id, same content).
+  StoredScene PutScene(const std::string& id, std::shared_ptr<const Scene> scene);
   /// \throws Error(kNotFound) telling the client to re-send the robot/scene inline.
   StoredRobot FindRobot(const std::string& id) const;
   StoredScene FindScene(const std::string& id) const;
