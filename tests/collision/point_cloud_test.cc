@@ -1,8 +1,13 @@
 // Scene::InsertPointCloud: ray-casting insertion into a copy of a scene's OctoMap (or a new map),
 // world -> map frame, the old scene unchanged, validation messages, and the effect on the
-// collision checker.
+// collision checker. ExampleMaps: the mobile-robot and drone maps in examples/scenes keep their
+// documented start/goal positions free and connected.
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
+#include <deque>
 #include <limits>
 #include <memory>
 #include <string>
@@ -260,6 +265,221 @@ TEST(PointCloud, PointsOnTheArmPutAValidStartInCollision) {
   wall.sensor_origin = Eigen::Vector3d(0.0, 0.0, 1.5);
   const auto walled = std::make_shared<const Scene>(empty->InsertPointCloud(wall));
   EXPECT_TRUE(CollisionChecker(robot, walled).IsValid(ready));
+}
+
+// --- Example maps for mobile robots and drones (examples/scenes/README.md) ---------------------
+
+/// The occupied finest voxels of a map with an identity pose, as centres.
+std::vector<Eigen::Vector3d> OccupiedVoxels(const octomap::OcTree& tree) {
+  std::vector<Eigen::Vector3d> out;
+  const double res = tree.getResolution();
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    const int n = static_cast<int>(std::lround(it.getSize() / res));
+    const Eigen::Vector3d corner = Eigen::Vector3d(it.getX(), it.getY(), it.getZ()) -
+                                   Eigen::Vector3d::Constant(0.5 * it.getSize() - 0.5 * res);
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        for (int k = 0; k < n; ++k) out.push_back(corner + res * Eigen::Vector3d(i, j, k));
+      }
+    }
+  }
+  return out;
+}
+
+/// Distance from `p` to the nearest occupied voxel (its cube, not its centre) [m].
+double Clearance(const std::vector<Eigen::Vector3d>& voxels, double res, const Eigen::Vector3d& p) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector3d& v : voxels) {
+    best = std::min(best, ((p - v).cwiseAbs() - Eigen::Vector3d::Constant(0.5 * res)).cwiseMax(0.0).norm());
+  }
+  return best;
+}
+
+/// A grid of cells (the map's voxels) over [lo, hi] whose centres lie farther than `radius`
+/// from every occupied voxel cube; BFS over 6-neighbours (4 when the grid is one cell tall).
+class FreeSpace {
+ public:
+  FreeSpace(const std::vector<Eigen::Vector3d>& voxels, double res, const Eigen::Vector3d& lo,
+            const Eigen::Vector3d& hi, double radius)
+      : res_(res), lo_(lo) {
+    for (int a = 0; a < 3; ++a) n_[a] = std::max(1, static_cast<int>(std::lround((hi[a] - lo[a]) / res)));
+    blocked_.assign(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2], 0);
+    const int reach = static_cast<int>(std::ceil(radius / res)) + 1;
+    for (const Eigen::Vector3d& v : voxels) {
+      int c[3];
+      for (int a = 0; a < 3; ++a) c[a] = static_cast<int>(std::floor((v[a] - lo_[a]) / res));
+      int from[3], to[3];
+      for (int a = 0; a < 3; ++a) {
+        from[a] = std::max(0, c[a] - reach);
+        to[a] = std::min(n_[a] - 1, c[a] + reach);
+      }
+      for (int i = from[0]; i <= to[0]; ++i) {
+        for (int j = from[1]; j <= to[1]; ++j) {
+          for (int k = from[2]; k <= to[2]; ++k) {
+            const Eigen::Vector3d d = ((Centre(i, j, k) - v).cwiseAbs() - Eigen::Vector3d::Constant(0.5 * res));
+            if (d.cwiseMax(0.0).norm() <= radius) blocked_[Index(i, j, k)] = 1;
+          }
+        }
+      }
+    }
+  }
+  /// Blocks every cell whose centre is inside the box [a, b].
+  void Block(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    for (int i = 0; i < n_[0]; ++i) {
+      for (int j = 0; j < n_[1]; ++j) {
+        for (int k = 0; k < n_[2]; ++k) {
+          const Eigen::Vector3d c = Centre(i, j, k);
+          if ((c.array() >= a.array()).all() && (c.array() <= b.array()).all()) blocked_[Index(i, j, k)] = 1;
+        }
+      }
+    }
+  }
+  bool Free(const Eigen::Vector3d& p) const {
+    const auto c = Cell(p);
+    return Inside(c[0], c[1], c[2]) && !blocked_[Index(c[0], c[1], c[2])];
+  }
+  /// The cells reachable from `start` (0 = not reached).
+  std::vector<char> Reach(const Eigen::Vector3d& start) const {
+    std::vector<char> seen(blocked_.size(), 0);
+    if (!Free(start)) return seen;
+    const auto s = Cell(start);
+    std::deque<std::array<int, 3>> queue{{s[0], s[1], s[2]}};
+    seen[Index(s[0], s[1], s[2])] = 1;
+    static const int kSteps[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    while (!queue.empty()) {
+      const auto c = queue.front();
+      queue.pop_front();
+      for (const auto& d : kSteps) {
+        const int i = c[0] + d[0], j = c[1] + d[1], k = c[2] + d[2];
+        if (!Inside(i, j, k) || blocked_[Index(i, j, k)] || seen[Index(i, j, k)]) continue;
+        seen[Index(i, j, k)] = 1;
+        queue.push_back({i, j, k});
+      }
+    }
+    return seen;
+  }
+  bool Connected(const std::vector<char>& reach, const Eigen::Vector3d& p) const {
+    const auto c = Cell(p);
+    return Inside(c[0], c[1], c[2]) && reach[Index(c[0], c[1], c[2])];
+  }
+
+ private:
+  std::array<int, 3> Cell(const Eigen::Vector3d& p) const {
+    std::array<int, 3> c;
+    for (int a = 0; a < 3; ++a) c[a] = n_[a] == 1 ? 0 : static_cast<int>(std::floor((p[a] - lo_[a]) / res_));
+    return c;
+  }
+  Eigen::Vector3d Centre(int i, int j, int k) const {
+    Eigen::Vector3d c = lo_ + res_ * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
+    if (n_[2] == 1) c.z() = lo_.z();
+    return c;
+  }
+  bool Inside(int i, int j, int k) const { return i >= 0 && j >= 0 && k >= 0 && i < n_[0] && j < n_[1] && k < n_[2]; }
+  std::size_t Index(int i, int j, int k) const {
+    return (static_cast<std::size_t>(k) * n_[1] + j) * n_[0] + i;
+  }
+  double res_;
+  Eigen::Vector3d lo_;
+  int n_[3];
+  std::vector<char> blocked_;
+};
+
+struct ExampleMap {
+  std::vector<Eigen::Vector3d> voxels;
+  double resolution = 0.0;
+};
+
+ExampleMap LoadExampleMap(const std::string& name, double resolution) {
+  const auto scene = test::LoadScene("scenes/" + name + "_octomap.json");
+  EXPECT_EQ(scene->occupancy_maps().size(), 1u);
+  EXPECT_TRUE(scene->objects().empty());
+  const OccupancyMap& map = scene->occupancy_maps().at(0);
+  EXPECT_EQ(map.name, name);
+  EXPECT_TRUE(map.pose.isApprox(Eigen::Isometry3d::Identity()));
+  EXPECT_DOUBLE_EQ(map.tree->getResolution(), resolution);
+  return {OccupiedVoxels(*map.tree), map.tree->getResolution()};
+}
+
+// Mobile bases: the body spans z 0.05..0.45 (examples/robots/mobile_base.json); a position is
+// checked at z = 0.25 against the walls (all taller than 0.45 m, so this is the planar distance).
+constexpr double kBaseHeight = 0.25;
+constexpr double kMargin = 0.3;  // [m] clearance every documented start/goal keeps
+
+TEST(ExampleMaps, MazeCorridorsAdmitARoundBaseAndTheDocumentedStartGoalAreFree) {
+  const ExampleMap maze = LoadExampleMap("maze", 0.05);
+  const Eigen::Vector3d start(0.7, 0.7, kBaseHeight), goal(7.3, 7.3, kBaseHeight);
+  for (const Eigen::Vector3d& p : {start, goal}) {
+    const double clearance = Clearance(maze.voxels, maze.resolution, p);
+    EXPECT_GT(clearance, kMargin) << p.transpose();
+    std::printf("maze (%.2f, %.2f): clearance %.3f m\n", p.x(), p.y(), clearance);
+  }
+  // Planar free space of a round base of radius 0.3 at the base's height: every cell centre
+  // of the 6 x 6 maze (every corridor, dead ends included) is reachable from the start.
+  const FreeSpace space(maze.voxels, maze.resolution, Eigen::Vector3d(0, 0, kBaseHeight),
+                        Eigen::Vector3d(8, 8, kBaseHeight), 0.3);
+  const auto reach = space.Reach(start);
+  const double lines[] = {0.1, 1.3, 2.7, 3.9, 5.3, 6.7, 7.9};  // wall centre lines (maze.json)
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j < 6; ++j) {
+      const Eigen::Vector3d centre(0.5 * (lines[i] + lines[i + 1]), 0.5 * (lines[j] + lines[j + 1]), kBaseHeight);
+      EXPECT_TRUE(space.Connected(reach, centre)) << "maze cell " << i << ", " << j;
+    }
+  }
+  // The straight line is blocked (the path needs turns).
+  bool blocked = false;
+  for (double t = 0.0; t <= 1.0; t += 0.001) blocked = blocked || !space.Free(start + t * (goal - start));
+  EXPECT_TRUE(blocked);
+}
+
+TEST(ExampleMaps, OfficeCorridorReachesTheRoomGoalThroughADoor) {
+  const ExampleMap office = LoadExampleMap("office", 0.05);
+  const Eigen::Vector3d start(1.0, 4.0, kBaseHeight), goal(10.5, 1.5, kBaseHeight);
+  for (const Eigen::Vector3d& p : {start, goal}) {
+    const double clearance = Clearance(office.voxels, office.resolution, p);
+    EXPECT_GT(clearance, kMargin) << p.transpose();
+    std::printf("office (%.2f, %.2f): clearance %.3f m\n", p.x(), p.y(), clearance);
+  }
+  // Nothing but the door's own wall lies within 1.0 m of a door gap (x0..x1 on the line y).
+  struct Door {
+    double x0, x1, y;
+  };
+  for (const Door& door : {Door{2.5, 3.5, 3.1}, Door{8.0, 9.0, 3.1}, Door{1.5, 2.5, 4.9}, Door{9.0, 10.0, 4.9}}) {
+    int near = 0;
+    for (const Eigen::Vector3d& v : office.voxels) {
+      const double dx = std::max({door.x0 - v.x(), v.x() - door.x1, 0.0});
+      if (std::hypot(dx, v.y() - door.y) < 1.0 && std::abs(v.y() - door.y) > 0.1) ++near;
+    }
+    EXPECT_EQ(near, 0) << "door at x " << door.x0 << ".." << door.x1 << ", y " << door.y;
+  }
+  // The mobile base turning in place sweeps a disc of radius 0.35: still connected.
+  FreeSpace space(office.voxels, office.resolution, Eigen::Vector3d(0, 0, kBaseHeight),
+                  Eigen::Vector3d(12, 8, kBaseHeight), 0.35);
+  EXPECT_TRUE(space.Connected(space.Reach(start), goal));
+  // Every door (1.0 m gap) is passable for that disc: each room's centre is reachable.
+  for (const Eigen::Vector3d& room : {Eigen::Vector3d(3.0, 2.2, kBaseHeight), Eigen::Vector3d(9.5, 2.0, kBaseHeight),
+                                      Eigen::Vector3d(2.0, 5.8, kBaseHeight), Eigen::Vector3d(9.5, 5.8, kBaseHeight)}) {
+    EXPECT_TRUE(space.Connected(space.Reach(start), room)) << room.transpose();
+  }
+  // Closing the south-east room's door disconnects the goal.
+  space.Block(Eigen::Vector3d(7.9, 2.9, 0), Eigen::Vector3d(9.1, 3.3, 1));
+  EXPECT_FALSE(space.Connected(space.Reach(start), goal));
+}
+
+TEST(ExampleMaps, DroneCourseIsCrossedOnlyThroughTheWindow) {
+  const ExampleMap course = LoadExampleMap("drone_course", 0.1);
+  const Eigen::Vector3d start(1.0, 5.0, 1.5), goal(9.0, 5.0, 2.5);
+  for (const Eigen::Vector3d& p : {start, goal}) {
+    const double clearance = Clearance(course.voxels, course.resolution, p);
+    EXPECT_GT(clearance, kMargin) << p.transpose();
+    std::printf("drone_course (%.2f, %.2f, %.2f): clearance %.3f m\n", p.x(), p.y(), p.z(), clearance);
+  }
+  // The drone's body fits in a sphere of radius 0.33 (examples/robots/drone.json); its
+  // workspace keeps z in [0.3, 3.7].
+  FreeSpace space(course.voxels, course.resolution, Eigen::Vector3d(0, 0, 0.3), Eigen::Vector3d(10, 10, 3.7), 0.33);
+  EXPECT_TRUE(space.Connected(space.Reach(start), goal));
+  space.Block(Eigen::Vector3d(4.5, 4.3, 1.3), Eigen::Vector3d(5.5, 5.7, 2.7));  // close the window
+  EXPECT_FALSE(space.Connected(space.Reach(start), goal));
 }
 
 }  // namespace
