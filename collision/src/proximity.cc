@@ -1,1 +1,245 @@
 #include "chasles/collision/proximity.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include <fcl/fcl.h>
+#include <fcl/geometry/octree/octree.h>
+#include <octomap/OcTree.h>
+
+#include "chasles/robot/error.h"
+
+// Design notes
+// ------------
+// * Every query calls the geometry+transform overload of fcl::distance, which builds its
+//   traversal on the stack over shared, immutable geometry: nothing is mutated, so one instance
+//   serves all threads (as CollisionChecker's FCL path).
+// * Each pair is pruned by bounding spheres against the best distance so far (starting at
+//   max_distance), and the DistanceResult starts at that bound, so an octree traversal skips
+//   every voxel that cannot be nearer.
+// * Order of the nearest points: FCL puts them in the order of the objects it actually
+//   traverses. An occupancy map is passed first (FCL's octree–shape traversal reports the voxel
+//   point first whichever order it is called in); FCL swaps a (shape, mesh) call into
+//   (mesh, shape) without swapping the points back. Pair() undoes both, and for mesh pairs
+//   also FCL 0.7's mixed frames (see there).
+// * Overlap: FCL reports a negative or implementation-defined distance without meaningful
+//   points; the query reports 0 and takes a contact point from fcl::collide.
+
+namespace chasles {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+struct Geom {
+  std::shared_ptr<fcl::CollisionGeometryd> geom;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // bounding-sphere centre, own frame
+  double radius = 0.0;
+};
+
+Geom MakeGeom(const Shape& s) {
+  Geom g;
+  switch (s.type) {
+    case ShapeType::kSphere:
+      g.geom = std::make_shared<fcl::Sphered>(s.radius);
+      break;
+    case ShapeType::kBox:
+      g.geom = std::make_shared<fcl::Boxd>(s.size.x(), s.size.y(), s.size.z());
+      break;
+    case ShapeType::kCylinder:
+      g.geom = std::make_shared<fcl::Cylinderd>(s.radius, s.length);
+      break;
+    case ShapeType::kCapsule:
+      g.geom = std::make_shared<fcl::Capsuled>(s.radius, s.length);
+      break;
+    case ShapeType::kMesh: {
+      auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
+      std::vector<fcl::Vector3d> vertices(s.mesh->vertices.begin(), s.mesh->vertices.end());
+      std::vector<fcl::Triangle> triangles;
+      triangles.reserve(s.mesh->triangles.size());
+      for (const Eigen::Vector3i& t : s.mesh->triangles) triangles.emplace_back(t[0], t[1], t[2]);
+      model->beginModel(static_cast<int>(triangles.size()), static_cast<int>(vertices.size()));
+      model->addSubModel(vertices, triangles);
+      model->endModel();
+      g.geom = model;
+      break;
+    }
+  }
+  g.geom->computeLocalAABB();
+  g.center = g.geom->aabb_center;
+  g.radius = g.geom->aabb_radius;
+  return g;
+}
+
+struct LinkShape {
+  Geom g;
+  Eigen::Isometry3d local;  // shape pose in the link frame
+};
+
+struct Obstacle {
+  std::string name;
+  int index = -1;
+  Geom g;
+  fcl::Transform3d tf;
+  Eigen::Vector3d center;  // bounding centre, world
+  double radius = 0.0;
+  bool octree = false;
+};
+
+}  // namespace
+
+struct ObstacleProximity::Impl {
+  std::vector<std::vector<LinkShape>> link_shapes;  // parallel to links_
+  std::vector<Obstacle> obstacles;
+
+  /// Distance from one placed link shape to one obstacle, if below `bound`: fills d and the
+  /// points (link, obstacle) and returns true.
+  bool Pair(const LinkShape& s, const fcl::Transform3d& tf, const Obstacle& o, double bound, double* d,
+            Eigen::Vector3d* p_link, Eigen::Vector3d* p_obstacle) const {
+    const fcl::CollisionGeometryd* a = o.octree ? o.g.geom.get() : s.g.geom.get();
+    const fcl::CollisionGeometryd* b = o.octree ? s.g.geom.get() : o.g.geom.get();
+    const fcl::Transform3d& ta = o.octree ? o.tf : tf;
+    const fcl::Transform3d& tb = o.octree ? tf : o.tf;
+    // Points come back in the order FCL traversed the pair (see the design notes).
+    const bool swapped = a->getObjectType() == fcl::OT_GEOM && b->getObjectType() == fcl::OT_BVH;
+    const bool link_first = o.octree ? false : !swapped;
+
+    fcl::DistanceRequestd request(/*enable_nearest_points=*/true);
+    fcl::DistanceResultd result(bound);
+    fcl::distance(a, ta, b, tb, request, result);
+    if (result.o1 == nullptr || !(result.min_distance < bound)) return false;
+    if (result.min_distance > 0.0) {
+      *d = result.min_distance;
+      *p_link = link_first ? result.nearest_points[0] : result.nearest_points[1];
+      *p_obstacle = link_first ? result.nearest_points[1] : result.nearest_points[0];
+      if (a->getObjectType() == fcl::OT_BVH || b->getObjectType() == fcl::OT_BVH) {
+        // Mesh pairs: some of FCL 0.7's shape–triangle routines return each point in its own
+        // object's frame, others in the world frame. Keep the reading whose points are `d` apart.
+        const Eigen::Vector3d local_link = tf * *p_link, local_obstacle = o.tf * *p_obstacle;
+        const double world_error = std::abs((*p_link - *p_obstacle).norm() - *d);
+        const double local_error = std::abs((local_link - local_obstacle).norm() - *d);
+        if (local_error < world_error) {
+          *p_link = local_link;
+          *p_obstacle = local_obstacle;
+        }
+      }
+      return true;
+    }
+    // Contact or overlap: distance 0 at a contact point.
+    *d = 0.0;
+    fcl::CollisionRequestd creq(1, /*enable_contact=*/true);
+    fcl::CollisionResultd cres;
+    fcl::collide(a, ta, b, tb, creq, cres);
+    if (cres.numContacts() > 0) {
+      *p_link = cres.getContact(0).pos;
+      *p_obstacle = cres.getContact(0).pos;
+    } else {  // touching within FCL's tolerances: no contact reported
+      *p_link = tf * s.g.center;
+      *p_obstacle = o.center;
+    }
+    return true;
+  }
+};
+
+ObstacleProximity::ObstacleProximity(std::shared_ptr<const CollisionChecker> checker)
+    : ObstacleProximity(checker ? checker->robot_ptr() : nullptr,
+                        checker ? std::shared_ptr<const Scene>(checker, &checker->scene()) : nullptr) {
+  if (!checker) ThrowInvalid("obstacle proximity: collision checker is null");
+  checker_ = std::move(checker);
+}
+
+ObstacleProximity::ObstacleProximity(std::shared_ptr<const RobotModel> robot, std::shared_ptr<const Scene> scene)
+    : robot_(std::move(robot)), scene_(std::move(scene)), impl_(std::make_unique<Impl>()) {
+  if (!robot_) ThrowInvalid("obstacle proximity: robot is null");
+  if (!scene_) scene_ = std::make_shared<Scene>();
+  Impl& m = *impl_;
+  for (int l = 0; l < robot_->num_links(); ++l) {
+    const auto& shapes = robot_->links()[l].collision;
+    if (shapes.empty()) continue;
+    links_.push_back(l);
+    std::vector<LinkShape> placed;
+    for (const Shape& s : shapes) placed.push_back({MakeGeom(s), s.pose});
+    m.link_shapes.push_back(std::move(placed));
+  }
+  int index = 0;
+  for (const SceneObject& o : scene_->objects()) {
+    Obstacle ob;
+    ob.name = o.name;
+    ob.index = index++;
+    ob.g = MakeGeom(o.shape);
+    ob.tf = o.shape.pose;
+    ob.center = o.shape.pose * ob.g.center;
+    ob.radius = ob.g.radius;
+    m.obstacles.push_back(std::move(ob));
+  }
+  for (const OccupancyMap& map : scene_->occupancy_maps()) {
+    const int map_index = index++;
+    // Bound the occupied leaves only (the tree's root box is far larger).
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = Eigen::Vector3d::Constant(-kInf);
+    for (auto it = map.tree->begin_leafs(), end = map.tree->end_leafs(); it != end; ++it) {
+      if (!map.tree->isNodeOccupied(*it)) continue;
+      const double h = 0.5 * it.getSize();
+      const Eigen::Vector3d c(it.getX(), it.getY(), it.getZ());
+      lo = lo.cwiseMin(c - Eigen::Vector3d::Constant(h));
+      hi = hi.cwiseMax(c + Eigen::Vector3d::Constant(h));
+    }
+    if (!(lo.array() <= hi.array()).all()) continue;  // nothing occupied: no obstacle
+    Obstacle ob;
+    ob.name = map.name;
+    ob.index = map_index;
+    ob.octree = true;
+    ob.g.geom = std::make_shared<fcl::OcTreed>(map.tree);
+    ob.tf = map.pose;
+    ob.center = map.pose * (0.5 * (lo + hi));
+    ob.radius = 0.5 * (hi - lo).norm();
+    m.obstacles.push_back(std::move(ob));
+  }
+}
+
+ObstacleProximity::~ObstacleProximity() = default;
+
+void ObstacleProximity::Query(const Eigen::VectorXd& q, double max_distance, std::vector<LinkProximity>* out) const {
+  if (q.size() != robot_->num_dofs()) {
+    ThrowInvalid("proximity query: q has " + std::to_string(q.size()) + " values, robot '" + robot_->name() +
+                 "' has " + std::to_string(robot_->num_dofs()) + " joints");
+  }
+  if (!(max_distance > 0.0)) {
+    ThrowInvalid("proximity query: max_distance = " + FormatNumber(max_distance) + " must be > 0");
+  }
+  std::vector<Eigen::Isometry3d> poses;
+  robot_->ForwardKinematics(q, &poses);
+  const Impl& m = *impl_;
+  out->assign(links_.size(), LinkProximity{});
+  for (std::size_t i = 0; i < links_.size(); ++i) {
+    LinkProximity& best = (*out)[i];
+    best.link = links_[i];
+    double bound = max_distance;
+    for (const LinkShape& s : m.link_shapes[i]) {
+      const Eigen::Isometry3d pose = poses[links_[i]] * s.local;
+      const fcl::Transform3d& tf = pose;
+      const Eigen::Vector3d c = pose * s.g.center;
+      for (const Obstacle& o : m.obstacles) {
+        if ((c - o.center).norm() - s.g.radius - o.radius >= bound) continue;
+        double d;
+        Eigen::Vector3d p_link, p_obstacle;
+        if (!m.Pair(s, tf, o, bound, &d, &p_link, &p_obstacle)) continue;
+        bound = d;
+        best.obstacle = o.index;
+        best.obstacle_name = o.name;
+        best.distance = d;
+        best.link_point = p_link;
+        best.obstacle_point = p_obstacle;
+        if (d <= 0.0) break;
+      }
+      if (bound <= 0.0) break;
+    }
+  }
+}
+
+std::vector<LinkProximity> ObstacleProximity::Query(const Eigen::VectorXd& q, double max_distance) const {
+  std::vector<LinkProximity> out;
+  Query(q, max_distance, &out);
+  return out;
+}
+
+}  // namespace chasles
