@@ -319,6 +319,45 @@ def make_ik_request(name, robot, link, expected, extra):
     return request
 
 
+# Mobile robots (issue 4) on the OctoMap maps, one request per planner family.
+# name: (robot file in ../robots, workspace (min, max) override or None, scene, start, goal, planner).
+MAZE = ((0.0, 0.0, 0.0), (8.0, 8.0, 0.0))
+MAZE_START, MAZE_GOAL = [0.7, 0.7, 0.0], [7.3, 7.3, 0.0]
+OFFICE_START, OFFICE_GOAL = [1.0, 4.0, 0.0], [10.5, 1.5, 0.0]
+DRONE_START, DRONE_GOAL = [1.0, 5.0, 1.5, 0.0, 0.0, 0.0], [9.0, 5.0, 2.5, 0.0, 0.0, 0.0]
+MOBILE_PROBLEMS = {
+    "maze_astar": ("mobile_base", MAZE, "maze_octomap", MAZE_START, MAZE_GOAL, "astar"),
+    "maze_wavefront": ("mobile_base", MAZE, "maze_octomap", MAZE_START, MAZE_GOAL, "wavefront"),
+    "maze_rrt_connect": ("mobile_base", MAZE, "maze_octomap", MAZE_START, MAZE_GOAL, "rrt_connect"),
+    "office_astar": ("mobile_base", None, "office_octomap", OFFICE_START, OFFICE_GOAL, "astar"),
+    "office_wavefront": ("mobile_base", None, "office_octomap", OFFICE_START, OFFICE_GOAL, "wavefront"),
+    "office_rrt_connect": ("mobile_base", None, "office_octomap", OFFICE_START, OFFICE_GOAL, "rrt_connect"),
+    "office_car": ("car", None, "office_octomap", [1.0, 4.0, 0.0], [10.5, 4.0, 3.14159], "rrt_connect"),
+    "drone_astar": ("drone", None, "drone_course_octomap", DRONE_START, DRONE_GOAL, "astar"),
+    "drone_potential_field": ("drone", None, "drone_course_octomap", DRONE_START, DRONE_GOAL, "potential_field"),
+    "drone_wavefront": ("drone", None, "drone_course_octomap", DRONE_START, DRONE_GOAL, "wavefront"),
+    "drone_rrt_connect": ("drone", None, "drone_course_octomap", DRONE_START, DRONE_GOAL, "rrt_connect"),
+}
+
+
+def make_mobile_request(name, robot, workspace, scene, start, goal, planner):
+    mobile = json.loads(read(f"robots/{robot}.json"))
+    if workspace is not None:
+        lo, hi = workspace
+        mobile["workspace_min"] = dict(zip("xyz", lo))
+        mobile["workspace_max"] = dict(zip("xyz", hi))
+    return {
+        "requestId": name,
+        "robot": {"mobile": mobile},
+        "scene": json.loads(read(f"scenes/{scene}.json")),
+        "start": {"positions": start},
+        "goal": {"positions": goal},
+        "planner": {"plannerId": planner},
+        "timeBudget": 5.0,
+        "seed": "7",
+    }
+
+
 def write(name, message):
     path = os.path.join(HERE, f"{name}.json")
     with open(path, "w", encoding="utf-8") as f:
@@ -338,6 +377,8 @@ def main():
         write(name, make_pose_request(name, *problem))
     for name, problem in sorted(IK_PROBLEMS.items()):
         write(name, make_ik_request(name, *problem))
+    for name, problem in sorted(MOBILE_PROBLEMS.items()):
+        write(name, make_mobile_request(name, *problem))
 
 
 if __name__ == "__main__":

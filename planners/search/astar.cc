@@ -437,9 +437,13 @@ class AstarPlanner : public Planner {
     const double resolution = params.at("resolution");
     const double cells = params.at("cells_per_joint");
     settings_.resolution.resize(n);
+    // Default: one spacing for every coordinate, from the widest range. Per-joint spacings would
+    // cut a narrow coordinate (a drone's ±0.35 rad tilt) into steps so cheap that the search
+    // floods them.
+    const double widest = (robot.upper_limits() - robot.lower_limits()).maxCoeff();
     for (int i = 0; i < n; ++i) {
       const double range = robot.upper_limits()[i] - robot.lower_limits()[i];
-      double res = resolution > 0.0 ? resolution : range / cells;
+      double res = resolution > 0.0 ? resolution : widest / cells;
       if (!(res > 0.0)) res = 1.0;  // a joint without range: only the start's coordinate
       if (range / res > CSpaceLattice::kMaxCellsPerJoint) {
         ThrowInvalid("planner.parameters['resolution'] = " + FormatNumber(resolution) + " gives " +
@@ -521,9 +525,9 @@ PlannerSpec AstarSpec() {
   spec.optimizing = false;
   spec.parameters = {
       {"resolution",
-       "lattice spacing of every joint [rad] or [m]; 0 = (upper - lower limit) / cells_per_joint per joint",
+       "lattice spacing of every joint [rad] or [m]; 0 = the widest joint range / cells_per_joint",
        ParameterType::kDouble, 0.0, 0.0, 100.0},
-      {"cells_per_joint", "lattice steps across each joint's range when resolution = 0 [-]", ParameterType::kInt,
+      {"cells_per_joint", "lattice steps across the widest joint range when resolution = 0 [-]", ParameterType::kInt,
        32.0, 2.0, 1e6},
       {"connectivity",
        "neighbours: 0 = automatic (full for at most 3 joints, axis moves otherwise), 1 = axis moves (2n), "

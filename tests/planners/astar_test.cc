@@ -260,7 +260,7 @@ TEST(AstarTest, EmptyPlaneAxisMovesCostIsTheManhattanDistance) {
   }
 }
 
-TEST(AstarTest, DefaultResolutionDividesEachJointRangeIntoCellsPerJoint) {
+TEST(AstarTest, DefaultResolutionDividesTheWidestJointRangeIntoCellsPerJoint) {
   const auto checker = PlaneChecker({});
   // 10 m / 20 cells = 0.5 m; axis moves from (1, 1) to (4, 2.5): Manhattan distance on the lattice.
   const Eigen::Vector2d start(1.0, 1.0), goal(4.0, 2.5);
