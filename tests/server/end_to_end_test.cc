@@ -14,9 +14,40 @@ namespace chasles::testing {
 namespace {
 
 const std::vector<std::string> kRequests = {
-    "panda_table",     "panda_shelf",     "panda_cage",      "panda_shelf_octomap",
-    "ur5_table",       "ur5_shelf",       "ur5_cage",        "planar_2r_table",
-    "planar_2r_shelf", "planar_2r_cage",  "planar_2r_posts"};
+    "panda_table",     "panda_shelf",      "panda_cage",         "panda_shelf_octomap",
+    "ur5_table",       "ur5_shelf",        "ur5_cage",           "planar_2r_table",
+    "planar_2r_shelf", "planar_2r_cage",   "planar_2r_posts",    "maze_astar",
+    "maze_wavefront",  "maze_rrt_connect", "office_astar",       "office_wavefront",
+    "office_rrt_connect", "office_car",    "drone_astar",        "drone_potential_field",
+    "drone_wavefront", "drone_rrt_connect"};
+
+constexpr double kPi = 3.14159265358979323846;
+
+bool IsCarRequest(const v1::PlanRequest& request) {
+  return request.robot().has_mobile() && (request.robot().mobile().kind() == v1::MobileRobot::DUBINS_CAR ||
+                                          request.robot().mobile().kind() == v1::MobileRobot::REEDS_SHEPP_CAR);
+}
+
+/// A car's heading is unwrapped along its path: it ends at the goal heading modulo 2π.
+void ExpectAtGoal(const v1::PlanRequest& request, int joint, double value) {
+  const double goal = request.goal().positions(joint);
+  if (IsCarRequest(request) && joint == 2) {
+    EXPECT_NEAR(std::remainder(value - goal, 2 * kPi), 0.0, 1e-6) << "heading";
+  } else {
+    EXPECT_NEAR(value, goal, 1e-6) << "joint " << joint;
+  }
+}
+
+/// "arm", or the mobile kind as ListPlanners spells it.
+std::string RequestKind(const v1::PlanRequest& request) {
+  if (!request.robot().has_mobile()) return "arm";
+  switch (request.robot().mobile().kind()) {
+    case v1::MobileRobot::DUBINS_CAR: return "dubins_car";
+    case v1::MobileRobot::REEDS_SHEPP_CAR: return "reeds_shepp_car";
+    case v1::MobileRobot::FREE_FLYER: return "free_flyer";
+    default: return "planar";
+  }
+}
 
 void ExpectVerifiedTrajectory(const v1::PlanRequest& request, const v1::PlanResponse& response) {
   ASSERT_EQ(response.outcome(), v1::SUCCESS) << v1::PlanOutcome_Name(response.outcome()) << ": " << response.message();
@@ -33,7 +64,7 @@ void ExpectVerifiedTrajectory(const v1::PlanRequest& request, const v1::PlanResp
     ASSERT_EQ(first.positions_size(), dofs);
     ASSERT_EQ(last.positions_size(), dofs);
     EXPECT_NEAR(first.positions(j), request.start().positions(j), 1e-6) << "joint " << j;
-    EXPECT_NEAR(last.positions(j), request.goal().positions(j), 1e-6) << "joint " << j;
+    ExpectAtGoal(request, j, last.positions(j));
   }
   double previous = -1.0;
   for (const v1::TrajectoryPoint& point : trajectory.points()) {
@@ -46,7 +77,7 @@ void ExpectVerifiedTrajectory(const v1::PlanRequest& request, const v1::PlanResp
   ASSERT_GE(response.path_size(), 2);
   for (int j = 0; j < dofs; ++j) {
     EXPECT_NEAR(response.path(0).positions(j), request.start().positions(j), 1e-6);
-    EXPECT_NEAR(response.path(response.path_size() - 1).positions(j), request.goal().positions(j), 1e-6);
+    ExpectAtGoal(request, j, response.path(response.path_size() - 1).positions(j));
   }
   EXPECT_GT(response.verification().states_checked(), 0u);
   EXPECT_LE(response.verification().max_velocity_ratio(), 1.0 + 1e-9);
@@ -74,8 +105,9 @@ INSTANTIATE_TEST_SUITE_P(Examples, ExampleRequest, ::testing::ValuesIn(kRequests
                          [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
 
 // Every registered planner; EveryPlannerIsInTheMatrix keeps this list equal to ListPlanners.
-const std::vector<std::string> kPlanners = {"bit_star", "informed_rrt_star", "lazy_prm_star", "prm",
-                                            "prm_star", "rrt", "rrt_connect", "rrt_star"};
+const std::vector<std::string> kPlanners = {"astar", "bit_star", "informed_rrt_star", "lazy_prm_star",
+                                            "potential_field", "prm", "prm_star", "rrt",
+                                            "rrt_connect", "rrt_star", "wavefront"};
 
 TEST(EveryPlanner, EveryPlannerIsInTheMatrix) {
   LoopbackServer server;
@@ -88,19 +120,45 @@ TEST(EveryPlanner, EveryPlannerIsInTheMatrix) {
 
 class EveryPlannerOnEveryRequest : public SharedServerTest<::testing::TestWithParam<std::tuple<std::string, std::string>>> {};
 
+// Every planner on every request returns a verified trajectory, except where it says why not:
+// a planner refuses a robot kind it does not plan for (FAILED_PRECONDITION, as ListPlanners
+// tells), the wavefront refuses more than 3 moving coordinates, and the potential field may stop
+// in a local minimum — an outcome with no trajectory, never a wrong one.
 TEST_P(EveryPlannerOnEveryRequest, ReturnsAVerifiedTrajectory) {
   const auto& [problem, planner] = GetParam();
   v1::PlanRequest request = LoadRequest(problem);
   request.mutable_planner()->set_planner_id(planner);
+  request.mutable_planner()->clear_parameters();
   v1::ListPlannersResponse planners;
   ASSERT_TRUE(server_->ListPlanners(&planners).ok());
-  bool optimizing = false;
-  for (const v1::PlannerDescription& p : planners.planners()) optimizing |= p.id() == planner && p.optimizing();
-  // Anytime planners refine until the budget ends: keep it small.
-  request.set_time_budget(optimizing ? 0.5 : 3.0);
+  bool optimizing = false, kind_supported = false;
+  for (const v1::PlannerDescription& p : planners.planners()) {
+    if (p.id() != planner) continue;
+    optimizing = p.optimizing();
+    for (const std::string& kind : p.robot_kinds()) kind_supported |= kind == RequestKind(request);
+  }
+  // Anytime planners refine until the budget ends: keep it small (a car's curves cost more).
+  request.set_time_budget(optimizing ? (IsCarRequest(request) ? 2.0 : 0.5) : 5.0);
   v1::PlanResponse response;
   const grpc::Status status = server_->Plan(request, &response);
+  if (!kind_supported) {
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << status.error_message();
+    EXPECT_NE(status.error_message().find("does not plan for " + RequestKind(request) + " robots"), std::string::npos)
+        << status.error_message();
+    return;
+  }
+  if (planner == "wavefront" && status.error_code() == grpc::StatusCode::FAILED_PRECONDITION) {
+    EXPECT_NE(status.error_message().find("at most 3 moving coordinates"), std::string::npos) << status.error_message();
+    EXPECT_GT(request.start().positions_size(), 3);
+    return;
+  }
   ASSERT_TRUE(status.ok()) << status.error_message();
+  if (planner == "potential_field" && response.outcome() == v1::LOCAL_MINIMUM) {
+    EXPECT_EQ(response.trajectory().points_size(), 0);
+    EXPECT_EQ(response.path_size(), 0);
+    EXPECT_NE(response.message().find("local minimum"), std::string::npos) << response.message();
+    return;
+  }
   ExpectVerifiedTrajectory(request, response);
 }
 
