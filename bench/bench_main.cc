@@ -330,12 +330,27 @@ std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>> MakeFamilyQueries(const
   return out;
 }
 
+/// "astar[epsilon=2;max_nodes=1e6]" → ("astar", {epsilon: 2, max_nodes: 1e6}).
+std::pair<std::string, ParameterValues> ParsePlannerConfig(const std::string& text) {
+  const auto open = text.find('[');
+  if (open == std::string::npos) return {text, {}};
+  ParameterValues values;
+  std::stringstream ss(text.substr(open + 1, text.size() - open - 2));
+  std::string item;
+  while (std::getline(ss, item, ';')) {
+    const auto eq = item.find('=');
+    if (eq == std::string::npos) throw std::runtime_error("planner parameter '" + item + "' needs name=value");
+    values[item.substr(0, eq)] = std::stod(item.substr(eq + 1));
+  }
+  return {text.substr(0, open), values};
+}
+
 void BenchFamilies(const Options& options) {
   PlannerRegistry registry;
   RegisterDefaultPlanners(&registry);
   const PlanningPipeline pipeline(registry);
   std::vector<std::string> planners = options.planners;
-  if (planners.empty()) planners = {"rrt_connect", "rrt_star", "astar", "potential_field", "wavefront"};
+  if (planners.empty()) planners = {"rrt_connect", "rrt_star", "astar", "astar[epsilon=2]", "potential_field", "wavefront"};
   std::printf("\n## Planner families, %d seeded queries per problem whose straight line collides\n\n", options.queries);
   std::printf("Budget %.2g s per query (rrt_star, anytime: %.2g s). No shortcutting: the lengths are the planners' own "
               "paths (C-space length, [m] and [rad] summed as the configuration norm). Ratios are against rrt_connect on "
@@ -348,7 +363,8 @@ void BenchFamilies(const Options& options) {
     auto checker = std::make_shared<const CollisionChecker>(problem.robot, LoadScene(problem.scene));
     const auto queries = MakeFamilyQueries(*checker, options.queries, options.seed);
     double base_time = std::nan(""), base_length = std::nan("");
-    for (const std::string& id : planners) {
+    for (const std::string& config : planners) {
+      const auto [id, parameters] = ParsePlannerConfig(config);
       const bool optimizing = registry.Spec(id).optimizing;
       std::vector<double> plan_ms, length;
       int solved = 0, collide = 0;
@@ -359,6 +375,7 @@ void BenchFamilies(const Options& options) {
         query.start = queries[k].first;
         query.goal = queries[k].second;
         query.planner_id = id;
+        query.parameters = parameters;
         query.seed = options.seed + k;
         query.shortcut_attempts = -1;
         query.collision_resolution = options.resolution;
@@ -394,7 +411,7 @@ void BenchFamilies(const Options& options) {
       std::string other;
       for (const auto& [code, count] : failures) other += (other.empty() ? "" : ", ") + code + " " + std::to_string(count);
       if (collide > 0) other += (other.empty() ? "" : "; ") + std::to_string(collide) + " collide at the re-check";
-      std::printf("| %s | %s | %d/%zu | %.2f | %.2f | %.2f× | %.3f | %.2f× | %s |\n", name.c_str(), id.c_str(), solved,
+      std::printf("| %s | %s | %d/%zu | %.2f | %.2f | %.2f× | %.3f | %.2f× | %s |\n", name.c_str(), config.c_str(), solved,
                   queries.size(), t, Quantile(plan_ms, 0.95), t / base_time, l, l / base_length, other.c_str());
       std::fflush(stdout);
     }
