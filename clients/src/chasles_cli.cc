@@ -214,6 +214,9 @@ int Planners(const Options& options) {
   for (const v1::PlannerDescription& planner : response.planners()) {
     std::printf("%-20s %-10s %s\n", planner.id().c_str(), planner.optimizing() ? "yes" : "no",
                 planner.description().c_str());
+    std::string kinds;
+    for (const std::string& kind : planner.robot_kinds()) kinds += (kinds.empty() ? "" : ", ") + kind;
+    std::printf("    %-22s %s\n", "robot kinds", kinds.c_str());
     for (const v1::ParameterDescription& p : planner.parameters()) {
       const std::string range = p.type() == v1::ParameterDescription::BOOL
                                     ? "true/false"

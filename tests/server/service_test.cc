@@ -224,6 +224,7 @@ TEST(Cli, HealthPlannersPlanAndUploads) {
   EXPECT_EQ(planners.exit_code, 0) << planners.output;
   EXPECT_NE(planners.output.find("rrt_connect"), std::string::npos) << planners.output;
   EXPECT_NE(planners.output.find("default"), std::string::npos) << planners.output;
+  EXPECT_NE(planners.output.find("robot kinds            arm, planar, free_flyer\n"), std::string::npos) << planners.output;
 
   const std::string csv = ::testing::TempDir() + "/chasles_cli_panda_table.csv";
   CommandResult plan = RunCli(at + "plan " + ExamplePath("requests/panda_table.json") + " --out " + csv);
