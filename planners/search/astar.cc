@@ -441,12 +441,25 @@ class AstarPlanner : public Planner {
     // cut a narrow coordinate (a drone's ±0.35 rad tilt) into steps so cheap that the search
     // floods them.
     const double widest = (robot.upper_limits() - robot.lower_limits()).maxCoeff();
+    // Per-joint overrides `resolution[i]` (ResolveParameters checked their values).
+    for (const auto& [name, value] : params) {
+      if (name.rfind("resolution[", 0) != 0) continue;
+      const long index = std::stol(name.substr(11, name.size() - 12));
+      if (index >= n) {
+        ThrowInvalid("planner.parameters['" + name + "']: robot '" + robot.name() + "' has " + std::to_string(n) +
+                     " joints (indices 0.." + std::to_string(n - 1) + ") (planner '" + spec_.id + "')");
+      }
+    }
     for (int i = 0; i < n; ++i) {
       const double range = robot.upper_limits()[i] - robot.lower_limits()[i];
-      double res = resolution > 0.0 ? resolution : widest / cells;
+      const std::string key = "resolution[" + std::to_string(i) + "]";
+      const auto own = params.find(key);
+      const double requested = own != params.end() && own->second > 0.0 ? own->second : resolution;
+      const std::string field = own != params.end() && own->second > 0.0 ? key : std::string("resolution");
+      double res = requested > 0.0 ? requested : widest / cells;
       if (!(res > 0.0)) res = 1.0;  // a joint without range: only the start's coordinate
       if (range / res > CSpaceLattice::kMaxCellsPerJoint) {
-        ThrowInvalid("planner.parameters['resolution'] = " + FormatNumber(resolution) + " gives " +
+        ThrowInvalid("planner.parameters['" + field + "'] = " + FormatNumber(requested) + " gives " +
                      FormatShort(range / res) + " lattice steps across joint '" + robot.dof_names()[i] + "' ([" +
                      FormatNumber(robot.lower_limits()[i]) + ", " + FormatNumber(robot.upper_limits()[i]) +
                      "]); at most 2^30 (planner '" + spec_.id + "')");
@@ -525,8 +538,9 @@ PlannerSpec AstarSpec() {
   spec.optimizing = false;
   spec.parameters = {
       {"resolution",
-       "lattice spacing of every joint [rad] or [m]; 0 = the widest joint range / cells_per_joint",
-       ParameterType::kDouble, 0.0, 0.0, 100.0},
+       "lattice spacing of every joint [rad] or [m]; 0 = the widest joint range / cells_per_joint; "
+       "resolution[i] sets joint i's own spacing (0 = as the others)",
+       ParameterType::kDouble, 0.0, 0.0, 100.0, true},
       {"cells_per_joint", "lattice steps across the widest joint range when resolution = 0 [-]", ParameterType::kInt,
        32.0, 2.0, 1e6},
       {"connectivity",

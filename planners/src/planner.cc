@@ -38,6 +38,15 @@ ParameterValues ResolveParameters(const PlannerSpec& spec, const ParameterValues
   for (const auto& [name, value] : values) {
     const std::string field = "planner.parameters['" + name + "']";
     const ParameterSpec* p = spec.Find(name);
+    // `name[i]` of a per-joint parameter.
+    const auto bracket = name.find('[');
+    if (p == nullptr && bracket != std::string::npos && bracket > 0 && name.back() == ']') {
+      const ParameterSpec* base = spec.Find(name.substr(0, bracket));
+      const std::string index = name.substr(bracket + 1, name.size() - bracket - 2);
+      const bool digits = !index.empty() && index.size() <= 6 &&
+                          index.find_first_not_of("0123456789") == std::string::npos;
+      if (base != nullptr && base->per_joint && digits) p = base;
+    }
     if (p == nullptr) {
       std::string known;
       for (const auto& q : spec.parameters) known += (known.empty() ? "" : ", ") + q.name;

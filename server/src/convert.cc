@@ -696,6 +696,7 @@ void PlannerSpecToProto(const PlannerSpec& spec, v1::PlannerDescription* descrip
     out->set_default_value(param.default_value);
     out->set_min(param.min);
     out->set_max(param.max);
+    out->set_per_joint(param.per_joint);
   }
 }
 

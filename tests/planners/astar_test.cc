@@ -522,6 +522,39 @@ TEST(AstarTest, OutOfRangeParametersAreInvalidArguments) {
             "most 2^30 (planner 'astar')");
 }
 
+TEST(AstarTest, PerJointResolutionSetsEachJointsSpacing) {
+  const auto checker = PlaneChecker({});
+  // x every 0.5 m, y every 0.25 m (resolution[1] overrides resolution for joint 1), 8-connected:
+  // (1, 1) → (2.5, 2.5) is 3 diagonal steps (0.5, 0.25) and 3 steps of 0.25 in y. A uniform
+  // 0.5 m lattice would take 3 diagonals of 0.5·√2 (2.12) instead.
+  const Eigen::Vector2d start(1.0, 1.0), goal(2.5, 2.5);
+  const PlanningProblem p =
+      Problem(checker, start, goal, {{"resolution", 0.5}, {"resolution[1]", 0.25}, {"connectivity", 2}});
+  const PlannerResult r = Plan(p);
+  ExpectValidPath(r, p, goal);
+  EXPECT_NEAR(PathCost(r.path), 3 * std::sqrt(0.5 * 0.5 + 0.25 * 0.25) + 0.75, 1e-9);
+  for (const Eigen::VectorXd& q : r.path) {
+    const double kx = (q[0] - 1.0) / 0.5, ky = (q[1] - 1.0) / 0.25;
+    EXPECT_NEAR(kx, std::round(kx), 1e-9) << q.transpose();
+    EXPECT_NEAR(ky, std::round(ky), 1e-9) << q.transpose();
+  }
+}
+
+TEST(AstarTest, PerJointResolutionErrorsNameTheIndexedParameter) {
+  const auto checker = PlaneChecker({});
+  const Eigen::Vector2d start(1.0, 1.0), goal(2.0, 2.0);
+  EXPECT_EQ(SetupError(Problem(checker, start, goal, {{"resolution[2]", 0.1}}), ErrorCode::kInvalidArgument),
+            "planner.parameters['resolution[2]']: robot 'point' has 2 joints (indices 0..1) (planner 'astar')");
+  EXPECT_EQ(SetupError(Problem(checker, start, goal, {{"resolution[1]", -1}}), ErrorCode::kInvalidArgument),
+            "planner.parameters['resolution[1]'] = -1 must be within [0, 100] (planner 'astar')");
+  EXPECT_EQ(SetupError(Problem(checker, start, goal, {{"epsilon[1]", 2}}), ErrorCode::kInvalidArgument),
+            "planner.parameters['epsilon[1]'] is not a parameter of planner 'astar' (known: resolution, "
+            "cells_per_joint, connectivity, epsilon, max_nodes, max_expansions)");
+  EXPECT_EQ(SetupError(Problem(checker, start, goal, {{"resolution[1]", 1e-9}}), ErrorCode::kInvalidArgument),
+            "planner.parameters['resolution[1]'] = 1e-09 gives 1e+10 lattice steps across joint 'y' ([0, 10]); at "
+            "most 2^30 (planner 'astar')");
+}
+
 TEST(AstarTest, FullConnectivityWithSevenJointsIsAFailedPrecondition) {
   const auto checker = PandaWithBox();
   const Eigen::VectorXd q = Eigen::VectorXd::Zero(7);

@@ -27,6 +27,9 @@ struct ParameterSpec {
   double default_value = 0.0;
   double min = 0.0;  ///< inclusive
   double max = 0.0;  ///< inclusive
+  /// Also settable per joint as `name[i]` (i = configuration index), e.g. `resolution[3]`;
+  /// the planner checks i against the robot and lets `name[i]` override `name` for joint i.
+  bool per_joint = false;
 };
 
 struct PlannerSpec {
@@ -56,6 +59,8 @@ using ParameterValues = std::map<std::string, double>;
 ///   `planner.parameters['range'] = -1 must be within [0, 100] (planner 'rrt')`,
 ///   `planner.parameters['foo'] is not a parameter of planner 'rrt' (known: range, goal_bias)`,
 ///   `planner.parameters['max_nearest'] = 2.5 must be an integer`.
+/// Per-joint values (`resolution[3]` for a per_joint parameter) are checked against the same
+/// type and range and kept under their indexed name.
 ParameterValues ResolveParameters(const PlannerSpec& spec, const ParameterValues& values);
 
 /// Everything a planner needs for one query.
