@@ -38,7 +38,7 @@ StoredRobot ModelStore::FindRobot(const std::string& id) const {
   if (auto model = robots_.Get(id)) return {id, model};
   throw Error(ErrorCode::kNotFound, "robot_id '" + id +
                                         "' is not stored on this server (never uploaded here, or evicted); "
-                                        "re-send the robot inline in PlanRequest.robot or call UploadRobot again");
+                                        "re-send the robot inline (the request's robot field) or call UploadRobot again");
 }
 
 StoredScene ModelStore::FindScene(const std::string& id) const {
@@ -46,7 +46,7 @@ StoredScene ModelStore::FindScene(const std::string& id) const {
   if (auto scene = scenes_.Get(id)) return {id, scene};
   throw Error(ErrorCode::kNotFound, "scene_id '" + id +
                                         "' is not stored on this server (never uploaded here, or evicted); "
-                                        "re-send the scene inline in PlanRequest.scene or call UploadScene again");
+                                        "send the scene inline (the request's scene field) or call UploadScene again");
 }
 
 std::shared_ptr<const CollisionChecker> ModelStore::Checker(const StoredRobot& robot, const StoredScene& scene) {
