@@ -11,6 +11,7 @@
 #include <octomap/OcTree.h>
 
 #include "chasles/robot/error.h"
+#include "fcl_geometry.h"
 #include "occupancy_grid.h"
 
 // Design notes
@@ -204,13 +205,6 @@ struct SphereLink {
   double br;         // bounding-sphere radius (padding included)
 };
 
-/// An FCL collision geometry with its bounding sphere in its own frame.
-struct FclGeom {
-  std::shared_ptr<fcl::CollisionGeometryd> geom;
-  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // bounding centre, own frame
-  double radius = 0.0;
-};
-
 struct RobotShape {  // FCL path: one link shape
   int link;
   FclGeom g;
@@ -227,40 +221,6 @@ struct SceneGeom {  // an FCL scene object (world pose fixed)
   bool octree = false;
   int grid = -1;  // fast path: index into Impl::grids when this map is gridded
 };
-
-FclGeom MakeGeom(const Shape& s) {
-  FclGeom g;
-  switch (s.type) {
-    case ShapeType::kSphere:
-      g.geom = std::make_shared<fcl::Sphered>(s.radius);
-      break;
-    case ShapeType::kBox:
-      g.geom = std::make_shared<fcl::Boxd>(s.size.x(), s.size.y(), s.size.z());
-      break;
-    case ShapeType::kCylinder:
-      g.geom = std::make_shared<fcl::Cylinderd>(s.radius, s.length);
-      break;
-    case ShapeType::kCapsule:
-      g.geom = std::make_shared<fcl::Capsuled>(s.radius, s.length);
-      break;
-    case ShapeType::kMesh: {
-      auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
-      std::vector<fcl::Vector3d> vertices(s.mesh->vertices.begin(), s.mesh->vertices.end());
-      std::vector<fcl::Triangle> triangles;
-      triangles.reserve(s.mesh->triangles.size());
-      for (const Eigen::Vector3i& t : s.mesh->triangles) triangles.emplace_back(t[0], t[1], t[2]);
-      model->beginModel(static_cast<int>(triangles.size()), static_cast<int>(vertices.size()));
-      model->addSubModel(vertices, triangles);
-      model->endModel();
-      g.geom = model;
-      break;
-    }
-  }
-  g.geom->computeLocalAABB();
-  g.center = g.geom->aabb_center;
-  g.radius = g.geom->aabb_radius;
-  return g;
-}
 
 inline bool SpheresOverlap(const Eigen::Vector3d& c1, double r1, const Eigen::Vector3d& c2, double r2) {
   const double r = r1 + r2;
