@@ -23,6 +23,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "chasles/collision/collision_checker.h"
+#include "chasles/optimizers/shortcut.h"
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/planners/registry.h"
 #include "chasles/robot/dynamics.h"
@@ -169,6 +170,14 @@ void BenchChecks(const Options& options) {
 // ---------------------------------------------------------------------------------------------
 // Planning time per planner and scene over seeded random queries.
 
+/// True when some segment of `path` collides at a 0.001 re-check (finer than any planner uses).
+bool CollidesAtRecheck(const CollisionChecker& checker, const JointPath& path) {
+  for (size_t i = 0; i + 1 < path.size(); ++i) {
+    if (!checker.IsMotionValid(path[i], path[i + 1], 0.001)) return true;
+  }
+  return false;
+}
+
 std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>> MakeQueries(const CollisionChecker& checker, int n,
                                                                      std::uint64_t seed) {
   std::mt19937_64 rng(seed);
@@ -233,21 +242,13 @@ void BenchPlanning(const Options& options) {
           continue;
         }
         ++solved;
-        for (size_t i = 0; i + 1 < out.path.size(); ++i) {
-          if (!checker->IsMotionValid(out.path[i], out.path[i + 1], 0.001)) {
-            ++collide_when_rechecked;
-            break;
-          }
-        }
+        if (CollidesAtRecheck(*checker, out.path)) ++collide_when_rechecked;
         plan_ms.push_back(1e3 * out.seconds.plan);
         total_ms.push_back(1e3 * out.seconds.total);
         shortcut_ms.push_back(1e3 * out.seconds.shortcut);
         verify_ms.push_back(1e3 * out.seconds.verify);
-        double raw = 0, shortened = 0;
-        for (size_t i = 1; i < out.raw_path.size(); ++i) raw += (out.raw_path[i] - out.raw_path[i - 1]).norm();
-        for (size_t i = 1; i < out.path.size(); ++i) shortened += (out.path[i] - out.path[i - 1]).norm();
-        raw_length.push_back(raw);
-        length.push_back(shortened);
+        raw_length.push_back(PathLength(out.raw_path));
+        length.push_back(PathLength(out.path));
       }
       const double median = Quantile(plan_ms, 0.5);
       if (id == "rrt_connect") baseline_median = median;
@@ -392,16 +393,9 @@ void BenchFamilies(const Options& options) {
           continue;
         }
         ++solved;
-        for (size_t i = 0; i + 1 < out.path.size(); ++i) {
-          if (!checker->IsMotionValid(out.path[i], out.path[i + 1], 0.001)) {
-            ++collide;
-            break;
-          }
-        }
+        if (CollidesAtRecheck(*checker, out.path)) ++collide;
         plan_ms.push_back(1e3 * out.seconds.plan);
-        double l = 0;
-        for (size_t i = 1; i < out.path.size(); ++i) l += (out.path[i] - out.path[i - 1]).norm();
-        length.push_back(l);
+        length.push_back(PathLength(out.path));
       }
       const double t = Quantile(plan_ms, 0.5), l = Quantile(length, 0.5);
       if (id == "rrt_connect") {
