@@ -23,6 +23,7 @@
 #include "chasles/collision/collision_checker.h"
 #include "chasles/planners/registry.h"
 #include "chasles/robot/error.h"
+#include "two_link_arm.h"
 
 namespace chasles {
 namespace {
@@ -56,31 +57,7 @@ std::shared_ptr<const RobotModel> PointRobot(int dims) {
   return RobotModel::FromTree("point", links, joints);
 }
 
-// The planar 2R arm of the planner contract test (links of 1.0 m and 0.8 m, spheres of 0.05 m).
-constexpr char kTwoLinkUrdf[] = R"(<?xml version="1.0"?>
-<robot name="two_link">
-  <link name="base"/>
-  <link name="link1">
-    <collision><origin xyz="0.25 0 0"/><geometry><sphere radius="0.05"/></geometry></collision>
-    <collision><origin xyz="0.5 0 0"/><geometry><sphere radius="0.05"/></geometry></collision>
-    <collision><origin xyz="0.75 0 0"/><geometry><sphere radius="0.05"/></geometry></collision>
-    <collision><origin xyz="1.0 0 0"/><geometry><sphere radius="0.05"/></geometry></collision>
-  </link>
-  <link name="link2">
-    <collision><origin xyz="0.2 0 0"/><geometry><sphere radius="0.05"/></geometry></collision>
-    <collision><origin xyz="0.4 0 0"/><geometry><sphere radius="0.05"/></geometry></collision>
-    <collision><origin xyz="0.6 0 0"/><geometry><sphere radius="0.05"/></geometry></collision>
-    <collision><origin xyz="0.8 0 0"/><geometry><sphere radius="0.05"/></geometry></collision>
-  </link>
-  <joint name="j1" type="revolute">
-    <parent link="base"/><child link="link1"/><axis xyz="0 0 1"/>
-    <limit lower="-3.14" upper="3.14" velocity="2" effort="10"/>
-  </joint>
-  <joint name="j2" type="revolute">
-    <parent link="link1"/><child link="link2"/><origin xyz="1.0 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-2.8" upper="2.8" velocity="2" effort="10"/>
-  </joint>
-</robot>)";
+using testing::kTwoLinkUrdf;  // the planar 2R arm of the planner contract test
 
 void AddBox(Scene* scene, const std::string& name, double cx, double cy, double sx, double sy) {
   scene->AddObject({name, Shape::Box(Eigen::Vector3d(sx, sy, 0.5), At(cx, cy))});
