@@ -6,7 +6,6 @@
 #include <string>
 
 #include "chasles/robot/error.h"
-#include "internal.h"
 
 namespace chasles {
 namespace {

@@ -4,110 +4,199 @@
 #include <cmath>
 
 #include "chasles/robot/error.h"
-#include "internal.h"
 
 namespace chasles {
-namespace optimizers_internal {
+namespace poly {
+namespace {
 
-double PhaseDuration(const TimedTrajectory::Segment& seg, Phase phase) {
-  return phase == Phase::kCruise ? seg.t_cruise : seg.t_acc;
-}
-
-double PhaseStart(const TimedTrajectory::Segment& seg, Phase phase) {
-  switch (phase) {
-    case Phase::kAccelerate: return 0.0;
-    case Phase::kCruise: return seg.t_acc;
-    case Phase::kDecelerate: return seg.t_acc + seg.t_cruise;
+/// Coefficients of the k-th derivative.
+std::vector<double> Derivative(const double* c, int size, int k) {
+  std::vector<double> out;
+  for (int i = k; i < size; ++i) {
+    double factor = 1.0;
+    for (int j = 0; j < k; ++j) factor *= static_cast<double>(i - j);
+    out.push_back(factor * c[i]);
   }
-  return 0.0;
-}
-
-Phase PhaseAt(const TimedTrajectory::Segment& seg, double tau) {
-  if (tau < seg.t_acc) return Phase::kAccelerate;
-  if (tau < seg.t_acc + seg.t_cruise) return Phase::kCruise;
-  return Phase::kDecelerate;
-}
-
-TrajectorySample SegmentStateInPhase(const TimedTrajectory::Segment& seg, Phase phase, double tau) {
-  TrajectorySample out;
-  out.t = seg.t0 + tau;
-  const Eigen::VectorXd delta = seg.b - seg.a;
-  const double v_peak = seg.s_acc * seg.t_acc;  // ds/dt while cruising
-  switch (phase) {
-    case Phase::kAccelerate: {
-      const double s = 0.5 * seg.s_acc * tau * tau;
-      out.q = seg.a + s * delta;
-      out.qd = (seg.s_acc * tau) * delta;
-      out.qdd = seg.s_acc * delta;
-      break;
-    }
-    case Phase::kCruise: {
-      const double s = 0.5 * seg.s_acc * seg.t_acc * seg.t_acc + v_peak * (tau - seg.t_acc);
-      out.q = seg.a + s * delta;
-      out.qd = v_peak * delta;
-      out.qdd = Eigen::VectorXd::Zero(delta.size());
-      break;
-    }
-    case Phase::kDecelerate: {
-      const double tau_left = std::max(0.0, seg.duration() - tau);  // time to the end
-      const double remaining = 0.5 * seg.s_acc * tau_left * tau_left;  // 1 − s
-      out.q = seg.b - remaining * delta;
-      out.qd = (seg.s_acc * tau_left) * delta;
-      out.qdd = -seg.s_acc * delta;
-      break;
-    }
-  }
-  // Keep every state inside the segment's bounding box (rounding could otherwise step an ulp
-  // past an endpoint that sits exactly on a joint limit). Exact endpoints are unaffected.
-  out.q = out.q.cwiseMax(seg.a.cwiseMin(seg.b)).cwiseMin(seg.a.cwiseMax(seg.b));
   return out;
 }
 
-}  // namespace optimizers_internal
+/// Real roots of p in the open interval (lo, hi), sorted. The polynomial is split into
+/// monotone pieces at the roots of p' (found the same way), and each piece with a sign change
+/// holds exactly one root, found by bisection.
+void Roots(const std::vector<double>& p, double lo, double hi, std::vector<double>* roots) {
+  int size = static_cast<int>(p.size());
+  while (size > 0 && p[size - 1] == 0.0) --size;
+  if (size <= 1) return;  // constant: no isolated roots
+  if (size == 2) {
+    const double x = -p[0] / p[1];
+    if (x > lo && x < hi) roots->push_back(x);
+    return;
+  }
+  const std::vector<double> dp = Derivative(p.data(), size, 1);
+  std::vector<double> breaks{lo};
+  Roots(dp, lo, hi, &breaks);
+  breaks.push_back(hi);
+  for (std::size_t i = 0; i + 1 < breaks.size(); ++i) {
+    double a = breaks[i], b = breaks[i + 1];
+    double fa = Eval(p.data(), size, a), fb = Eval(p.data(), size, b);
+    if (fa == 0.0) {
+      if (a > lo && a < hi && (roots->empty() || roots->back() != a)) roots->push_back(a);
+      continue;
+    }
+    if (fb == 0.0 || (fa < 0.0) == (fb < 0.0)) continue;  // a root at b is found from the right
+    for (int it = 0; it < 200 && b - a > 1e-15 * std::max(1.0, std::abs(a)); ++it) {
+      const double m = 0.5 * (a + b);
+      const double fm = Eval(p.data(), size, m);
+      if (fm == 0.0) { a = b = m; break; }
+      if ((fm < 0.0) == (fa < 0.0)) { a = m; fa = fm; } else { b = m; }
+    }
+    roots->push_back(0.5 * (a + b));
+  }
+}
+
+}  // namespace
+
+double Eval(const double* c, int size, double x) {
+  double value = 0.0;
+  for (int i = size - 1; i >= 0; --i) value = value * x + c[i];
+  return value;
+}
+
+double EvalDerivative(const double* c, int size, int k, double x) {
+  double value = 0.0;
+  for (int i = size - 1; i >= k; --i) {
+    double factor = 1.0;
+    for (int j = 0; j < k; ++j) factor *= static_cast<double>(i - j);
+    value = value * x + factor * c[i];
+  }
+  return value;
+}
+
+double MaxAbsDerivative(const double* c, int size, int k, double length, double* where) {
+  const std::vector<double> d = Derivative(c, size, k);
+  double at = 0.0, best = 0.0;
+  if (!d.empty()) {
+    const int n = static_cast<int>(d.size());
+    best = std::abs(d[0]);
+    const double end = std::abs(Eval(d.data(), n, length));
+    if (end > best) {
+      best = end;
+      at = length;
+    }
+    if (n >= 3 && length > 0.0) {
+      std::vector<double> critical;
+      Roots(Derivative(d.data(), n, 1), 0.0, length, &critical);
+      for (double x : critical) {
+        const double value = std::abs(Eval(d.data(), n, x));
+        if (value > best) {
+          best = value;
+          at = x;
+        }
+      }
+    }
+  }
+  if (where != nullptr) *where = at;
+  return best;
+}
+
+void Range(const double* c, int size, double length, double* lo, double* hi) {
+  *lo = *hi = size > 0 ? c[0] : 0.0;
+  if (size == 0) return;
+  const double end = Eval(c, size, length);
+  *lo = std::min(*lo, end);
+  *hi = std::max(*hi, end);
+  if (size >= 3 && length > 0.0) {
+    std::vector<double> critical;
+    Roots(Derivative(c, size, 1), 0.0, length, &critical);
+    for (double x : critical) {
+      const double v = Eval(c, size, x);
+      *lo = std::min(*lo, v);
+      *hi = std::max(*hi, v);
+    }
+  }
+}
+
+}  // namespace poly
+
+TimedTrajectory::TimedTrajectory(std::vector<Piece> pieces, Eigen::VectorXd end_position)
+    : pieces_(std::move(pieces)), end_position_(std::move(end_position)) {
+  if (pieces_.empty()) {
+    if (end_position_.size() != 0) ThrowInvalid("a trajectory with no pieces cannot have an end position");
+    return;
+  }
+  const Eigen::Index n = pieces_.front().coefficients.rows();
+  for (std::size_t k = 0; k < pieces_.size(); ++k) {
+    const Piece& piece = pieces_[k];
+    if (piece.coefficients.rows() != n || piece.coefficients.cols() < 1) {
+      ThrowInvalid("trajectory piece " + std::to_string(k) + " has a " + std::to_string(piece.coefficients.rows()) +
+                   "×" + std::to_string(piece.coefficients.cols()) + " coefficient matrix, expected " +
+                   std::to_string(n) + " rows and at least 1 column");
+    }
+  }
+  if (end_position_.size() != 0 && end_position_.size() != n) {
+    ThrowInvalid("trajectory end position has " + std::to_string(end_position_.size()) + " values, pieces have " +
+                 std::to_string(n));
+  }
+}
+
+double TimedTrajectory::duration() const {
+  if (pieces_.empty()) return 0.0;
+  return pieces_.back().t0 + pieces_.back().duration;
+}
+
+int TimedTrajectory::degree() const {
+  int out = 0;
+  for (const Piece& piece : pieces_) out = std::max(out, piece.degree());
+  return out;
+}
 
 namespace {
 
-using optimizers_internal::PhaseAt;
-using optimizers_internal::SegmentStateInPhase;
-
-TrajectorySample RestAt(const Eigen::VectorXd& q, double t) {
+TrajectorySample EvaluatePiece(const TimedTrajectory::Piece& piece, double tau) {
+  const Eigen::Index n = piece.coefficients.rows();
+  const int size = static_cast<int>(piece.coefficients.cols());
   TrajectorySample out;
-  out.t = t;
-  out.q = q;
-  out.qd = Eigen::VectorXd::Zero(q.size());
-  out.qdd = Eigen::VectorXd::Zero(q.size());
+  out.t = piece.t0 + tau;
+  out.q.resize(n);
+  out.qd.resize(n);
+  out.qdd.resize(n);
+  out.jerk.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double c[16];
+    for (int k = 0; k < size && k < 16; ++k) c[k] = piece.coefficients(i, k);
+    const int m = std::min(size, 16);
+    out.q[i] = tau == 0.0 ? c[0] : poly::Eval(c, m, tau);
+    out.qd[i] = poly::EvalDerivative(c, m, 1, tau);
+    out.qdd[i] = poly::EvalDerivative(c, m, 2, tau);
+    out.jerk[i] = poly::EvalDerivative(c, m, 3, tau);
+  }
   return out;
 }
 
 }  // namespace
 
-double TimedTrajectory::duration() const {
-  if (segments_.empty()) return 0.0;
-  return segments_.back().t0 + segments_.back().duration();
-}
-
-JointPath TimedTrajectory::Waypoints() const {
-  JointPath out;
-  if (segments_.empty()) return out;
-  out.reserve(segments_.size() + 1);
-  out.push_back(segments_.front().a);
-  for (const Segment& seg : segments_) out.push_back(seg.b);
-  return out;
-}
-
 TrajectorySample TimedTrajectory::Evaluate(double t) const {
-  if (segments_.empty()) {
+  if (pieces_.empty()) {
     throw Error(ErrorCode::kFailedPrecondition, "cannot evaluate an empty trajectory");
   }
   const double end = duration();
-  if (!(t > 0.0)) return RestAt(segments_.front().a, 0.0);  // also catches NaN
-  if (t >= end) return RestAt(segments_.back().b, end);
-  // The last segment that starts at or before t (right limit at segment boundaries).
-  auto it = std::upper_bound(segments_.begin(), segments_.end(), t,
-                             [](double value, const Segment& seg) { return value < seg.t0; });
-  const Segment& seg = (it == segments_.begin()) ? segments_.front() : *(it - 1);
-  const double tau = std::min(std::max(0.0, t - seg.t0), seg.duration());
-  TrajectorySample out = SegmentStateInPhase(seg, PhaseAt(seg, tau), tau);
+  if (!(t > 0.0)) return EvaluatePiece(pieces_.front(), 0.0);  // also catches NaN
+  if (t >= end) {
+    // The last piece of positive duration gives the end state (a zero-duration tail piece
+    // would report its own, possibly zero, derivatives).
+    auto last = pieces_.end() - 1;
+    while (last != pieces_.begin() && !(last->duration > 0.0)) --last;
+    TrajectorySample out = EvaluatePiece(*last, last->duration);
+    out.t = end;
+    if (end_position_.size() != 0) out.q = end_position_;
+    return out;
+  }
+  // The last piece that starts at or before t (right limit at piece boundaries).
+  auto it = std::upper_bound(pieces_.begin(), pieces_.end(), t,
+                             [](double value, const Piece& piece) { return value < piece.t0; });
+  const Piece& piece = (it == pieces_.begin()) ? pieces_.front() : *(it - 1);
+  const double tau = std::min(std::max(0.0, t - piece.t0), piece.duration);
+  TrajectorySample out = EvaluatePiece(piece, tau);
   out.t = t;
   return out;
 }
@@ -117,24 +206,63 @@ std::vector<TrajectorySample> TimedTrajectory::Sample(double period) const {
     ThrowInvalid("sample period = " + FormatNumber(period) + " must be finite and > 0");
   }
   std::vector<TrajectorySample> out;
-  if (segments_.empty()) return out;
+  if (pieces_.empty()) return out;
   const double end = duration();
   constexpr double kMaxSamples = 1e8;
   if (end / period > kMaxSamples) {
     ThrowInvalid("sample period = " + FormatNumber(period) + " s gives more than 1e8 samples for a " +
                  FormatNumber(end) + " s trajectory");
   }
-  // Times k·period strictly before the end (skipping one within 1e-9·period of it, so no
-  // near-duplicate sample precedes the final one), then the end itself.
   const double guard = 1e-9 * period;
-  out.push_back(RestAt(segments_.front().a, 0.0));
+  out.push_back(Evaluate(0.0));
   for (long k = 1;; ++k) {
     const double t = static_cast<double>(k) * period;
     if (!(t < end - guard)) break;
     out.push_back(Evaluate(t));
   }
-  if (end > 0.0) out.push_back(RestAt(segments_.back().b, end));
+  if (end > 0.0) out.push_back(Evaluate(end));
   return out;
+}
+
+JointPath TimedTrajectory::Waypoints() const {
+  JointPath out;
+  if (pieces_.empty()) return out;
+  out.reserve(pieces_.size() + 1);
+  out.push_back(pieces_.front().coefficients.col(0));
+  for (std::size_t k = 1; k < pieces_.size(); ++k) out.push_back(pieces_[k].coefficients.col(0));
+  out.push_back(Evaluate(duration()).q);
+  return out;
+}
+
+TimedTrajectory TimedTrajectory::TimeScaled(double factor) const {
+  if (!std::isfinite(factor) || !(factor > 0.0)) {
+    ThrowInvalid("time scale factor = " + FormatNumber(factor) + " must be finite and > 0");
+  }
+  std::vector<Piece> pieces = pieces_;
+  for (Piece& piece : pieces) {
+    piece.t0 *= factor;
+    piece.duration *= factor;
+    double scale = 1.0;
+    for (Eigen::Index k = 1; k < piece.coefficients.cols(); ++k) {
+      scale /= factor;
+      piece.coefficients.col(k) *= scale;
+    }
+  }
+  return TimedTrajectory(std::move(pieces), end_position_);
+}
+
+TimedTrajectory::Piece LinePiece(double t0, double duration, const Eigen::VectorXd& origin,
+                                 const Eigen::VectorXd& direction, double s0, double s1, double s2, double s3) {
+  TimedTrajectory::Piece piece;
+  piece.t0 = t0;
+  piece.duration = duration;
+  const int cols = s3 != 0.0 ? 4 : 3;
+  piece.coefficients.resize(origin.size(), cols);
+  piece.coefficients.col(0) = s0 == 0.0 ? origin : Eigen::VectorXd(origin + s0 * direction);
+  piece.coefficients.col(1) = s1 * direction;
+  piece.coefficients.col(2) = s2 * direction;
+  if (cols == 4) piece.coefficients.col(3) = s3 * direction;
+  return piece;
 }
 
 }  // namespace chasles

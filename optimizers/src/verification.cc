@@ -2,37 +2,53 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
+#include "chasles/robot/dynamics.h"
 #include "chasles/robot/error.h"
-#include "internal.h"
 
 namespace chasles {
 namespace {
 
-using optimizers_internal::Phase;
-using optimizers_internal::PhaseAt;
-using optimizers_internal::PhaseDuration;
-using optimizers_internal::PhaseStart;
-using optimizers_internal::SegmentStateInPhase;
-using Segment = TimedTrajectory::Segment;
+using Piece = TimedTrajectory::Piece;
 
 std::string At(double t) { return " at t = " + FormatNumber(t) + " s"; }
 
-/// Local time at which the segment's profile reaches path parameter s ∈ [0, 1].
-double TimeAtParameter(const Segment& seg, double s) {
-  if (!(seg.s_acc > 0.0) || !(seg.duration() > 0.0)) return 0.0;
-  const double s1 = 0.5 * seg.s_acc * seg.t_acc * seg.t_acc;  // covered while accelerating
-  if (s <= s1) return std::sqrt(2.0 * s / seg.s_acc);
-  if (s >= 1.0 - s1) return std::max(0.0, seg.duration() - std::sqrt(2.0 * std::max(0.0, 1.0 - s) / seg.s_acc));
-  return seg.t_acc + (s - s1) / (seg.s_acc * seg.t_acc);
+/// Row i of a piece as a contiguous coefficient vector.
+Eigen::VectorXd Row(const Piece& piece, int i) { return piece.coefficients.row(i).transpose(); }
+
+/// Derivative k of joint i at local time tau (the piece's own one-sided value at its ends).
+double Derivative(const Piece& piece, int i, int k, double tau) {
+  const Eigen::VectorXd c = Row(piece, i);
+  return poly::EvalDerivative(c.data(), static_cast<int>(c.size()), k, tau);
+}
+
+/// The largest joint travel bound over a piece: maxᵢ max|q̇ᵢ|·duration [rad].
+double Travel(const Piece& piece) {
+  double travel = 0.0;
+  for (int i = 0; i < piece.coefficients.rows(); ++i) {
+    const Eigen::VectorXd c = Row(piece, i);
+    travel = std::max(travel, poly::MaxAbsDerivative(c.data(), static_cast<int>(c.size()), 1, piece.duration) *
+                                  piece.duration);
+  }
+  return travel;
+}
+
+/// Position of a piece at local time tau.
+Eigen::VectorXd PositionIn(const Piece& piece, double tau) {
+  Eigen::VectorXd q(piece.coefficients.rows());
+  for (int i = 0; i < q.size(); ++i) q[i] = tau == 0.0 ? piece.coefficients(i, 0) : Derivative(piece, i, 0, tau);
+  return q;
 }
 
 class Verifier {
  public:
-  Verifier(const CollisionChecker& checker, const KinematicLimits& limits,
-           const VerificationOptions& options, VerificationReport* report)
-      : checker_(checker), robot_(checker.robot()), limits_(limits), options_(options), report_(report) {}
+  Verifier(const CollisionChecker& checker, const KinematicLimits& limits, const VerificationOptions& options,
+           VerificationReport* report)
+      : checker_(checker), robot_(checker.robot()), limits_(limits), options_(options), report_(report) {
+    dynamics_.gravity = limits.gravity;
+  }
 
   std::string JointName(int i) const {
     std::string name = "joint " + std::to_string(i);
@@ -40,52 +56,89 @@ class Verifier {
     return name;
   }
 
-  /// Velocity and acceleration of one state against the limits.
-  bool CheckDynamics(const TrajectorySample& x) {
+  bool Fail(const std::string& reason) {
+    report_->reason = reason;
+    return false;
+  }
+
+  /// Exact limits of one piece: position range, |q̇|, |q̈| and (when limited) |q⃛| at the
+  /// extrema of each joint's polynomial.
+  bool CheckLimits(const Piece& piece) {
     const double slack = 1.0 + options_.limit_tolerance;
-    for (int i = 0; i < x.qd.size(); ++i) {
-      const double ratio = std::abs(x.qd[i]) / limits_.max_velocity[i];
-      report_->max_velocity_ratio = std::max(report_->max_velocity_ratio, ratio);
-      if (!(ratio <= slack)) {
-        return Fail(JointName(i) + " velocity " + FormatNumber(x.qd[i]) + " rad/s exceeds limit " +
-                    FormatNumber(limits_.max_velocity[i]) + " rad/s" + At(x.t));
+    const Eigen::VectorXd& lower = robot_.lower_limits();
+    const Eigen::VectorXd& upper = robot_.upper_limits();
+    struct Bound {
+      int order;
+      const Eigen::VectorXd* limit;
+      double* ratio;
+      const char* what;
+      const char* unit;
+    };
+    const Bound bounds[3] = {
+        {1, &limits_.max_velocity, &report_->max_velocity_ratio, "velocity", "rad/s"},
+        {2, &limits_.max_acceleration, &report_->max_acceleration_ratio, "acceleration", "rad/s²"},
+        {3, &limits_.max_jerk, &report_->max_jerk_ratio, "jerk", "rad/s³"},
+    };
+    for (int i = 0; i < piece.coefficients.rows(); ++i) {
+      const Eigen::VectorXd c = Row(piece, i);
+      const int size = static_cast<int>(c.size());
+      double lo, hi;
+      poly::Range(c.data(), size, piece.duration, &lo, &hi);
+      const double pad_lo = 1e-12 * std::max(1.0, std::abs(lower[i]));
+      const double pad_hi = 1e-12 * std::max(1.0, std::abs(upper[i]));
+      if (!(lo >= lower[i] - pad_lo && hi <= upper[i] + pad_hi)) {
+        const double value = lo < lower[i] - pad_lo ? lo : hi;
+        return Fail(JointName(i) + " position " + FormatNumber(value) + " is outside its limits [" +
+                    FormatNumber(lower[i]) + ", " + FormatNumber(upper[i]) + "] between t = " + FormatNumber(piece.t0) +
+                    " and " + FormatNumber(piece.t0 + piece.duration) + " s");
       }
-    }
-    for (int i = 0; i < x.qdd.size(); ++i) {
-      const double ratio = std::abs(x.qdd[i]) / limits_.max_acceleration[i];
-      report_->max_acceleration_ratio = std::max(report_->max_acceleration_ratio, ratio);
-      if (!(ratio <= slack)) {
-        return Fail(JointName(i) + " acceleration " + FormatNumber(x.qdd[i]) + " rad/s² exceeds limit " +
-                    FormatNumber(limits_.max_acceleration[i]) + " rad/s²" + At(x.t));
+      for (const Bound& bound : bounds) {
+        if (bound.limit->size() == 0) continue;
+        double where = 0.0;
+        const double value = poly::MaxAbsDerivative(c.data(), size, bound.order, piece.duration, &where);
+        const double ratio = value / (*bound.limit)[i];
+        *bound.ratio = std::max(*bound.ratio, ratio);
+        if (!(ratio <= slack)) {
+          return Fail(JointName(i) + " " + bound.what + " " +
+                      FormatNumber(poly::EvalDerivative(c.data(), size, bound.order, where)) + " " + bound.unit +
+                      " exceeds limit " + FormatNumber((*bound.limit)[i]) + " " + bound.unit + At(piece.t0 + where));
+        }
       }
     }
     return true;
   }
 
-  /// Position limits, then collisions (self and scene) of one state.
-  bool CheckState(const TrajectorySample& x) {
-    const Eigen::VectorXd& lower = robot_.lower_limits();
-    const Eigen::VectorXd& upper = robot_.upper_limits();
-    for (int i = 0; i < x.q.size(); ++i) {
-      if (!(x.q[i] >= lower[i] && x.q[i] <= upper[i])) {
-        return Fail(JointName(i) + " position " + FormatNumber(x.q[i]) + " is outside its limits [" + FormatNumber(lower[i]) +
-                    ", " + FormatNumber(upper[i]) + "]" + At(x.t));
+  /// Collisions (self and scene) and, when limited, torques of one state.
+  bool CheckState(const Piece& piece, double tau) {
+    const double t = piece.t0 + tau;
+    // CheckLimits has passed: any excess over a position limit is rounding (<= 1e-12 relative).
+    const Eigen::VectorXd q = PositionIn(piece, tau).cwiseMax(robot_.lower_limits()).cwiseMin(robot_.upper_limits());
+    ++report_->states_checked;
+    if (!checker_.IsValid(q, &counters_)) {
+      const CollisionResult contact = checker_.Check(q);
+      if (!contact.in_collision) return Fail("state is invalid" + At(t) + " (rejected by the checker)");
+      if (contact.self_collision) {
+        return Fail("self-collision" + At(t) + " between link '" + contact.link_a + "' and link '" + contact.other + "'");
+      }
+      return Fail("collision" + At(t) + " between link '" + contact.link_a + "' and '" + contact.other + "'");
+    }
+    if (limits_.max_effort.size() == 0) return true;
+    const int n = static_cast<int>(q.size());
+    Eigen::VectorXd qd(n), qdd(n);
+    for (int i = 0; i < n; ++i) {
+      qd[i] = Derivative(piece, i, 1, tau);
+      qdd[i] = Derivative(piece, i, 2, tau);
+    }
+    const Eigen::VectorXd effort = InverseDynamics(robot_, q, qd, qdd, dynamics_);
+    for (int i = 0; i < n; ++i) {
+      const double ratio = std::abs(effort[i]) / limits_.max_effort[i];
+      report_->max_effort_ratio = std::max(report_->max_effort_ratio, ratio);
+      if (!(ratio <= 1.0 + options_.limit_tolerance)) {
+        return Fail(JointName(i) + " effort " + FormatNumber(effort[i]) + " exceeds limit " +
+                    FormatNumber(limits_.max_effort[i]) + At(t));
       }
     }
-    ++report_->states_checked;
-    if (checker_.IsValid(x.q, &counters_)) return true;
-    const CollisionResult contact = checker_.Check(x.q);
-    if (!contact.in_collision) return Fail("state is invalid" + At(x.t) + " (rejected by the checker)");
-    if (contact.self_collision) {
-      return Fail("self-collision" + At(x.t) + " between link '" + contact.link_a + "' and link '" +
-                  contact.other + "'");
-    }
-    return Fail("collision" + At(x.t) + " between link '" + contact.link_a + "' and '" + contact.other + "'");
-  }
-
-  bool Fail(const std::string& reason) {
-    report_->reason = reason;
-    return false;
+    return true;
   }
 
  private:
@@ -95,37 +148,48 @@ class Verifier {
   const VerificationOptions& options_;
   VerificationReport* report_;
   CheckCounters counters_;
+  DynamicsOptions dynamics_;
 };
 
-/// Structural soundness of segment k: sizes, finite numbers, a profile that covers s ∈ [0, 1]
-/// and continuity with the previous segment. Returns an empty string when sound.
-std::string SegmentDefect(const TimedTrajectory& trajectory, std::size_t k, int n, double position_tolerance) {
-  const Segment& seg = trajectory.segments()[k];
-  const std::string name = "segment " + std::to_string(k);
-  if (seg.a.size() != n || seg.b.size() != n) {
-    return name + " has " + std::to_string(seg.a.size()) + "/" + std::to_string(seg.b.size()) +
-           " values, robot has " + std::to_string(n) + " joints";
+/// Structural soundness of piece k. Returns an empty string when sound.
+std::string PieceDefect(const TimedTrajectory& trajectory, std::size_t k, int n, const VerificationOptions& options,
+                        double velocity_tolerance, bool jerk_limited) {
+  const Piece& piece = trajectory.pieces()[k];
+  const std::string name = "piece " + std::to_string(k);
+  if (piece.coefficients.rows() != n) {
+    return name + " has " + std::to_string(piece.coefficients.rows()) + " joints, robot has " + std::to_string(n);
   }
-  if (!seg.a.allFinite() || !seg.b.allFinite()) return name + " has a non-finite waypoint";
-  for (double x : {seg.t0, seg.t_acc, seg.t_cruise, seg.s_acc}) {
-    if (!std::isfinite(x) || x < 0.0) {
-      return name + " has an invalid profile (t0 = " + FormatNumber(seg.t0) + ", t_acc = " + FormatNumber(seg.t_acc) +
-             ", t_cruise = " + FormatNumber(seg.t_cruise) + ", s_acc = " + FormatNumber(seg.s_acc) + ")";
+  if (!piece.coefficients.allFinite()) return name + " has a non-finite coefficient";
+  if (!std::isfinite(piece.duration) || !(piece.duration >= 0.0) || !std::isfinite(piece.t0)) {
+    return name + " has an invalid timing (t0 = " + FormatNumber(piece.t0) + ", duration = " +
+           FormatNumber(piece.duration) + ")";
+  }
+  if (k == 0) {
+    if (piece.t0 != 0.0) return name + " starts at t = " + FormatNumber(piece.t0) + " s, expected 0 s";
+    return {};
+  }
+  const Piece& previous = trajectory.pieces()[k - 1];
+  const double expected_t0 = previous.t0 + previous.duration;
+  if (!(std::abs(piece.t0 - expected_t0) <= 1e-9 * std::max(1.0, expected_t0))) {
+    return name + " starts at t = " + FormatNumber(piece.t0) + " s, expected " + FormatNumber(expected_t0) + " s";
+  }
+  for (int i = 0; i < n; ++i) {
+    const double jump = std::abs(piece.coefficients(i, 0) - Derivative(previous, i, 0, previous.duration));
+    if (!(jump <= options.endpoint_tolerance)) {
+      return name + " does not start where piece " + std::to_string(k - 1) + " ends: joint " + std::to_string(i) +
+             " jumps " + FormatNumber(jump) + " rad" + At(piece.t0);
     }
-  }
-  const double s_end = seg.s_acc * seg.t_acc * (seg.t_acc + seg.t_cruise);
-  if (seg.a != seg.b && !(std::abs(s_end - 1.0) <= 1e-9)) {
-    return name + " profile covers s = " + FormatNumber(s_end) + " instead of 1" + At(seg.t0);
-  }
-  const double expected_t0 = k == 0 ? 0.0 : trajectory.segments()[k - 1].t0 + trajectory.segments()[k - 1].duration();
-  if (!(std::abs(seg.t0 - expected_t0) <= 1e-9 * std::max(1.0, expected_t0))) {
-    return name + " starts at t = " + FormatNumber(seg.t0) + " s, expected " + FormatNumber(expected_t0) + " s";
-  }
-  if (k > 0) {
-    const double jump = (seg.a - trajectory.segments()[k - 1].b).cwiseAbs().maxCoeff();
-    if (!(jump <= position_tolerance)) {
-      return name + " does not start where segment " + std::to_string(k - 1) + " ends (jump " + FormatNumber(jump) +
-             " rad)" + At(seg.t0);
+    const double velocity_jump = std::abs(Derivative(piece, i, 1, 0.0) - Derivative(previous, i, 1, previous.duration));
+    if (!(velocity_jump <= velocity_tolerance)) {
+      return name + " velocity of joint " + std::to_string(i) + " jumps " + FormatNumber(velocity_jump) + " rad/s" +
+             At(piece.t0);
+    }
+    if (jerk_limited) {
+      const double jump2 = std::abs(Derivative(piece, i, 2, 0.0) - Derivative(previous, i, 2, previous.duration));
+      if (!(jump2 <= velocity_tolerance)) {
+        return name + " acceleration of joint " + std::to_string(i) + " jumps " + FormatNumber(jump2) +
+               " rad/s² (an infinite jerk; max_jerk is set)" + At(piece.t0);
+      }
     }
   }
   return {};
@@ -149,11 +213,20 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
   const RobotModel& robot = checker.robot();
   const int n = robot.num_dofs();
   limits.Validate(n);
+  if (limits.max_effort.size() != 0 && !HasInertia(robot)) {
+    ThrowInvalid("max_effort needs a robot with inertia on every moving link");
+  }
   if (start.size() != n) {
     ThrowInvalid("start has " + std::to_string(start.size()) + " values, robot has " + std::to_string(n) + " joints");
   }
   if (goal.size() != n) {
     ThrowInvalid("goal has " + std::to_string(goal.size()) + " values, robot has " + std::to_string(n) + " joints");
+  }
+  for (const auto* v : {&options.start_velocity, &options.end_velocity}) {
+    if (v->size() != 0 && v->size() != n) {
+      ThrowInvalid(std::string(v == &options.start_velocity ? "start" : "end") + " velocity has " +
+                   std::to_string(v->size()) + " values, robot has " + std::to_string(n) + " joints");
+    }
   }
 
   VerificationReport report;
@@ -161,58 +234,165 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
     report.reason = "trajectory is empty";
     return report;
   }
-  const auto& segments = trajectory.segments();
-  for (std::size_t k = 0; k < segments.size(); ++k) {
-    std::string defect = SegmentDefect(trajectory, k, n, options.endpoint_tolerance);
+  const double velocity_tolerance = 1e-6 * std::max(1.0, limits.max_velocity.maxCoeff());
+  const bool jerk_limited = limits.max_jerk.size() != 0;
+  const auto& pieces = trajectory.pieces();
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    std::string defect = PieceDefect(trajectory, k, n, options, velocity_tolerance, jerk_limited);
     if (!defect.empty()) {
       report.reason = defect;
       return report;
     }
   }
-  const double start_error = (trajectory.Evaluate(0.0).q - start).cwiseAbs().maxCoeff();
+  const TrajectorySample first = trajectory.Evaluate(0.0);
+  const TrajectorySample last = trajectory.Evaluate(trajectory.duration());
+  const double start_error = (first.q - start).cwiseAbs().maxCoeff();
   if (!(start_error <= options.endpoint_tolerance)) {
     report.reason = "trajectory starts " + FormatNumber(start_error) + " rad from the start configuration (tolerance " +
                     FormatNumber(options.endpoint_tolerance) + " rad)";
     return report;
   }
-  const double end_error = (trajectory.Evaluate(trajectory.duration()).q - goal).cwiseAbs().maxCoeff();
+  const double end_error = (last.q - goal).cwiseAbs().maxCoeff();
   if (!(end_error <= options.endpoint_tolerance)) {
     report.reason = "trajectory ends " + FormatNumber(end_error) + " rad from the goal configuration (tolerance " +
                     FormatNumber(options.endpoint_tolerance) + " rad)" + At(trajectory.duration());
     return report;
   }
+  const Eigen::VectorXd rest = Eigen::VectorXd::Zero(n);
+  const Eigen::VectorXd& v0 = options.start_velocity.size() != 0 ? options.start_velocity : rest;
+  const Eigen::VectorXd& v1 = options.end_velocity.size() != 0 ? options.end_velocity : rest;
+  const double v0_error = (first.qd - v0).cwiseAbs().maxCoeff();
+  if (!(v0_error <= velocity_tolerance)) {
+    report.reason = "trajectory starts with a velocity " + FormatNumber(v0_error) + " rad/s from the expected one";
+    return report;
+  }
+  const double v1_error = (last.qd - v1).cwiseAbs().maxCoeff();
+  if (!(v1_error <= velocity_tolerance)) {
+    report.reason = "trajectory ends with a velocity " + FormatNumber(v1_error) + " rad/s from the expected one" +
+                    At(trajectory.duration());
+    return report;
+  }
+  if (jerk_limited) {
+    // A jerk limit means the acceleration is continuous, also from and to rest.
+    if (v0.isZero(0.0) && !(first.qdd.cwiseAbs().maxCoeff() <= velocity_tolerance)) {
+      report.reason = "trajectory starts at rest with acceleration " + FormatNumber(first.qdd.cwiseAbs().maxCoeff()) +
+                      " rad/s² (an infinite jerk; max_jerk is set)";
+      return report;
+    }
+    if (v1.isZero(0.0) && !(last.qdd.cwiseAbs().maxCoeff() <= velocity_tolerance)) {
+      report.reason = "trajectory ends at rest with acceleration " + FormatNumber(last.qdd.cwiseAbs().maxCoeff()) +
+                      " rad/s² (an infinite jerk; max_jerk is set)" + At(trajectory.duration());
+      return report;
+    }
+  }
 
   Verifier verifier(checker, limits, options, &report);
-  constexpr double kMaxStatesPerSegment = 1e8;
-  for (std::size_t k = 0; k < segments.size(); ++k) {
-    const Segment& seg = segments[k];
-    // Both one-sided values at every phase boundary: each phase at its start and its end.
-    for (Phase phase : {Phase::kAccelerate, Phase::kCruise, Phase::kDecelerate}) {
-      const double length = PhaseDuration(seg, phase);
-      if (!(length > 0.0)) continue;
-      const double begin = PhaseStart(seg, phase);
-      if (!verifier.CheckDynamics(SegmentStateInPhase(seg, phase, begin))) return report;
-      if (!verifier.CheckDynamics(SegmentStateInPhase(seg, phase, begin + length))) return report;
-    }
-    // States uniformly spaced in s, so consecutive ones differ by ≤ max_joint_step per joint.
-    const double widest = (seg.b - seg.a).cwiseAbs().maxCoeff();
-    const double steps = std::ceil(widest / options.max_joint_step);
-    if (steps > kMaxStatesPerSegment) {
-      report.reason = "segment " + std::to_string(k) + " would need more than 1e8 checks at max_joint_step = " +
+  for (const Piece& piece : pieces) {
+    if (!verifier.CheckLimits(piece)) return report;
+  }
+  constexpr double kMaxStatesPerPiece = 1e8;
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    const Piece& piece = pieces[k];
+    const double steps = std::ceil(Travel(piece) / options.max_joint_step);
+    if (steps > kMaxStatesPerPiece) {
+      report.reason = "piece " + std::to_string(k) + " would need more than 1e8 checks at max_joint_step = " +
                       FormatNumber(options.max_joint_step);
       return report;
     }
     const int m = std::max(1, static_cast<int>(steps));
-    for (int i = (k == 0 ? 0 : 1); i <= m; ++i) {  // segment k's first state is segment k−1's last
-      const double s = static_cast<double>(i) / m;
-      const double tau = i == m ? seg.duration() : TimeAtParameter(seg, s);
-      const Phase phase = i == m ? Phase::kDecelerate : PhaseAt(seg, tau);
-      const TrajectorySample x = SegmentStateInPhase(seg, phase, tau);
-      if (!verifier.CheckState(x) || !verifier.CheckDynamics(x)) return report;
+    for (int i = (k == 0 ? 0 : 1); i <= m; ++i) {  // piece k's first state is piece k−1's last
+      if (!verifier.CheckState(piece, piece.duration * i / m)) return report;
     }
   }
   report.ok = true;
   return report;
+}
+
+namespace {
+
+/// Distance from x to the segment a–b.
+double DistanceToSegment(const Eigen::VectorXd& x, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const Eigen::VectorXd ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double s = len2 > 0.0 ? std::min(1.0, std::max(0.0, (x - a).dot(ab) / len2)) : 0.0;
+  return (x - (a + s * ab)).norm();
+}
+
+}  // namespace
+
+TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const KinematicLimits& limits,
+                                    const JointPath& path, const CollisionChecker* checker, double max_joint_step) {
+  TrajectoryQuality out;
+  out.duration = trajectory.duration();
+  out.min_clearance = std::numeric_limits<double>::infinity();
+  if (trajectory.empty()) return out;
+  const int n = trajectory.num_dofs();
+  // Exact figures, piece by piece.
+  for (const Piece& piece : trajectory.pieces()) {
+    for (int i = 0; i < n; ++i) {
+      const Eigen::VectorXd c = Row(piece, i);
+      const int size = static_cast<int>(c.size());
+      if (limits.max_velocity.size() == n) {
+        out.max_velocity_ratio = std::max(
+            out.max_velocity_ratio, poly::MaxAbsDerivative(c.data(), size, 1, piece.duration) / limits.max_velocity[i]);
+      }
+      if (limits.max_acceleration.size() == n) {
+        out.max_acceleration_ratio =
+            std::max(out.max_acceleration_ratio,
+                     poly::MaxAbsDerivative(c.data(), size, 2, piece.duration) / limits.max_acceleration[i]);
+      }
+      const double jerk = poly::MaxAbsDerivative(c.data(), size, 3, piece.duration);
+      out.max_jerk = std::max(out.max_jerk, jerk);
+      if (limits.max_jerk.size() == n) out.max_jerk_ratio = std::max(out.max_jerk_ratio, jerk / limits.max_jerk[i]);
+      // ∫ (q⃛ᵢ)² dτ of the jerk polynomial, exactly: square it, integrate term by term.
+      if (size >= 4) {
+        std::vector<double> j;
+        for (int p = 3; p < size; ++p) j.push_back(c[p] * p * (p - 1) * (p - 2));
+        double integral = 0.0;
+        for (std::size_t a = 0; a < j.size(); ++a) {
+          for (std::size_t b = 0; b < j.size(); ++b) {
+            const int power = static_cast<int>(a + b) + 1;
+            integral += j[a] * j[b] * std::pow(piece.duration, power) / power;
+          }
+        }
+        out.jerk_integral += integral;
+      }
+    }
+  }
+  // Sampled figures.
+  double total_travel = 0.0;
+  for (const Piece& piece : trajectory.pieces()) total_travel += Travel(piece);
+  const int samples = std::max(2, std::min(2000, static_cast<int>(std::ceil(total_travel / max_joint_step)) + 1));
+  const bool effort = checker != nullptr && limits.max_effort.size() == n && HasInertia(checker->robot());
+  DynamicsOptions dynamics;
+  dynamics.gravity = limits.gravity;
+  std::vector<Eigen::VectorXd> states;
+  states.reserve(samples);
+  const int clearance_every = std::max(1, samples / 200);
+  for (int s = 0; s < samples; ++s) {
+    const TrajectorySample x = trajectory.Evaluate(trajectory.duration() * s / (samples - 1));
+    states.push_back(x.q);
+    if (checker != nullptr && (s % clearance_every == 0 || s == samples - 1)) {
+      out.min_clearance = std::min(out.min_clearance, checker->Clearance(x.q));
+    }
+    if (effort) {
+      const Eigen::VectorXd tau = InverseDynamics(checker->robot(), x.q, x.qd, x.qdd, dynamics);
+      for (int i = 0; i < n; ++i) out.max_effort_ratio = std::max(out.max_effort_ratio, std::abs(tau[i]) / limits.max_effort[i]);
+    }
+  }
+  if (path.size() >= 2) {
+    for (const Eigen::VectorXd& q : states) {
+      double nearest = std::numeric_limits<double>::infinity();
+      for (std::size_t k = 0; k + 1 < path.size(); ++k) nearest = std::min(nearest, DistanceToSegment(q, path[k], path[k + 1]));
+      out.max_deviation = std::max(out.max_deviation, nearest);
+    }
+    for (const Eigen::VectorXd& w : path) {
+      double nearest = std::numeric_limits<double>::infinity();
+      for (std::size_t s = 0; s + 1 < states.size(); ++s) nearest = std::min(nearest, DistanceToSegment(w, states[s], states[s + 1]));
+      out.max_deviation = std::max(out.max_deviation, nearest);
+    }
+  }
+  return out;
 }
 
 }  // namespace chasles

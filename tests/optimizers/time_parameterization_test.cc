@@ -71,7 +71,7 @@ TEST(RestToRest, StraightSegmentsHaveTheExactMinimumTimeAndRespectLimits) {
     const double expected = ReferenceDuration(a, b, limits, &triangle);
     (triangle ? triangles : trapezoids)++;
     const TimedTrajectory traj = ParameterizeRestToRest({a, b}, limits);
-    ASSERT_EQ(traj.segments().size(), 1u);
+    ASSERT_LE(traj.pieces().size(), 3u);  // accelerate, cruise, decelerate
     ASSERT_NEAR(traj.duration(), expected, 1e-12 * expected);
 
     // The exact profile at 1 kHz: within limits, and central differences of positions agree
@@ -111,24 +111,26 @@ TEST(RestToRest, BindingJointHitsItsAccelerationLimit) {
   // Δ = (2, 1): V = 0.5, A = 1, V² ≤ A → trapezoid, T = 1/V + V/A = 2.5 s.
   const TimedTrajectory traj = ParameterizeRestToRest({Eigen::Vector2d(0, 0), Eigen::Vector2d(2, 1)}, limits);
   EXPECT_DOUBLE_EQ(traj.duration(), 2.5);
-  const auto& seg = traj.segments()[0];
-  EXPECT_DOUBLE_EQ(seg.t_acc, 0.5);
-  EXPECT_DOUBLE_EQ(seg.t_cruise, 1.5);
-  // Right limit at a phase boundary: at t = t_acc the cruise phase starts (q̈ = 0).
-  EXPECT_EQ(traj.Evaluate(seg.t_acc).qdd, Eigen::Vector2d::Zero());
+  ASSERT_EQ(traj.pieces().size(), 3u);
+  EXPECT_DOUBLE_EQ(traj.pieces()[0].duration, 0.5);
+  EXPECT_DOUBLE_EQ(traj.pieces()[1].duration, 1.5);
+  // Right limit at a phase boundary: when the cruise phase starts, q̈ = 0.
+  EXPECT_EQ(traj.Evaluate(traj.pieces()[1].t0).qdd, Eigen::Vector2d::Zero());
   EXPECT_DOUBLE_EQ(traj.Evaluate(0.25).qdd[0], 2.0);
   EXPECT_DOUBLE_EQ(traj.Evaluate(1.0).qd[0], 1.0);
   EXPECT_DOUBLE_EQ(traj.Evaluate(2.0).qdd[0], -2.0);  // decelerating from t = 2.0 on
-  // At rest at both ends.
-  EXPECT_EQ(traj.Evaluate(0.0).qdd, Eigen::Vector2d::Zero());
-  EXPECT_EQ(traj.Evaluate(2.5).qdd, Eigen::Vector2d::Zero());
+  // At rest at both ends (accelerating from rest, decelerating into it).
+  EXPECT_EQ(traj.Evaluate(0.0).qd, Eigen::Vector2d::Zero());
+  EXPECT_NEAR(traj.Evaluate(2.5).qd.cwiseAbs().maxCoeff(), 0.0, 1e-15);
+  EXPECT_DOUBLE_EQ(traj.Evaluate(0.0).qdd[0], 2.0);
+  EXPECT_DOUBLE_EQ(traj.Evaluate(2.5).qdd[0], -2.0);
   EXPECT_EQ(traj.Evaluate(-1.0).q, Eigen::Vector2d(0, 0));
   EXPECT_EQ(traj.Evaluate(9.0).q, Eigen::Vector2d(2, 1));
 
   // Δ = (0.1, 0): V = 10, A = 20, V² > A → triangle, T = 2/√20.
   const TimedTrajectory tri = ParameterizeRestToRest({Eigen::Vector2d(0, 0), Eigen::Vector2d(0.1, 0)}, limits);
   EXPECT_NEAR(tri.duration(), 2.0 / std::sqrt(20.0), 1e-15);
-  EXPECT_EQ(tri.segments()[0].t_cruise, 0.0);
+  EXPECT_EQ(tri.pieces().size(), 2u);  // no cruise
   EXPECT_NEAR(tri.Evaluate(tri.duration() / 2).q[0], 0.05, 1e-15);
 }
 
@@ -164,43 +166,33 @@ TEST(RestToRest, MultiWaypointPathsRespectLimitsEverywhere) {
     const JointPath path = RandomPath(rng, kDofs);
     const TimedTrajectory traj = ParameterizeRestToRest(path, limits);
 
-    // Duplicates dropped, every other waypoint kept bit for bit, segments back to back.
+    // Duplicates dropped; each segment takes its exact rest-to-rest time and the robot
+    // passes every waypoint at rest.
     JointPath distinct{path.front()};
     for (const auto& q : path) {
       if (!(q == distinct.back())) distinct.push_back(q);
     }
-    const JointPath waypoints = traj.Waypoints();
     if (distinct.size() == 1) {
-      ASSERT_EQ(traj.segments().size(), 1u);
+      ASSERT_EQ(traj.pieces().size(), 1u);
       EXPECT_EQ(traj.duration(), 0.0);
       continue;
     }
-    ASSERT_EQ(waypoints.size(), distinct.size());
-    for (std::size_t k = 0; k < distinct.size(); ++k) EXPECT_TRUE(BitEqual(waypoints[k], distinct[k])) << k;
     double expected_total = 0.0;
     for (std::size_t k = 0; k + 1 < distinct.size(); ++k) {
-      const auto& seg = traj.segments()[k];
-      EXPECT_EQ(seg.t0, expected_total);
+      const TrajectorySample at = traj.Evaluate(expected_total);
+      EXPECT_LE((at.q - distinct[k]).cwiseAbs().maxCoeff(), 1e-9) << k;
+      EXPECT_LE(at.qd.cwiseAbs().maxCoeff(), 1e-9) << k;
       bool triangle;
-      const double expected = ReferenceDuration(distinct[k], distinct[k + 1], limits, &triangle);
-      EXPECT_NEAR(seg.duration(), expected, 1e-12 * expected);
-      expected_total += seg.duration();
-      // The robot passes every waypoint exactly, at rest.
-      const TrajectorySample at = traj.Evaluate(seg.t0);
-      EXPECT_TRUE(BitEqual(at.q, distinct[k]));
-      EXPECT_EQ(at.qd, Eigen::VectorXd::Zero(kDofs));
-      // Right limit: inside the trajectory the acceleration is that of the segment starting.
-      if (k > 0) {
-        EXPECT_EQ(at.qdd, (seg.s_acc * (seg.b - seg.a)).eval());
-      }
+      expected_total += ReferenceDuration(distinct[k], distinct[k + 1], limits, &triangle);
     }
+    EXPECT_NEAR(traj.duration(), expected_total, 1e-12 * expected_total);
     EXPECT_TRUE(BitEqual(traj.Evaluate(0).q, path.front()));
     EXPECT_TRUE(BitEqual(traj.Evaluate(traj.duration()).q, path.back()));
 
     // 1 kHz: returned derivatives within limits; finite differences of positions too (1e-3);
     // positions equal the trapezoid-rule integral of the velocities up to the rule's error at
-    // the ≤ 4 acceleration jumps per segment (≤ aᵢh²/4 each).
-    const int kinks = 4 * static_cast<int>(traj.segments().size());
+    // the acceleration jumps between pieces (≤ aᵢh²/4 each).
+    const int kinks = static_cast<int>(traj.pieces().size()) + 1;
     std::vector<TrajectorySample> xs;
     for (long k = 0; k * h <= traj.duration(); ++k) xs.push_back(traj.Evaluate(k * h));
     Eigen::VectorXd integral = Eigen::VectorXd::Zero(kDofs);
@@ -244,7 +236,7 @@ TEST(RestToRest, SingleOrRepeatedWaypointGivesOneSampleThere) {
   // Trailing duplicates that differ only in the sign of zero: the last waypoint bit for bit.
   const Eigen::Vector3d plus_zero(1.0, 0.0, 0.0), minus_zero(1.0, -0.0, 0.0);
   const TimedTrajectory traj = ParameterizeRestToRest({q, plus_zero, minus_zero}, limits);
-  EXPECT_EQ(traj.segments().size(), 1u);
+  EXPECT_LE(traj.pieces().size(), 3u);
   EXPECT_TRUE(BitEqual(traj.Evaluate(traj.duration()).q, minus_zero));
 }
 
@@ -262,9 +254,7 @@ TEST(Sample, FirstAndLastExactPeriodRespected) {
     EXPECT_TRUE(BitEqual(samples.front().q, path.front()));
     EXPECT_TRUE(BitEqual(samples.back().q, path.back()));
     EXPECT_EQ(samples.front().qd, Eigen::VectorXd::Zero(kDofs));
-    EXPECT_EQ(samples.front().qdd, Eigen::VectorXd::Zero(kDofs));
-    EXPECT_EQ(samples.back().qd, Eigen::VectorXd::Zero(kDofs));
-    EXPECT_EQ(samples.back().qdd, Eigen::VectorXd::Zero(kDofs));
+    EXPECT_LE(samples.back().qd.cwiseAbs().maxCoeff(), 1e-12);
     EXPECT_EQ(samples.back().t, traj.duration());
     if (traj.duration() == 0.0) {
       EXPECT_EQ(samples.size(), 1u);

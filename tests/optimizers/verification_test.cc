@@ -48,7 +48,9 @@ TEST_F(VerificationTest, GoodTrajectoryPasses) {
   EXPECT_EQ(report.reason, "");
   // Dense: at least one state per 0.005 rad of the widest joint motion of every segment.
   double steps = 0;
-  for (const auto& seg : trajectory_.segments()) steps += std::ceil((seg.b - seg.a).cwiseAbs().maxCoeff() / 0.005);
+  for (std::size_t k = 0; k + 1 < path_.size(); ++k) {
+    steps += std::ceil((path_[k + 1] - path_[k]).cwiseAbs().maxCoeff() / 0.005);
+  }
   EXPECT_GE(report.states_checked, static_cast<int>(steps));
   EXPECT_LE(report.max_velocity_ratio, 1.0 + 1e-9);
   EXPECT_GT(report.max_velocity_ratio, 0.999);  // minimum time: some joint cruises at its limit
@@ -116,20 +118,32 @@ TEST_F(VerificationTest, PositionLimitViolationFailsNamingTheJoint) {
   EXPECT_THAT(report.reason, HasSubstr("outside its limits"));
 }
 
-TEST_F(VerificationTest, BrokenSegmentsFail) {
-  auto segments = trajectory_.segments();
-  ASSERT_GE(segments.size(), 2u);
-  segments[1].a[0] += 0.01;  // a jump between segments 0 and 1
+TEST_F(VerificationTest, BrokenPiecesFail) {
+  auto pieces = trajectory_.pieces();
+  ASSERT_GE(pieces.size(), 2u);
+  pieces[1].coefficients(0, 0) += 0.01;  // a jump between pieces 0 and 1
   VerificationReport report =
-      VerifyTrajectory(TimedTrajectory(segments), path_.front(), path_.back(), *checker_, limits_);
+      VerifyTrajectory(TimedTrajectory(pieces), path_.front(), path_.back(), *checker_, limits_);
   EXPECT_FALSE(report.ok);
-  EXPECT_THAT(report.reason, HasSubstr("segment 1 does not start where segment 0 ends"));
+  EXPECT_THAT(report.reason, HasSubstr("piece 1 does not start where piece 0 ends: joint 0 jumps 0.01 rad"));
 
-  segments = trajectory_.segments();
-  segments[0].s_acc *= 1.01;  // profile overshoots s = 1
-  report = VerifyTrajectory(TimedTrajectory(segments), path_.front(), path_.back(), *checker_, limits_);
+  pieces = trajectory_.pieces();
+  pieces[0].duration *= 1.01;  // piece 1 no longer starts when piece 0 ends
+  report = VerifyTrajectory(TimedTrajectory(pieces), path_.front(), path_.back(), *checker_, limits_);
   EXPECT_FALSE(report.ok);
-  EXPECT_THAT(report.reason, HasSubstr("segment 0 profile covers s = "));
+  EXPECT_THAT(report.reason, HasSubstr("piece 1 starts at t = "));
+
+  pieces = trajectory_.pieces();
+  pieces[1].coefficients(1, 1) += 0.1;  // a velocity step
+  report = VerifyTrajectory(TimedTrajectory(pieces), path_.front(), path_.back(), *checker_, limits_);
+  EXPECT_FALSE(report.ok);
+  EXPECT_THAT(report.reason, HasSubstr("piece 1 velocity of joint 1 jumps 0.1"));
+
+  pieces = trajectory_.pieces();
+  pieces[2].coefficients(0, 1) = std::nan("");
+  report = VerifyTrajectory(TimedTrajectory(pieces), path_.front(), path_.back(), *checker_, limits_);
+  EXPECT_FALSE(report.ok);
+  EXPECT_THAT(report.reason, HasSubstr("piece 2 has a non-finite coefficient"));
 
   report = VerifyTrajectory(TimedTrajectory(), path_.front(), path_.back(), *checker_, limits_);
   EXPECT_FALSE(report.ok);

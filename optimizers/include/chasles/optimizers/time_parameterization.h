@@ -1,9 +1,14 @@
 #pragma once
 /// \file
-/// Exact minimum-time rest-to-rest parameterisation along each straight segment of a path.
+/// Exact time parameterisation of joint-space paths: rest-to-rest along each straight segment
+/// (the fallback every optimiser can land on), and the time-optimal parameterisation with
+/// bounded-deviation blends at the corners.
+
+#include <string>
 
 #include <Eigen/Core>
 
+#include "chasles/collision/collision_checker.h"
 #include "chasles/optimizers/timed_trajectory.h"
 
 namespace chasles {
@@ -12,21 +17,75 @@ namespace chasles {
 struct KinematicLimits {
   Eigen::VectorXd max_velocity;      ///< > 0 [rad/s] per joint
   Eigen::VectorXd max_acceleration;  ///< > 0 [rad/s²] per joint
-  /// Checks sizes (== num_dofs), finiteness and positivity.
+  Eigen::VectorXd max_jerk;          ///< empty = unlimited; else > 0 [rad/s³] per joint
+  /// Empty = unlimited; else > 0 [N·m] or [N] per joint, on the inverse-dynamics torque
+  /// (a robot with inertia only), computed with `gravity`.
+  Eigen::VectorXd max_effort;
+  Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);  ///< base frame [m/s²], for efforts
+  /// Checks sizes (== num_dofs), finiteness and positivity of every limit that is set.
   /// \throws Error(kInvalidArgument), e.g. `max_velocity[2] = -1 must be > 0`,
   ///         `max_acceleration has 6 values, robot has 7 joints`.
   void Validate(int num_dofs) const;
 };
 
-/// Times each segment a→b with the exact minimum-time rest-to-rest profile along the line:
-/// with Δ = b − a, V = minᵢ vᵢ/|Δᵢ| and A = minᵢ aᵢ/|Δᵢ|, the duration is 1/V + V/A when
-/// V² ≤ A (trapezoid) and 2/√A otherwise (triangle). Every joint then stays within its
-/// velocity and acceleration limits at every instant. Zero-length segments (exactly repeated
-/// waypoints) are dropped; segment k+1 starts where segment k ends (t0 and waypoint exact).
-/// A path of one waypoint, or of identical ones, gives one zero-duration segment a = b = that
-/// waypoint (so Sample() returns a single sample there), never an empty trajectory.
+/// Times each segment a→b with the exact minimum-time rest-to-rest profile along the line, so
+/// the robot stops at every waypoint. With Δ = b − a, V = minᵢ vᵢ/|Δᵢ| and A = minᵢ aᵢ/|Δᵢ|,
+/// the duration is 1/V + V/A when V² ≤ A (trapezoid) and 2/√A otherwise (triangle). With
+/// max_jerk set (J = minᵢ jᵢ/|Δᵢ|), each segment is the minimum-time jerk-limited profile
+/// (up to seven phases of constant jerk ±J or 0, cubic pieces) instead. Every joint stays
+/// within its limits at every instant. Zero-length segments (exactly repeated waypoints) are
+/// dropped. A path of one waypoint, or of identical ones, gives one zero-duration piece there.
+/// max_effort is not considered here (see ParameterizeTimeOptimal).
 /// \throws Error(kInvalidArgument) for an empty path, waypoints of different sizes or with
 ///         non-finite values, or limits that fail Validate(path[0].size()).
 TimedTrajectory ParameterizeRestToRest(const JointPath& path, const KinematicLimits& limits);
+
+struct TimeOptimalOptions {
+  /// How close the trajectory must pass to every interior waypoint [rad] (Euclidean in joint
+  /// space): the corner is cut by a parabolic blend (constant acceleration) that starts and
+  /// ends on the adjacent segments and stays in their convex hull. 0 = stop at every corner.
+  double max_deviation = 0.05;
+  /// Velocity at the start / end [rad/s]; empty = at rest. Non-zero: it must point along the
+  /// first segment (start) / the last segment (end) and respect the velocity limits.
+  Eigen::VectorXd start_velocity, end_velocity;
+  /// With a checker: every blend is checked for collisions at this joint step [rad]; a blend
+  /// that collides is redone with a quarter of the deviation (down to a stop at the corner).
+  double max_joint_step = 0.005;
+};
+
+struct TimeOptimalReport {
+  int blends = 0;             ///< corners passed without stopping
+  int blends_tightened = 0;   ///< blends redone with a smaller deviation after a collision
+  int effort_iterations = 0;  ///< slow-downs applied to meet max_effort
+  std::string message;        ///< summary
+};
+
+/// Minimum-time parameterisation of the path with blended corners under per-joint velocity and
+/// acceleration limits (and torque limits with max_effort on a robot with inertia).
+///
+/// Each segment k has path-speed and path-acceleration limits Vₖ = minᵢ vᵢ/|dₖᵢ| and
+/// Aₖ = minᵢ aᵢ/|dₖᵢ| (dₖ its unit direction). A corner passed at speed u takes a parabolic
+/// blend of duration u·c (c = maxᵢ |Δdᵢ|/aᵢ) that cuts the corner by u²·|Δd|·c/8 ≤
+/// max_deviation. Corner speeds are the largest a forward and a backward pass allow; each
+/// straight part is bang–coast–bang between them. Reversals (d₂ = −d₁) blend into a smooth
+/// turn on the segment itself; duplicate waypoints are dropped. Velocities, accelerations and
+/// positions within limits are exact (the pieces are quadratic in time). A straight
+/// rest-to-rest path gives exactly the duration 1/V + V/A (or 2/√A).
+///
+/// max_effort: the torques are checked along the trajectory (at every 0.005 rad of joint motion
+/// and at piece ends); a segment or blend that exceeds them is slowed down (its acceleration
+/// limits scaled) and the parameterisation redone, up to 40 times.
+/// max_jerk must be empty: this profile's acceleration steps have unbounded jerk.
+///
+/// \throws Error(kInvalidArgument) for an invalid path or limits (as ParameterizeRestToRest),
+///   max_jerk set, max_deviation or max_joint_step not finite and >= 0 / > 0, a start/end
+///   velocity of the wrong size, not along its segment, over a limit, too fast to stop within
+///   the path, or non-zero on a path with no motion; max_effort on a robot without inertia.
+/// \throws Error(kFailedPrecondition) when max_effort cannot be met: the robot cannot hold a
+///   configuration of the path against gravity, or 40 slow-downs did not suffice.
+TimedTrajectory ParameterizeTimeOptimal(const JointPath& path, const KinematicLimits& limits,
+                                        const TimeOptimalOptions& options = {},
+                                        const CollisionChecker* checker = nullptr,
+                                        TimeOptimalReport* report = nullptr);
 
 }  // namespace chasles

@@ -17,52 +17,86 @@ struct TrajectorySample {
   Eigen::VectorXd q;       ///< positions [rad] / [m]
   Eigen::VectorXd qd;      ///< velocities [rad/s] / [m/s]
   Eigen::VectorXd qdd;     ///< accelerations [rad/s²] / [m/s²]
+  Eigen::VectorXd jerk;    ///< jerks [rad/s³] / [m/s³]
   Eigen::VectorXd effort;  ///< joint torques [N·m] / forces [N]; empty unless computed (pipeline)
 };
 
-/// A trajectory that is exact between samples: a sequence of segments, each a straight
-/// joint-space line a→b traversed by a scalar profile s(t) ∈ [0, 1] that is piecewise
-/// quadratic (trapezoidal or triangular velocity, rest to rest).
+/// A trajectory that is exact between samples: consecutive pieces, each a polynomial in time
+/// per joint. Every optimiser returns this form: the time-optimal parameterisation gives
+/// quadratic pieces (constant acceleration), collocation cubic pieces (constant jerk), the
+/// B-spline smoother cubic or quintic pieces. Limits can therefore be checked exactly, at the
+/// extrema of each polynomial, rather than at samples.
 class TimedTrajectory {
  public:
-  struct Segment {
-    Eigen::VectorXd a, b;      ///< endpoints
-    double t0 = 0.0;           ///< start time [s]
-    double t_acc = 0.0;        ///< acceleration phase duration [s] (= deceleration)
-    double t_cruise = 0.0;     ///< constant-velocity phase duration [s]
-    double s_acc = 0.0;        ///< path acceleration ds/dt² [1/s²]
-    double duration() const { return 2.0 * t_acc + t_cruise; }
+  /// q(t0 + τ) = Σₖ coefficients.col(k) τᵏ for τ ∈ [0, duration].
+  struct Piece {
+    double t0 = 0.0;                ///< start time [s]
+    double duration = 0.0;          ///< [s], >= 0
+    Eigen::MatrixXd coefficients;   ///< num_dofs × (degree + 1), lowest power first
+    int degree() const { return static_cast<int>(coefficients.cols()) - 1; }
   };
 
   TimedTrajectory() = default;
-  explicit TimedTrajectory(std::vector<Segment> segments) : segments_(std::move(segments)) {}
+  /// Pieces in time order with t0 = the previous piece's end; `end_position` (optional) is the
+  /// exact final configuration, returned at t >= duration() instead of the last polynomial's
+  /// value there (which carries rounding). Only the shapes are checked here (same rows, at
+  /// least one column, non-empty end_position of the same size); VerifyTrajectory checks
+  /// continuity and finiteness.
+  /// \throws Error(kInvalidArgument) on mismatched sizes.
+  explicit TimedTrajectory(std::vector<Piece> pieces, Eigen::VectorXd end_position = {});
 
-  const std::vector<Segment>& segments() const { return segments_; }
+  const std::vector<Piece>& pieces() const { return pieces_; }
   double duration() const;
-  bool empty() const { return segments_.empty(); }
-  int num_dofs() const { return segments_.empty() ? 0 : static_cast<int>(segments_.front().a.size()); }
+  bool empty() const { return pieces_.empty(); }
+  int num_dofs() const { return pieces_.empty() ? 0 : static_cast<int>(pieces_.front().coefficients.rows()); }
+  /// Highest polynomial degree over the pieces (0 when empty).
+  int degree() const;
 
-  /// Exact state at time t [s], clamped to [0, duration()] (NaN counts as 0).
-  /// The robot is at rest outside (0, duration()): t <= 0 gives the first waypoint and
-  /// t >= duration() the last one, bit-exactly, with q̇ = q̈ = 0. At a phase or segment
-  /// boundary strictly inside, q̈ (which jumps there) is the value of the phase that STARTS at
-  /// t (the right limit); q and q̇ are continuous. Positions are a + s·(b − a) while
-  /// accelerating or cruising and b − (1 − s)·(b − a) while decelerating, so every segment
-  /// starts at its `a` and ends at its `b` exactly.
+  /// Exact state at time t [s], clamped to [0, duration()] (NaN counts as 0). At a piece
+  /// boundary strictly inside, the piece that STARTS at t is used (right limit): q and q̇ are
+  /// continuous there, q̈ and the jerk may jump. t <= 0 gives the first piece's start (its
+  /// constant coefficient, bit-exactly); t >= duration() gives the end state with q =
+  /// end_position when one was given.
   /// \throws Error(kFailedPrecondition) on an empty trajectory.
   TrajectorySample Evaluate(double t) const;
   /// Samples at t = 0, period, 2·period, … strictly before duration() (a multiple of the
-  /// period within 1e-9·period of the end is skipped), then at duration() exactly. The first
-  /// and last samples are the first and last waypoints bit-exactly with q̇ = q̈ = 0. A
+  /// period within 1e-9·period of the end is skipped), then at duration() exactly. A
   /// zero-duration trajectory gives one sample; an empty one gives none.
   /// \throws Error(kInvalidArgument) when period is not finite and > 0 or would give more
   ///         than 1e8 samples.
   std::vector<TrajectorySample> Sample(double period) const;
-  /// The segment endpoints in order: segments().front().a, then every segment's b.
+  /// The configuration at every piece boundary: the start, each piece's end, with duplicates
+  /// (consecutive equal configurations) kept.
   JointPath Waypoints() const;
 
+  /// A new trajectory that runs this one `factor` times slower: t' = factor·t, so velocities
+  /// scale by 1/factor, accelerations by 1/factor², jerks by 1/factor³. \throws kInvalidArgument
+  /// unless factor is finite and > 0.
+  TimedTrajectory TimeScaled(double factor) const;
+
  private:
-  std::vector<Segment> segments_;
+  std::vector<Piece> pieces_;
+  Eigen::VectorXd end_position_;
 };
+
+/// Appends a piece that moves along the line q = origin + s·direction with the scalar profile
+/// s(τ) = s0 + s1·τ + s2·τ² + s3·τ³ (unused terms 0) for τ ∈ [0, duration], starting at time t0.
+TimedTrajectory::Piece LinePiece(double t0, double duration, const Eigen::VectorXd& origin,
+                                 const Eigen::VectorXd& direction, double s0, double s1, double s2,
+                                 double s3 = 0.0);
+
+/// Polynomial helpers on coefficient vectors, lowest power first.
+namespace poly {
+/// p(x) by Horner's rule.
+double Eval(const double* c, int size, double x);
+/// The k-th derivative's value at x.
+double EvalDerivative(const double* c, int size, int k, double x);
+/// max |p^(k)(x)| over x ∈ [0, length], exact up to the root finder (bisection to ~1e-15
+/// relative): the extremes are at the interval's ends or at real roots of p^(k+1).
+/// `where` (optional) receives an x at which the maximum is attained.
+double MaxAbsDerivative(const double* c, int size, int k, double length, double* where = nullptr);
+/// min and max of p over [0, length].
+void Range(const double* c, int size, double length, double* lo, double* hi);
+}  // namespace poly
 
 }  // namespace chasles

@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Dense verification of a timed trajectory before it leaves the server.
+/// Dense verification of a timed trajectory before it leaves the server, and the quality
+/// figures a response reports.
 
 #include <string>
 
@@ -12,30 +13,34 @@ namespace chasles {
 
 struct VerificationOptions {
   double max_joint_step = 0.005;   ///< resample so no joint moves more than this between checks [rad]
-  double endpoint_tolerance = 1e-6;  ///< |q(0) − start|∞ and |q(T) − goal|∞ bound [rad]
-  double limit_tolerance = 1e-9;   ///< relative slack on velocity/acceleration limits
+  double endpoint_tolerance = 1e-6;  ///< |q(0) − start|∞, |q(T) − goal|∞ and piece-to-piece jumps [rad]
+  double limit_tolerance = 1e-9;   ///< relative slack on velocity/acceleration/jerk/effort limits
+  /// Expected velocity at the start / end [rad/s]; empty = at rest. Checked to
+  /// 1e-6·max(1, v_max) per joint, as is velocity continuity between pieces.
+  Eigen::VectorXd start_velocity, end_velocity;
 };
 
 struct VerificationReport {
   bool ok = false;
   std::string reason;              ///< empty when ok, else what failed and where (time, joint)
   int states_checked = 0;
-  double max_velocity_ratio = 0.0;     ///< max over samples and joints of |q̇ᵢ|/vᵢ
-  double max_acceleration_ratio = 0.0; ///< max over samples and joints of |q̈ᵢ|/aᵢ
+  double max_velocity_ratio = 0.0;     ///< max over the trajectory and joints of |q̇ᵢ|/vᵢ (exact)
+  double max_acceleration_ratio = 0.0; ///< max of |q̈ᵢ|/aᵢ (exact)
+  double max_jerk_ratio = 0.0;         ///< max of |q⃛ᵢ|/jᵢ (exact); 0 without jerk limits
+  double max_effort_ratio = 0.0;       ///< max of |τᵢ|/τmaxᵢ at the checked states; 0 without effort limits
 };
 
-/// Resamples `trajectory` so that consecutive states differ by at most max_joint_step in every
-/// joint, and checks each state for collisions (self + scene) and position limits, the
-/// velocities/accelerations against `limits` (evaluated on the exact profile at every sample
-/// and at every phase boundary), and the endpoints against start and goal.
-///
-/// In order: every segment's structure (sizes, finite non-negative profile numbers, a profile
-/// that covers s ∈ [0, 1] to 1e-9, t0 continuous to 1e-9 s, each segment starting within
-/// endpoint_tolerance of where the previous one ends); q(0) vs start and q(T) vs goal; then
-/// segment by segment in time order: q̇ and q̈ at both ends of every phase (both one-sided
-/// values at each boundary), and m + 1 states at s = k/m with m = ⌈maxᵢ|Δᵢ| / max_joint_step⌉,
-/// each evaluated at its exact time on the profile: position limits, q̇/q̈ limits, then
-/// checker.IsValid (a contact is named with checker.Check). Stops at the first failure.
+/// Checks, in order, stopping at the first failure:
+/// 1. structure: every piece has num_dofs rows, finite coefficients, a finite duration >= 0,
+///    starts when the previous one ends (1e-9 s relative), and continues its position (within
+///    endpoint_tolerance) and velocity; with max_jerk set also its acceleration, and the
+///    acceleration is zero at an end at rest (a step there would be an infinite jerk);
+/// 2. q(0) vs start, q(T) vs goal, q̇(0) and q̇(T) vs the expected velocities;
+/// 3. piece by piece in time order, exactly at the extrema of each polynomial: position limits
+///    (to 1e-12 relative), velocity, acceleration and (when limited) jerk limits;
+/// 4. states spaced so no joint moves more than max_joint_step between consecutive ones
+///    (m = ⌈maxᵢ max|q̇ᵢ|·duration / step⌉ per piece): collisions (self + scene) and, with
+///    max_effort on a robot with inertia, the inverse-dynamics torques.
 /// `reason` says what failed and where, e.g.
 /// `collision at t = 1.234 s between link 'panda_link5' and 'shelf_top'`,
 /// `self-collision at t = 0.5 s between link 'link1' and link 'link4'`,
@@ -44,10 +49,36 @@ struct VerificationReport {
 /// `trajectory ends 0.001 rad from the goal configuration (tolerance 1e-06 rad) at t = 4.8 s`,
 /// `trajectory is empty`. Joints are numbered from 0 in configuration order.
 /// \throws Error(kInvalidArgument) for options that are not finite with max_joint_step > 0 and
-///         tolerances >= 0, limits that fail Validate(robot().num_dofs()), or start/goal sizes.
+///         tolerances >= 0, limits that fail Validate(robot().num_dofs()), start/goal or
+///         expected velocity sizes, or max_effort on a robot without inertia.
 VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eigen::VectorXd& start,
                                     const Eigen::VectorXd& goal, const CollisionChecker& checker,
                                     const KinematicLimits& limits,
                                     const VerificationOptions& options = {});
+
+/// Quality figures of a trajectory (what a response reports besides the verification).
+struct TrajectoryQuality {
+  double duration = 0.0;                ///< [s]
+  double max_velocity_ratio = 0.0;      ///< max |q̇ᵢ|/vᵢ (exact)
+  double max_acceleration_ratio = 0.0;  ///< max |q̈ᵢ|/aᵢ (exact)
+  double max_jerk_ratio = 0.0;          ///< max |q⃛ᵢ|/jᵢ (exact, inside pieces); 0 without jerk limits
+  double max_jerk = 0.0;                ///< max |q⃛ᵢ| inside pieces [rad/s³] (steps between pieces not counted)
+  double max_effort_ratio = 0.0;        ///< max |τᵢ|/τmaxᵢ at the sampled states; 0 without effort limits
+  /// Largest distance [rad] (Euclidean in joint space) between the trajectory and the input
+  /// path, both ways: from sampled states to the nearest point of the path's polyline, and from
+  /// each waypoint to the nearest sampled state.
+  double max_deviation = 0.0;
+  /// Smallest distance between the robot and the scene's obstacles at the sampled states [m];
+  /// +inf when the scene has none (self-distance not included).
+  double min_clearance = 0.0;
+  double jerk_integral = 0.0;           ///< ∫‖q⃛‖² dt over the pieces (exact) [rad²/s⁵]
+};
+
+/// Measures `trajectory` against the limits and the input `path` (may be empty: deviation 0),
+/// sampling states every `max_joint_step` of joint motion (at most 2000 states in all) for the
+/// sampled figures. `checker` may be null (clearance and effort then 0).
+TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const KinematicLimits& limits,
+                                    const JointPath& path, const CollisionChecker* checker,
+                                    double max_joint_step = 0.01);
 
 }  // namespace chasles

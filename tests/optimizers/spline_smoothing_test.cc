@@ -1,0 +1,2 @@
+// Tests are being written.
+#include <gtest/gtest.h>
