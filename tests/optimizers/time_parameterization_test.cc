@@ -11,45 +11,21 @@
 
 #include "chasles/optimizers/timed_trajectory.h"
 #include "chasles/robot/error.h"
+#include "random_paths.h"
 #include "test_util.h"
 
 namespace chasles {
 namespace {
 
 using test::BitEqual;
+using test::FirstExceeding;
 using test::Random;
+using test::RandomLimits;
+using test::RandomPath;
+using test::ReferenceDuration;
 
 constexpr int kDofs = 7;
 constexpr double kPeriod = 1e-3;  // 1 kHz
-
-KinematicLimits RandomLimits(Random& rng, int n) {
-  KinematicLimits limits;
-  limits.max_velocity = rng.Vector(n, 0.3, 3.0);
-  limits.max_acceleration = rng.Vector(n, 0.5, 12.0);
-  return limits;
-}
-
-/// Reference minimum time of a straight rest-to-rest segment, computed here independently.
-double ReferenceDuration(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const KinematicLimits& limits,
-                         bool* triangle) {
-  double v = std::numeric_limits<double>::infinity(), acc = v;
-  for (int i = 0; i < a.size(); ++i) {
-    const double d = std::fabs(b[i] - a[i]);
-    if (d == 0) continue;
-    v = std::fmin(v, limits.max_velocity[i] / d);
-    acc = std::fmin(acc, limits.max_acceleration[i] / d);
-  }
-  *triangle = v * v > acc;
-  return *triangle ? 2.0 / std::sqrt(acc) : 1.0 / v + v / acc;
-}
-
-/// |x| <= limit·(1 + rel) for every joint; returns the first offending joint or -1.
-int FirstExceeding(const Eigen::VectorXd& x, const Eigen::VectorXd& limit, double rel) {
-  for (int i = 0; i < x.size(); ++i) {
-    if (!(std::fabs(x[i]) <= limit[i] * (1.0 + rel))) return i;
-  }
-  return -1;
-}
 
 TEST(RestToRest, StraightSegmentsHaveTheExactMinimumTimeAndRespectLimits) {
   Random rng(test::TestSeed());
@@ -132,28 +108,6 @@ TEST(RestToRest, BindingJointHitsItsAccelerationLimit) {
   EXPECT_NEAR(tri.duration(), 2.0 / std::sqrt(20.0), 1e-15);
   EXPECT_EQ(tri.pieces().size(), 2u);  // no cruise
   EXPECT_NEAR(tri.Evaluate(tri.duration() / 2).q[0], 0.05, 1e-15);
-}
-
-/// A random path with reversals (returning to an earlier waypoint), exact duplicates and
-/// joints that do not move on some segments.
-JointPath RandomPath(Random& rng, int n) {
-  JointPath path{rng.Vector(n, -2.0, 2.0)};
-  const int waypoints = 2 + rng.Index(8);
-  for (int k = 1; k < waypoints; ++k) {
-    const double r = rng.Uniform();
-    if (r < 0.15) {
-      path.push_back(path.back());  // exact duplicate
-    } else if (r < 0.3 && path.size() >= 2) {
-      path.push_back(path[path.size() - 2]);  // reversal
-    } else {
-      Eigen::VectorXd q = path.back() + std::pow(10.0, rng.Uniform(-2.0, 0.0)) * rng.Vector(n, -2.0, 2.0);
-      for (int i = 0; i < n; ++i) {
-        if (rng.Uniform() < 0.2) q[i] = path.back()[i];
-      }
-      path.push_back(q);
-    }
-  }
-  return path;
 }
 
 TEST(RestToRest, MultiWaypointPathsRespectLimitsEverywhere) {
