@@ -26,20 +26,6 @@ void CheckRange(double value, double lo, double hi, const std::string& field) {
   }
 }
 
-/// The limits the trajectory must respect: overrides capped at the model's velocity limits,
-/// acceleration defaulting to 2 × the velocity limit per second.
-KinematicLimits ResolveLimits(const PlanQuery& query) {
-  const RobotModel& robot = query.checker->robot();
-  KinematicLimits limits;
-  limits.max_velocity = robot.velocity_limits();
-  if (query.max_velocity.size() > 0) {
-    limits.max_velocity = query.max_velocity.cwiseMin(robot.velocity_limits());
-  }
-  limits.max_acceleration =
-      query.max_acceleration.size() > 0 ? query.max_acceleration : Eigen::VectorXd(2.0 * limits.max_velocity);
-  return limits;
-}
-
 std::string DescribeContact(const CollisionResult& c) {
   return c.self_collision ? "link '" + c.link_a + "' touches link '" + c.other + "'"
                           : "link '" + c.link_a + "' touches '" + c.other + "'";
@@ -59,6 +45,7 @@ const char* ToString(PlanOutcomeCode code) {
     case PlanOutcomeCode::kCancelled: return "CANCELLED";
     case PlanOutcomeCode::kDeadlineExceeded: return "DEADLINE_EXCEEDED";
     case PlanOutcomeCode::kLocalMinimum: return "LOCAL_MINIMUM";
+    case PlanOutcomeCode::kInfeasibleLimits: return "INFEASIBLE_LIMITS";
   }
   return "UNKNOWN";
 }
@@ -109,20 +96,10 @@ void PlanQuery::Validate(const PlannerRegistry& registry) const {
   if (shortcut_attempts < -1) {
     ThrowInvalid("trajectory.shortcut_attempts = " + std::to_string(shortcut_attempts) + " must be >= -1");
   }
-  const auto check_vector = [n](const Eigen::VectorXd& v, const std::string& field) {
-    if (v.size() == 0) return;
-    if (v.size() != n) {
-      ThrowInvalid("trajectory." + field + " has " + std::to_string(v.size()) + " values, the robot has " +
-                   std::to_string(n) + " joints");
-    }
-    for (int i = 0; i < n; ++i) {
-      if (!std::isfinite(v[i]) || v[i] <= 0) {
-        ThrowInvalid("trajectory." + field + "[" + std::to_string(i) + "] = " + FormatNumber(v[i]) + " must be finite and > 0");
-      }
-    }
-  };
-  check_vector(max_velocity, "max_velocity");
-  check_vector(max_acceleration, "max_acceleration");
+  TrajectorySpec resolved = trajectory;
+  resolved.gravity = gravity;
+  ResolveLimits(robot, resolved);  // throws naming trajectory.<field>
+  (void)n;
 }
 
 PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& termination) const {
@@ -138,7 +115,11 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
   // 1. Validate: contract violations throw; a colliding start or goal is an outcome.
   query.Validate(registry_);
   const CollisionChecker& checker = *query.checker;
-  out.limits = ResolveLimits(query);
+  {
+    TrajectorySpec spec = query.trajectory;
+    spec.gravity = query.gravity;
+    out.limits = ResolveLimits(checker.robot(), spec);
+  }
   const CollisionResult start_contact = checker.Check(query.start);
   out.state_checks += 1;
   if (start_contact.in_collision) {
@@ -236,38 +217,36 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
   }
   out.seconds.shortcut = SecondsSince(t);
 
-  // 4. Time-parameterise: exact minimum-time rest-to-rest along each segment.
-  t = Clock::now();
-  out.trajectory = ParameterizeRestToRest(out.path, out.limits);
-  out.seconds.parameterize = SecondsSince(t);
-
-  // 5. Verify densely before anything leaves.
-  t = Clock::now();
-  VerificationOptions verify;
-  verify.max_joint_step = std::min(0.005, query.collision_resolution);
-  out.verification = VerifyTrajectory(out.trajectory, query.start, out.goal, checker, out.limits, verify);
+  // 4–5. Time-parameterise (and optimise), then verify densely before anything leaves.
+  TrajectorySpec spec = query.trajectory;
+  spec.gravity = query.gravity;
+  TrajectoryStageResult timed =
+      RunTrajectoryStage(out.path, checker, spec, std::min(0.005, query.collision_resolution), termination);
+  out.limits = timed.limits;
+  out.verification = timed.verification;
+  out.optimizer = timed.optimizer;
+  out.seconds.parameterize = timed.parameterize_seconds;
+  out.seconds.optimize = timed.optimize_seconds;
+  out.seconds.verify = timed.verify_seconds;
   out.state_checks += static_cast<std::uint64_t>(out.verification.states_checked);
-  out.seconds.verify = SecondsSince(t);
-  if (!out.verification.ok) {
-    out.trajectory = TimedTrajectory();
-    return finish(PlanOutcomeCode::kVerificationFailed,
-                  "the trajectory failed dense verification: " + out.verification.reason);
+  if (timed.code == TrajectoryStageCode::kInfeasibleLimits) {
+    return finish(PlanOutcomeCode::kInfeasibleLimits, timed.message);
   }
-  out.samples = out.trajectory.Sample(query.sample_period);
+  if (timed.code != TrajectoryStageCode::kSuccess) {
+    return finish(PlanOutcomeCode::kVerificationFailed, timed.message);
+  }
+  out.trajectory = std::move(timed.trajectory);
+  out.quality = timed.quality;
+  out.samples = SampleTrajectory(out.trajectory, checker.robot(), query.sample_period, query.gravity);
   const RobotModel& robot = checker.robot();
-  if (HasInertia(robot)) {
-    DynamicsOptions dynamics;
-    dynamics.gravity = query.gravity;
-    for (TrajectorySample& sample : out.samples) {
-      sample.effort = InverseDynamics(robot, sample.q, sample.qd, sample.qdd, dynamics);
-    }
-  }
   if (query.pose_goal) {
     out.goal_manipulability = Manipulability(SpaceJacobian(robot, out.goal, query.pose_goal->link));
   }
   std::ostringstream message;
-  message << planned.message << "; " << out.path.size() << " waypoints after shortcutting, duration "
-          << out.trajectory.duration() << " s, verified at " << out.verification.states_checked << " states";
+  message << planned.message << "; " << out.path.size() << " waypoints after shortcutting; "
+          << ToString(out.optimizer.used) << " trajectory of " << out.trajectory.duration() << " s, verified at "
+          << out.verification.states_checked << " states";
+  if (out.optimizer.fell_back) message << "; " << out.optimizer.message;
   return finish(PlanOutcomeCode::kSuccess, message.str());
 }
 

@@ -596,26 +596,256 @@ PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<con
   }
   query.shortcut_attempts = trajectory.shortcut_attempts() == 0 ? 100 : trajectory.shortcut_attempts();
 
-  if (trajectory.max_velocity_size() > 0) {
-    RequireJointCount(trajectory.max_velocity_size(), robot, "trajectory.max_velocity");
-    query.max_velocity.resize(robot.num_dofs());
-    for (int i = 0; i < trajectory.max_velocity_size(); ++i) {
-      const double v = trajectory.max_velocity(i);
-      RequirePositive(v, Indexed("trajectory.max_velocity", i));
-      query.max_velocity[i] = std::min(v, robot.velocity_limits()[i]);
-    }
-  }
-  if (trajectory.max_acceleration_size() > 0) {
-    RequireJointCount(trajectory.max_acceleration_size(), robot, "trajectory.max_acceleration");
-    query.max_acceleration.resize(robot.num_dofs());
-    for (int i = 0; i < trajectory.max_acceleration_size(); ++i) {
-      const double a = trajectory.max_acceleration(i);
-      RequirePositive(a, Indexed("trajectory.max_acceleration", i));
-      query.max_acceleration[i] = a;
-    }
-  }
+  query.trajectory = TrajectorySpecFromProto(trajectory, robot, "trajectory");
   query.Validate(registry);
   return query;
+}
+
+namespace {
+
+Eigen::VectorXd PositiveJointValues(const google::protobuf::RepeatedField<double>& values, const RobotModel& robot,
+                                    const std::string& field) {
+  if (values.empty()) return {};
+  RequireJointCount(values.size(), robot, field);
+  Eigen::VectorXd out(values.size());
+  for (int i = 0; i < values.size(); ++i) {
+    RequirePositive(values[i], Indexed(field, i));
+    out[i] = values[i];
+  }
+  return out;
+}
+
+/// 0 = fallback; else within (0, 600].
+double BudgetFromProto(double value, double fallback, const std::string& field) {
+  if (value == 0.0) return fallback;
+  if (!(std::isfinite(value) && value > 0.0 && value <= 600.0)) {
+    ThrowInvalid(field + " = " + FormatNumber(value) + " must be within (0, 600] s (0 = " + FormatNumber(fallback) + " s)");
+  }
+  return value;
+}
+
+}  // namespace
+
+TrajectorySpec TrajectorySpecFromProto(const v1::TrajectoryOptions& options, const RobotModel& robot,
+                                       const std::string& field) {
+  TrajectorySpec spec;
+  if (options.max_velocity_size() > 0) {
+    spec.max_velocity = PositiveJointValues(options.max_velocity(), robot, field + ".max_velocity")
+                            .cwiseMin(robot.velocity_limits());
+  }
+  spec.max_acceleration = PositiveJointValues(options.max_acceleration(), robot, field + ".max_acceleration");
+  spec.max_jerk = PositiveJointValues(options.max_jerk(), robot, field + ".max_jerk");
+  spec.max_effort = PositiveJointValues(options.max_effort(), robot, field + ".max_effort");
+  switch (options.post_processing()) {
+    case v1::TrajectoryOptions::POST_PROCESSING_UNSPECIFIED: spec.method = PostProcessing::kAuto; break;
+    case v1::TrajectoryOptions::TOPP: spec.method = PostProcessing::kTimeOptimal; break;
+    case v1::TrajectoryOptions::COLLOCATION: spec.method = PostProcessing::kCollocation; break;
+    case v1::TrajectoryOptions::SPLINE: spec.method = PostProcessing::kSpline; break;
+    case v1::TrajectoryOptions::NONE: spec.method = PostProcessing::kNone; break;
+    default:
+      ThrowInvalid(field + ".post_processing = " + std::to_string(options.post_processing()) +
+                   " is not one of TOPP, COLLOCATION, SPLINE, NONE");
+  }
+  if (options.has_max_deviation()) {
+    RequireInRange(options.max_deviation(), 0.0, 1.0, field + ".max_deviation");
+    spec.max_deviation = options.max_deviation();
+  }
+  const auto weight = [](double w, const std::string& name) {
+    if (!(std::isfinite(w) && w >= 0.0)) ThrowInvalid(name + " = " + FormatNumber(w) + " must be finite and >= 0");
+    return w;
+  };
+  const v1::CollocationOptions& c = options.collocation();
+  const std::string cf = field + ".collocation";
+  if (c.knots() != 0 && c.knots() < 2) {
+    ThrowInvalid(cf + ".knots = " + std::to_string(c.knots()) + " must be >= 2 (0 = 100)");
+  }
+  if (c.knots() > 2000) ThrowInvalid(cf + ".knots = " + std::to_string(c.knots()) + " must be at most 2000");
+  spec.collocation.knots = c.knots() == 0 ? 100 : c.knots();
+  spec.collocation.jerk_weight = weight(c.jerk_weight(), cf + ".jerk_weight");
+  if (c.has_clearance()) spec.collocation.clearance = weight(c.clearance(), cf + ".clearance");
+  if (c.max_iterations() < 0) {
+    ThrowInvalid(cf + ".max_iterations = " + std::to_string(c.max_iterations()) + " must be >= 1 (0 = 500)");
+  }
+  spec.collocation.max_iterations = c.max_iterations() == 0 ? 500 : c.max_iterations();
+  spec.collocation.time_budget = BudgetFromProto(c.time_budget(), 5.0, cf + ".time_budget");
+
+  const v1::SplineOptions& b = options.spline();
+  const std::string sf = field + ".spline";
+  spec.spline.degree = b.degree() == 0 ? 3 : b.degree();
+  if (spec.spline.degree != 3 && spec.spline.degree != 5) {
+    ThrowInvalid(sf + ".degree = " + std::to_string(b.degree()) + " must be 3 or 5 (0 = 3)");
+  }
+  if (b.control_points() != 0 && b.control_points() < spec.spline.degree + 1) {
+    ThrowInvalid(sf + ".control_points = " + std::to_string(b.control_points()) + " must be >= degree + 1 = " +
+                 std::to_string(spec.spline.degree + 1) + " (0 = chosen from the path)");
+  }
+  if (b.control_points() > 500) {
+    ThrowInvalid(sf + ".control_points = " + std::to_string(b.control_points()) + " must be at most 500");
+  }
+  spec.spline.control_points = b.control_points();
+  spec.spline.jerk_weight = weight(b.jerk_weight(), sf + ".jerk_weight");
+  if (b.has_clearance()) spec.spline.clearance = weight(b.clearance(), sf + ".clearance");
+  if (b.max_deviation() != 0.0) {
+    if (!(std::isfinite(b.max_deviation()) && b.max_deviation() > 0.0)) {
+      ThrowInvalid(sf + ".max_deviation = " + FormatNumber(b.max_deviation()) + " must be finite and > 0 (0 = 0.1)");
+    }
+    spec.spline.max_deviation = b.max_deviation();
+  }
+  if (!b.algorithm().empty()) {
+    if (b.algorithm() != "slsqp" && b.algorithm() != "mma") {
+      ThrowInvalid(sf + ".algorithm = '" + b.algorithm() + "' must be 'slsqp' or 'mma'");
+    }
+    spec.spline.algorithm = b.algorithm();
+  }
+  if (b.max_evaluations() < 0) {
+    ThrowInvalid(sf + ".max_evaluations = " + std::to_string(b.max_evaluations()) + " must be >= 1 (0 = 2000)");
+  }
+  spec.spline.max_evaluations = b.max_evaluations() == 0 ? 2000 : b.max_evaluations();
+  spec.spline.time_budget = BudgetFromProto(b.time_budget(), 5.0, sf + ".time_budget");
+  return spec;
+}
+
+void QualityToProto(const TrajectoryQuality& quality, v1::TrajectoryQuality* out) {
+  out->set_duration(quality.duration);
+  out->set_max_velocity_ratio(quality.max_velocity_ratio);
+  out->set_max_acceleration_ratio(quality.max_acceleration_ratio);
+  out->set_max_jerk_ratio(quality.max_jerk_ratio);
+  out->set_max_jerk(quality.max_jerk);
+  out->set_max_effort_ratio(quality.max_effort_ratio);
+  out->set_max_deviation(quality.max_deviation);
+  out->set_min_clearance(std::isfinite(quality.min_clearance) ? quality.min_clearance
+                                                              : std::numeric_limits<double>::max());
+  out->set_jerk_integral(quality.jerk_integral);
+}
+
+void OptimizerToProto(const OptimizerSummary& summary, v1::OptimizerStatistics* out) {
+  out->set_requested(ToString(summary.requested));
+  out->set_used(ToString(summary.used));
+  out->set_fell_back(summary.fell_back);
+  out->set_message(summary.message);
+  out->set_solver_status(summary.report.status);
+  out->set_iterations(summary.report.iterations);
+  out->set_solve_seconds(summary.report.solve_seconds);
+  out->set_constraint_violation(summary.report.constraint_violation);
+  out->set_time_scale(summary.report.time_scale);
+  out->set_blends(summary.time_optimal.blends);
+  out->set_blends_tightened(summary.time_optimal.blends_tightened);
+}
+
+void VerificationToProto(const VerificationReport& report, double max_joint_step, v1::Verification* out) {
+  out->set_states_checked(static_cast<std::uint32_t>(std::max(0, report.states_checked)));
+  out->set_max_joint_step(max_joint_step);
+  out->set_max_velocity_ratio(report.max_velocity_ratio);
+  out->set_max_acceleration_ratio(report.max_acceleration_ratio);
+  out->set_max_jerk_ratio(report.max_jerk_ratio);
+  out->set_max_effort_ratio(report.max_effort_ratio);
+}
+
+void SamplesToProto(const std::vector<TrajectorySample>& samples, const RobotModel& robot,
+                    v1::JointTrajectory* trajectory) {
+  for (const std::string& name : robot.dof_names()) trajectory->add_joint_names(name);
+  for (const TrajectorySample& sample : samples) {
+    v1::TrajectoryPoint* point = trajectory->add_points();
+    point->set_time_from_start(sample.t);
+    ToProto(sample.q, point->mutable_positions());
+    ToProto(sample.qd, point->mutable_velocities());
+    ToProto(sample.qdd, point->mutable_accelerations());
+    if (sample.effort.size() > 0) ToProto(sample.effort, point->mutable_efforts());
+  }
+}
+
+OptimizeQuery OptimizeQueryFromProto(const v1::OptimizeRequest& request, std::shared_ptr<const CollisionChecker> checker,
+                                     RequestSettings* settings, double* input_duration) {
+  const RobotModel& robot = checker->robot();
+  OptimizeQuery query;
+  query.checker = std::move(checker);
+  settings->time_budget = BudgetFromProto(request.time_budget(), 10.0, "time_budget");
+  *input_duration = 0.0;
+  const bool has_path = request.path_size() > 0;
+  const bool has_trajectory = request.trajectory().points_size() > 0;
+  if (has_path == has_trajectory) {
+    ThrowInvalid(has_path ? "give either path or trajectory, not both"
+                          : "path and trajectory are both empty: give the path to optimise");
+  }
+  Eigen::VectorXd first_velocity, last_velocity;
+  if (has_path) {
+    for (int k = 0; k < request.path_size(); ++k) {
+      const std::string f = "path[" + std::to_string(k) + "].positions";
+      RequireJointCount(request.path(k).positions_size(), robot, f);
+      query.path.push_back(PositionsFromProto(request.path(k).positions(), f));
+    }
+  } else {
+    const v1::JointTrajectory& input = request.trajectory();
+    double previous = -std::numeric_limits<double>::infinity();
+    for (int k = 0; k < input.points_size(); ++k) {
+      const v1::TrajectoryPoint& point = input.points(k);
+      const std::string f = "trajectory.points[" + std::to_string(k) + "]";
+      RequireJointCount(point.positions_size(), robot, f + ".positions");
+      query.path.push_back(PositionsFromProto(point.positions(), f + ".positions"));
+      const double t = point.time_from_start();
+      if (!(std::isfinite(t) && t >= previous)) {
+        ThrowInvalid(f + ".time_from_start = " + FormatNumber(t) + " must be finite and not before the previous point's");
+      }
+      previous = t;
+    }
+    *input_duration = input.points(input.points_size() - 1).time_from_start() - input.points(0).time_from_start();
+    const auto velocity_of = [&](int k) -> Eigen::VectorXd {
+      const v1::TrajectoryPoint& point = input.points(k);
+      if (point.velocities_size() == 0) return {};
+      const std::string f = "trajectory.points[" + std::to_string(k) + "].velocities";
+      RequireJointCount(point.velocities_size(), robot, f);
+      return PositionsFromProto(point.velocities(), f);
+    };
+    first_velocity = velocity_of(0);
+    last_velocity = velocity_of(input.points_size() - 1);
+  }
+  query.trajectory = TrajectorySpecFromProto(request.options(), robot, "options");
+  if (request.has_gravity()) query.trajectory.gravity = VectorFromProto(request.gravity(), "gravity");
+  if (request.start_velocity_size() > 0) {
+    RequireJointCount(request.start_velocity_size(), robot, "start_velocity");
+    query.trajectory.start_velocity = PositionsFromProto(request.start_velocity(), "start_velocity");
+  } else if (first_velocity.size() > 0 && !first_velocity.isZero(0.0)) {
+    query.trajectory.start_velocity = first_velocity;
+  }
+  if (request.end_velocity_size() > 0) {
+    RequireJointCount(request.end_velocity_size(), robot, "end_velocity");
+    query.trajectory.end_velocity = PositionsFromProto(request.end_velocity(), "end_velocity");
+  } else if (last_velocity.size() > 0 && !last_velocity.isZero(0.0)) {
+    query.trajectory.end_velocity = last_velocity;
+  }
+  const double period = request.options().sample_period() == 0.0 ? 0.01 : request.options().sample_period();
+  RequireInRange(period, 1e-4, 1.0, "options.sample_period");
+  query.sample_period = period;
+  const double resolution = request.collision_resolution() == 0.0 ? 0.005 : request.collision_resolution();
+  RequireInRange(resolution, 1e-4, 0.1, "collision_resolution");
+  query.collision_resolution = resolution;
+  return query;
+}
+
+v1::PlanOutcome StageCodeToProto(TrajectoryStageCode code) {
+  switch (code) {
+    case TrajectoryStageCode::kSuccess: return v1::SUCCESS;
+    case TrajectoryStageCode::kInfeasibleLimits: return v1::INFEASIBLE_LIMITS;
+    case TrajectoryStageCode::kVerificationFailed: return v1::VERIFICATION_FAILED;
+  }
+  return v1::PLAN_OUTCOME_UNSPECIFIED;
+}
+
+void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery& query, v1::OptimizeResponse* response) {
+  response->set_outcome(StageCodeToProto(outcome.code));
+  response->set_message(outcome.message);
+  const TrajectoryStageResult& stage = outcome.stage;
+  v1::StageTimings* timings = response->mutable_timings();
+  timings->set_parameterize(stage.parameterize_seconds);
+  timings->set_optimize(stage.optimize_seconds);
+  timings->set_verify(stage.verify_seconds);
+  timings->set_total(outcome.total_seconds);
+  VerificationToProto(stage.verification, std::min(0.005, query.collision_resolution), response->mutable_verification());
+  OptimizerToProto(stage.optimizer, response->mutable_optimizer());
+  if (outcome.code != TrajectoryStageCode::kSuccess) return;
+  QualityToProto(stage.quality, response->mutable_quality());
+  SamplesToProto(outcome.samples, query.checker->robot(), response->mutable_trajectory());
+  response->set_duration(stage.trajectory.duration());
 }
 
 v1::PlanOutcome OutcomeToProto(PlanOutcomeCode code) {
@@ -628,6 +858,7 @@ v1::PlanOutcome OutcomeToProto(PlanOutcomeCode code) {
     case PlanOutcomeCode::kVerificationFailed: return v1::VERIFICATION_FAILED;
     case PlanOutcomeCode::kApproximateOnly: return v1::APPROXIMATE_ONLY;
     case PlanOutcomeCode::kLocalMinimum: return v1::LOCAL_MINIMUM;
+    case PlanOutcomeCode::kInfeasibleLimits: return v1::INFEASIBLE_LIMITS;
     case PlanOutcomeCode::kCancelled:
     case PlanOutcomeCode::kDeadlineExceeded: return v1::PLAN_OUTCOME_UNSPECIFIED;
   }
@@ -645,6 +876,7 @@ void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::
   timings->set_shortcut(outcome.seconds.shortcut);
   timings->set_parameterize(outcome.seconds.parameterize);
   timings->set_verify(outcome.seconds.verify);
+  timings->set_optimize(outcome.seconds.optimize);
   timings->set_total(outcome.seconds.total);
 
   v1::PlannerStatistics* stats = response->mutable_statistics();
@@ -654,24 +886,14 @@ void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::
   stats->set_path_length(outcome.path.empty() ? 0.0 : PathLength(outcome.path));
   stats->set_suboptimality_bound(outcome.suboptimality_bound);
 
-  v1::Verification* verification = response->mutable_verification();
-  verification->set_states_checked(static_cast<std::uint32_t>(std::max(0, outcome.verification.states_checked)));
-  verification->set_max_joint_step(query.collision_resolution);
-  verification->set_max_velocity_ratio(outcome.verification.max_velocity_ratio);
-  verification->set_max_acceleration_ratio(outcome.verification.max_acceleration_ratio);
+  VerificationToProto(outcome.verification, std::min(0.005, query.collision_resolution),
+                      response->mutable_verification());
+  OptimizerToProto(outcome.optimizer, response->mutable_optimizer());
 
   if (outcome.code != PlanOutcomeCode::kSuccess) return;  // nothing unverified leaves the server
   for (const Eigen::VectorXd& q : outcome.path) ToProto(q, response->add_path()->mutable_positions());
-  v1::JointTrajectory* trajectory = response->mutable_trajectory();
-  for (const std::string& name : robot.dof_names()) trajectory->add_joint_names(name);
-  for (const TrajectorySample& sample : outcome.samples) {
-    v1::TrajectoryPoint* point = trajectory->add_points();
-    point->set_time_from_start(sample.t);
-    ToProto(sample.q, point->mutable_positions());
-    ToProto(sample.qd, point->mutable_velocities());
-    ToProto(sample.qdd, point->mutable_accelerations());
-    if (sample.effort.size() > 0) ToProto(sample.effort, point->mutable_efforts());
-  }
+  SamplesToProto(outcome.samples, robot, response->mutable_trajectory());
+  QualityToProto(outcome.quality, response->mutable_quality());
   response->set_duration(outcome.trajectory.duration());
   if (query.pose_goal && outcome.goal.size() > 0) {
     ToProto(outcome.goal, response->mutable_reached_goal()->mutable_positions());

@@ -117,6 +117,45 @@ class PlanningService final : public v1::Planning::CallbackService {
     return reactor;
   }
 
+  grpc::ServerUnaryReactor* Optimize(grpc::CallbackServerContext* context, const v1::OptimizeRequest* request,
+                                     v1::OptimizeResponse* response) override {
+    const Clock::time_point arrival = Clock::now();
+    const Clock::time_point deadline = SteadyDeadline(*context);
+    std::string request_id = request->request_id();
+    if (request_id.empty()) {
+      char buffer[32];
+      std::snprintf(buffer, sizeof(buffer), "opt-%06" PRIu64, ++next_request_);
+      request_id = buffer;
+    }
+    response->set_request_id(request_id);
+    return RunOnPool("optimize", [this, request, response, request_id, arrival, deadline](PoolReactor& reactor) {
+      const StoredRobot robot = RobotOf(*request);
+      const StoredScene scene = SceneOf(*request);
+      response->set_robot_id(robot.id);
+      response->set_scene_id(scene.id);
+      RequestSettings settings;
+      double input_duration = 0.0;
+      const OptimizeQuery query =
+          OptimizeQueryFromProto(*request, store_->Checker(robot, scene), &settings, &input_duration);
+      const Clock::time_point now = Clock::now();
+      Clock::time_point budget_end = now + std::chrono::duration_cast<Clock::duration>(
+                                               std::chrono::duration<double>(settings.time_budget));
+      const auto margin = std::min<Clock::duration>(std::chrono::milliseconds(200), (deadline - now) / 10);
+      budget_end = std::min(budget_end, deadline - margin);
+      const Termination termination = reactor.Start(budget_end, deadline);
+      const OptimizeOutcome outcome = OptimizePath(query, termination);
+      OptimizeOutcomeToProto(outcome, query, response);
+      response->set_input_duration(input_duration);
+      Log("optimize request=%s robot=%s scene=%s waypoints=%zu method=%s used=%s outcome=%s duration=%.3f ms "
+          "parameterize=%.1f optimize=%.1f verify=%.1f total=%.1f",
+          request_id.c_str(), IdPrefix(robot.id).c_str(), IdPrefix(scene.id).c_str(), query.path.size(),
+          ToString(outcome.stage.optimizer.requested), ToString(outcome.stage.optimizer.used),
+          v1::PlanOutcome_Name(response->outcome()).c_str(), response->duration(),
+          1e3 * outcome.stage.parameterize_seconds, 1e3 * outcome.stage.optimize_seconds,
+          1e3 * outcome.stage.verify_seconds, 1e3 * SecondsSince(arrival));
+    });
+  }
+
   grpc::ServerUnaryReactor* ListPlanners(grpc::CallbackServerContext* context, const v1::ListPlannersRequest*,
                                          v1::ListPlannersResponse* response) override {
     grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
@@ -198,23 +237,13 @@ class PlanningService final : public v1::Planning::CallbackService {
     const Clock::time_point deadline = SteadyDeadline(*context);
     return RunOnPool("ik", [this, request, response, arrival, deadline](const PoolReactor& reactor) {
       // Robot (inline, id or default) and, for collision_free, the scene's cached checker.
-      StoredRobot robot;
-      switch (request->robot_source_case()) {
-        case v1::InverseKinematicsRequest::kRobot: robot = store_->AddRobot(request->robot(), "robot"); break;
-        case v1::InverseKinematicsRequest::kRobotId: robot = store_->FindRobot(request->robot_id()); break;
-        default: robot = store_->default_robot(); break;
-      }
+      const StoredRobot robot = RobotOf(*request);
       response->set_robot_id(robot.id);
       IkRequest ik = IkRequestFromProto(*request, *robot.model);
       std::string scene_id = "-";
       std::shared_ptr<const CollisionChecker> checker;
       if (request->collision_free()) {
-        StoredScene scene;
-        switch (request->scene_source_case()) {
-          case v1::InverseKinematicsRequest::kScene: scene = store_->AddScene(request->scene(), "scene"); break;
-          case v1::InverseKinematicsRequest::kSceneId: scene = store_->FindScene(request->scene_id()); break;
-          default: scene = store_->default_scene(); break;
-        }
+        const StoredScene scene = SceneOf(*request);
         scene_id = IdPrefix(scene.id);
         checker = store_->Checker(robot, scene);
         ik.accept = [checker](const Eigen::VectorXd& q) { return checker->IsValid(q); };
@@ -233,8 +262,27 @@ class PlanningService final : public v1::Planning::CallbackService {
   }
 
  private:
+  /// The request's robot: inline (parsed and cached), by id, or the server's default.
+  template <typename Request>
+  StoredRobot RobotOf(const Request& request) {
+    switch (request.robot_source_case()) {
+      case Request::kRobot: return store_->AddRobot(request.robot(), "robot");
+      case Request::kRobotId: return store_->FindRobot(request.robot_id());
+      default: return store_->default_robot();
+    }
+  }
+  /// The request's scene: inline (parsed and cached), by id, or the server's default.
+  template <typename Request>
+  StoredScene SceneOf(const Request& request) {
+    switch (request.scene_source_case()) {
+      case Request::kScene: return store_->AddScene(request.scene(), "scene");
+      case Request::kSceneId: return store_->FindScene(request.scene_id());
+      default: return store_->default_scene();
+    }
+  }
+
   /// Runs `work` on the pool and finishes the call with OK or the mapped exception.
-  grpc::ServerUnaryReactor* RunOnPool(const char* what, std::function<void(const PoolReactor&)> work) {
+  grpc::ServerUnaryReactor* RunOnPool(const char* what, std::function<void(PoolReactor&)> work) {
     auto* reactor = new PoolReactor();
     const bool queued = pool_->Submit([this, reactor, what, work = std::move(work)] {
       grpc::Status status;
@@ -270,19 +318,9 @@ class PlanningService final : public v1::Planning::CallbackService {
       status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled before planning started");
     } else try {
       // 1. Robot, scene and checker (parsed or cached).
-      StoredRobot robot;
-      switch (request->robot_source_case()) {
-        case v1::PlanRequest::kRobot: robot = store_->AddRobot(request->robot(), "robot"); break;
-        case v1::PlanRequest::kRobotId: robot = store_->FindRobot(request->robot_id()); break;
-        default: robot = store_->default_robot(); break;
-      }
+      const StoredRobot robot = RobotOf(*request);
       robot_id = robot.id;
-      StoredScene scene;
-      switch (request->scene_source_case()) {
-        case v1::PlanRequest::kScene: scene = store_->AddScene(request->scene(), "scene"); break;
-        case v1::PlanRequest::kSceneId: scene = store_->FindScene(request->scene_id()); break;
-        default: scene = store_->default_scene(); break;
-      }
+      const StoredScene scene = SceneOf(*request);
       scene_id = scene.id;
       std::shared_ptr<const CollisionChecker> checker = store_->Checker(robot, scene);
 
@@ -321,11 +359,11 @@ class PlanningService final : public v1::Planning::CallbackService {
     response->set_scene_id(scene_id);
     if (!status.ok()) seconds.total = SecondsSince(arrival);
     Log("plan request=%s robot=%s scene=%s planner=%s status=%s outcome=%s ms validate=%.1f plan=%.1f "
-        "shortcut=%.1f parameterize=%.1f verify=%.1f total=%.1f%s%s",
+        "shortcut=%.1f parameterize=%.1f optimize=%.1f verify=%.1f total=%.1f%s%s",
         request_id.c_str(), robot_id.empty() ? "-" : IdPrefix(robot_id).c_str(),
         scene_id.empty() ? "-" : IdPrefix(scene_id).c_str(), planner.c_str(), StatusName(status.error_code()),
         outcome_name.c_str(), 1e3 * seconds.validate, 1e3 * seconds.plan, 1e3 * seconds.shortcut,
-        1e3 * seconds.parameterize, 1e3 * seconds.verify, 1e3 * seconds.total, status.ok() ? "" : " error=",
+        1e3 * seconds.parameterize, 1e3 * seconds.optimize, 1e3 * seconds.verify, 1e3 * seconds.total, status.ok() ? "" : " error=",
         status.ok() ? "" : status.error_message().c_str());
     reactor->Finish(status);
   }

@@ -16,6 +16,7 @@
 #include "chasles/optimizers/time_parameterization.h"
 #include "chasles/optimizers/timed_trajectory.h"
 #include "chasles/optimizers/verification.h"
+#include "chasles/pipeline/trajectory_stage.h"
 #include "chasles/planners/planner.h"
 #include "chasles/planners/registry.h"
 #include "chasles/planners/termination.h"
@@ -44,8 +45,7 @@ struct PlanQuery {
   ParameterValues parameters;         ///< unresolved; validated against the planner's spec
   std::uint64_t seed = 1;
   double collision_resolution = 0.005;  ///< [rad], in [1e-4, 0.1]
-  Eigen::VectorXd max_velocity;       ///< empty = model limits; else > 0 and capped at the model's
-  Eigen::VectorXd max_acceleration;   ///< empty = 2 × velocity limits
+  TrajectorySpec trajectory;          ///< limits and post-processing (gravity: set from `gravity`)
   double sample_period = 0.01;        ///< [s], in [1e-4, 1]
   int shortcut_attempts = 100;        ///< -1 = off; never applied to a car's path (its shape is kept)
 
@@ -66,11 +66,12 @@ enum class PlanOutcomeCode {
   kCancelled,
   kDeadlineExceeded,
   kLocalMinimum,      ///< a descent planner (potential field) stopped in a local minimum
+  kInfeasibleLimits,  ///< the trajectory limits cannot be met (max_effort below what gravity needs)
 };
 const char* ToString(PlanOutcomeCode code);
 
 struct StageSeconds {
-  double validate = 0, plan = 0, shortcut = 0, parameterize = 0, verify = 0, total = 0;
+  double validate = 0, plan = 0, shortcut = 0, parameterize = 0, optimize = 0, verify = 0, total = 0;
 };
 
 struct PlanOutcome {
@@ -85,6 +86,8 @@ struct PlanOutcome {
   double goal_manipulability = 0.0;    ///< pose goal: √det(J Jᵀ) of the link at `goal`
   KinematicLimits limits;              ///< the limits the trajectory respects
   VerificationReport verification;
+  TrajectoryQuality quality;           ///< of the returned trajectory (kSuccess)
+  OptimizerSummary optimizer;          ///< what the post-processing did
   StageSeconds seconds;
   std::uint64_t graph_states = 0;
   std::uint64_t state_checks = 0;      ///< all stages

@@ -73,6 +73,22 @@ v1::PlanOutcome OutcomeToProto(PlanOutcomeCode code);
 /// statistics, verification and, for a pose goal, reached_goal and goal_manipulability.
 void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::PlanResponse* response);
 
+/// Trajectory options (limits, post-processing and its options) with the proto's defaults;
+/// `field` prefixes the names in errors ("trajectory" in PlanRequest, "options" in
+/// OptimizeRequest). \throws Error(kInvalidArgument) naming the field, index, value and rule.
+TrajectorySpec TrajectorySpecFromProto(const v1::TrajectoryOptions& options, const RobotModel& robot,
+                                       const std::string& field);
+
+/// The Optimize query: path (or a timed trajectory's positions, with its duration in
+/// `input_duration` and its boundary velocities when start/end_velocity are not given),
+/// options, gravity, resolution, budget (`settings`). \throws Error(kInvalidArgument) naming the field.
+OptimizeQuery OptimizeQueryFromProto(const v1::OptimizeRequest& request, std::shared_ptr<const CollisionChecker> checker,
+                                     RequestSettings* settings, double* input_duration);
+
+/// Fills outcome, message, timings, verification, optimizer and (on success) quality,
+/// trajectory and duration.
+void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery& query, v1::OptimizeResponse* response);
+
 /// Fills a catalogue entry.
 void PlannerSpecToProto(const PlannerSpec& spec, v1::PlannerDescription* description);
 

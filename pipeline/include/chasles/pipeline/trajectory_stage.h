@@ -1,0 +1,128 @@
+#pragma once
+/// \file
+/// The trajectory stage of the pipeline: a collision-free path → the trajectory the user asked
+/// for (time-optimal parameterisation, collocation, B-spline smoothing, or stops at every
+/// waypoint), verified, with its quality figures. Plan runs it after shortcutting; the Optimize
+/// RPC runs it on a user's own path.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "chasles/collision/collision_checker.h"
+#include "chasles/optimizers/collocation.h"
+#include "chasles/optimizers/optimizer_report.h"
+#include "chasles/optimizers/spline_smoothing.h"
+#include "chasles/optimizers/time_parameterization.h"
+#include "chasles/optimizers/timed_trajectory.h"
+#include "chasles/optimizers/verification.h"
+#include "chasles/planners/termination.h"
+
+namespace chasles {
+
+/// How the path becomes a trajectory.
+enum class PostProcessing {
+  kAuto,         ///< kTimeOptimal, or kCollocation when max_jerk is set
+  kTimeOptimal,  ///< exact time-optimal parameterisation with bounded-deviation blends
+  kCollocation,  ///< direct collocation in Ipopt, warm-started from the exact parameterisation
+  kSpline,       ///< B-spline smoothing in NLopt, started from the exact parameterisation
+  kNone,         ///< no optimisation: the exact rest-to-rest profile, stopping at every waypoint
+};
+const char* ToString(PostProcessing method);  ///< "auto", "topp", "collocation", "spline", "none"
+
+/// What the user asks of the trajectory (proto TrajectoryOptions, resolved defaults).
+struct TrajectorySpec {
+  PostProcessing method = PostProcessing::kAuto;
+  Eigen::VectorXd max_velocity;      ///< empty = model limits; else > 0, capped at the model's
+  Eigen::VectorXd max_acceleration;  ///< empty = 2 × the velocity limits
+  Eigen::VectorXd max_jerk;          ///< empty = unlimited; else > 0 [rad/s³]
+  Eigen::VectorXd max_effort;        ///< empty = unlimited; else > 0 [N·m]/[N] (robot with inertia)
+  Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);  ///< for efforts [m/s²]
+  double max_deviation = 0.05;       ///< time-optimal blends [rad], >= 0
+  Eigen::VectorXd start_velocity, end_velocity;  ///< empty = at rest (Optimize only)
+  CollocationOptions collocation;
+  SplineOptions spline;
+};
+
+/// The limits the trajectory must respect: overrides capped at the model's velocity limits,
+/// acceleration defaulting to 2 × the velocity limit per second.
+/// \throws Error(kInvalidArgument) naming `trajectory.<field>[i]` for sizes, non-finite or
+///         non-positive values, and max_effort on a robot without inertia.
+KinematicLimits ResolveLimits(const RobotModel& robot, const TrajectorySpec& spec);
+
+/// Expected outcomes of the stage.
+enum class TrajectoryStageCode {
+  kSuccess,
+  kInfeasibleLimits,    ///< max_effort cannot be met (e.g. gravity alone exceeds it)
+  kVerificationFailed,  ///< even the exact parameterisation failed dense verification (a path in collision)
+};
+
+/// What the optimiser did, for the response.
+struct OptimizerSummary {
+  PostProcessing requested = PostProcessing::kAuto;
+  PostProcessing used = PostProcessing::kTimeOptimal;  ///< what the returned trajectory is
+  bool fell_back = false;   ///< the requested optimiser's result was not used (reason in `message`)
+  std::string message;
+  OptimizerReport report;   ///< of the collocation / spline solve (zeros otherwise)
+  TimeOptimalReport time_optimal;  ///< of the exact parameterisation
+};
+
+struct TrajectoryStageResult {
+  TrajectoryStageCode code = TrajectoryStageCode::kVerificationFailed;
+  std::string message;
+  KinematicLimits limits;
+  TimedTrajectory trajectory;        ///< empty unless kSuccess
+  VerificationReport verification;
+  TrajectoryQuality quality;
+  OptimizerSummary optimizer;
+  double parameterize_seconds = 0.0;  ///< the exact parameterisation
+  double optimize_seconds = 0.0;      ///< collocation / spline
+  double verify_seconds = 0.0;
+};
+
+/// Runs the stage on `path` (start … goal, collision-free segments expected): the exact
+/// parameterisation (with max_jerk: jerk-limited stops at every waypoint), then the requested
+/// optimiser warm-started from it, then dense verification (collisions at max_joint_step,
+/// limits exactly). An optimiser that fails, or whose result fails verification, is replaced by
+/// the exact parameterisation (fell_back, with the reason); the exact one is verified too, so
+/// nothing that violates a limit or collides is ever returned. Optimisers stop when
+/// `termination` does (deadline, cancellation) and fall back.
+/// \throws Error(kInvalidArgument) for invalid limits/options (named), and kTimeOptimal with
+///         max_jerk set.
+TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionChecker& checker,
+                                         const TrajectorySpec& spec, double max_joint_step,
+                                         const Termination& termination);
+
+/// Samples at `period` (TimedTrajectory::Sample) with positions clamped to the joint limits
+/// (verification bounded any excess by 1e-12: rounding) and, when the robot has inertia on every
+/// moving link, the inverse-dynamics efforts under `gravity`.
+std::vector<TrajectorySample> SampleTrajectory(const TimedTrajectory& trajectory, const RobotModel& robot,
+                                               double period, const Eigen::Vector3d& gravity);
+
+/// The Optimize RPC in domain types: a user's own path → a verified trajectory.
+struct OptimizeQuery {
+  std::shared_ptr<const CollisionChecker> checker;
+  JointPath path;                 ///< >= 1 waypoint
+  TrajectorySpec trajectory;      ///< gravity included
+  double sample_period = 0.01;    ///< [s], in [1e-4, 1]
+  double collision_resolution = 0.005;  ///< [rad], in [1e-4, 0.1]
+};
+
+struct OptimizeOutcome {
+  /// kSuccess, kVerificationFailed (the input path leaves the joint limits or collides: message
+  /// says where) or kInfeasibleLimits.
+  TrajectoryStageCode code = TrajectoryStageCode::kVerificationFailed;
+  std::string message;
+  TrajectoryStageResult stage;
+  std::vector<TrajectorySample> samples;  ///< at sample_period (efforts when computed)
+  double total_seconds = 0.0;
+};
+
+/// Checks the path (sizes, finite, within joint limits: INVALID_ARGUMENT naming
+/// `path[k].positions[i]`; every segment collision-free at collision_resolution, else the
+/// kVerificationFailed outcome naming the segment and the contact), then RunTrajectoryStage.
+OptimizeOutcome OptimizePath(const OptimizeQuery& query, const Termination& termination);
+
+}  // namespace chasles

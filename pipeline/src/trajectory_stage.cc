@@ -1,0 +1,256 @@
+#include "chasles/pipeline/trajectory_stage.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "chasles/robot/dynamics.h"
+#include "chasles/robot/error.h"
+
+namespace chasles {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+void CheckVector(const Eigen::VectorXd& v, int n, const std::string& field) {
+  if (v.size() == 0) return;
+  if (v.size() != n) {
+    ThrowInvalid("trajectory." + field + " has " + std::to_string(v.size()) + " values, the robot has " +
+                 std::to_string(n) + " joints");
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!std::isfinite(v[i]) || v[i] <= 0) {
+      ThrowInvalid("trajectory." + field + "[" + std::to_string(i) + "] = " + FormatNumber(v[i]) + " must be finite and > 0");
+    }
+  }
+}
+
+}  // namespace
+
+const char* ToString(PostProcessing method) {
+  switch (method) {
+    case PostProcessing::kAuto: return "auto";
+    case PostProcessing::kTimeOptimal: return "topp";
+    case PostProcessing::kCollocation: return "collocation";
+    case PostProcessing::kSpline: return "spline";
+    case PostProcessing::kNone: return "none";
+  }
+  return "unknown";
+}
+
+KinematicLimits ResolveLimits(const RobotModel& robot, const TrajectorySpec& spec) {
+  const int n = robot.num_dofs();
+  CheckVector(spec.max_velocity, n, "max_velocity");
+  CheckVector(spec.max_acceleration, n, "max_acceleration");
+  CheckVector(spec.max_jerk, n, "max_jerk");
+  CheckVector(spec.max_effort, n, "max_effort");
+  if (spec.max_effort.size() != 0 && !HasInertia(robot)) {
+    ThrowInvalid("trajectory.max_effort is set, but robot '" + robot.name() +
+                 "' has no inertia on every moving link, so its torques are unknown");
+  }
+  if (!std::isfinite(spec.max_deviation) || spec.max_deviation < 0.0 || spec.max_deviation > 1.0) {
+    ThrowInvalid("trajectory.max_deviation = " + FormatNumber(spec.max_deviation) + " must be within [0, 1] rad");
+  }
+  KinematicLimits limits;
+  limits.max_velocity = robot.velocity_limits();
+  if (spec.max_velocity.size() > 0) limits.max_velocity = spec.max_velocity.cwiseMin(robot.velocity_limits());
+  limits.max_acceleration =
+      spec.max_acceleration.size() > 0 ? spec.max_acceleration : Eigen::VectorXd(2.0 * limits.max_velocity);
+  limits.max_jerk = spec.max_jerk;
+  limits.max_effort = spec.max_effort;
+  limits.gravity = spec.gravity;
+  return limits;
+}
+
+TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionChecker& checker,
+                                         const TrajectorySpec& spec, double max_joint_step,
+                                         const Termination& termination) {
+  const RobotModel& robot = checker.robot();
+  TrajectoryStageResult out;
+  out.limits = ResolveLimits(robot, spec);
+  const KinematicLimits& limits = out.limits;
+  const bool jerk = limits.max_jerk.size() != 0;
+  PostProcessing method = spec.method;
+  if (method == PostProcessing::kAuto) method = jerk ? PostProcessing::kCollocation : PostProcessing::kTimeOptimal;
+  if (method == PostProcessing::kTimeOptimal && jerk) {
+    ThrowInvalid("trajectory.max_jerk is set, but post_processing TOPP has acceleration steps (unbounded jerk); "
+                 "use COLLOCATION, SPLINE, or NONE (jerk-limited stops at every waypoint)");
+  }
+  out.optimizer.requested = spec.method;
+
+  // 1. The exact parameterisation: the answer for TOPP / NONE, the warm start otherwise.
+  auto t = Clock::now();
+  TimedTrajectory exact;
+  PostProcessing exact_kind = method == PostProcessing::kNone ? PostProcessing::kNone : PostProcessing::kTimeOptimal;
+  try {
+    if (jerk) {
+      if ((spec.start_velocity.size() != 0 && !spec.start_velocity.isZero(0.0)) ||
+          (spec.end_velocity.size() != 0 && !spec.end_velocity.isZero(0.0))) {
+        ThrowInvalid("start_velocity / end_velocity must be zero when trajectory.max_jerk is set");
+      }
+      exact = ParameterizeRestToRest(path, limits);
+      exact_kind = PostProcessing::kNone;
+    } else {
+      TimeOptimalOptions options;
+      options.max_deviation = method == PostProcessing::kNone ? 0.0 : spec.max_deviation;
+      options.start_velocity = spec.start_velocity;
+      options.end_velocity = spec.end_velocity;
+      options.max_joint_step = max_joint_step;
+      exact = ParameterizeTimeOptimal(path, limits, options, &checker, &out.optimizer.time_optimal);
+    }
+  } catch (const Error& e) {
+    if (e.code() != ErrorCode::kFailedPrecondition) throw;
+    out.parameterize_seconds = SecondsSince(t);
+    out.code = TrajectoryStageCode::kInfeasibleLimits;
+    out.message = e.what();
+    return out;
+  }
+  out.parameterize_seconds = SecondsSince(t);
+
+  VerificationOptions verify;
+  verify.max_joint_step = max_joint_step;
+  verify.start_velocity = spec.start_velocity;
+  verify.end_velocity = spec.end_velocity;
+  const auto stop = [&termination] {
+    const StopReason reason = termination.Reason();
+    return reason == StopReason::kCancelled || reason == StopReason::kDeadline;
+  };
+
+  // 2. The requested optimiser, warm-started from the exact trajectory.
+  TimedTrajectory chosen = exact;
+  out.optimizer.used = exact_kind;
+  if (method == PostProcessing::kCollocation || method == PostProcessing::kSpline) {
+    t = Clock::now();
+    const char* name = method == PostProcessing::kCollocation ? "collocation" : "spline smoothing";
+    OptimizerReport report;
+    TimedTrajectory candidate;
+    if (method == PostProcessing::kCollocation) {
+      CollocationOptions options = spec.collocation;
+      options.stop = stop;
+      CollocationResult result = OptimizeByCollocation(exact, limits, options, &checker);
+      report = result.report;
+      candidate = std::move(result.trajectory);
+    } else {
+      SplineOptions options = spec.spline;
+      options.stop = stop;
+      SplineResult result = SmoothWithBSpline(exact, limits, options, &checker);
+      report = result.report;
+      candidate = std::move(result.trajectory);
+    }
+    out.optimize_seconds = SecondsSince(t);
+    out.optimizer.report = report;
+    if (!report.ok) {
+      out.optimizer.fell_back = true;
+      out.optimizer.message = std::string(name) + " did not meet the limits (" + report.message +
+                              "); returned the exact parameterisation instead";
+    } else {
+      t = Clock::now();
+      const VerificationReport checked = VerifyTrajectory(candidate, path.front(), path.back(), checker, limits, verify);
+      out.verify_seconds += SecondsSince(t);
+      if (checked.ok) {
+        chosen = std::move(candidate);
+        out.optimizer.used = method;
+        out.verification = checked;
+        out.optimizer.message = std::string(name) + ": " + report.message;
+      } else {
+        out.optimizer.fell_back = true;
+        out.optimizer.message = std::string(name) + " result failed dense verification (" + checked.reason +
+                                "); returned the exact parameterisation instead";
+      }
+    }
+  }
+
+  // 3. Verify what leaves (unless the optimiser's result was just verified).
+  if (out.optimizer.used == exact_kind) {
+    t = Clock::now();
+    out.verification = VerifyTrajectory(chosen, path.front(), path.back(), checker, limits, verify);
+    out.verify_seconds += SecondsSince(t);
+    if (out.optimizer.message.empty()) out.optimizer.message = out.optimizer.time_optimal.message;
+  }
+  if (!out.verification.ok) {
+    out.code = TrajectoryStageCode::kVerificationFailed;
+    out.message = "the trajectory failed dense verification: " + out.verification.reason;
+    return out;
+  }
+  out.quality = MeasureTrajectory(chosen, limits, path, &checker, std::max(max_joint_step, 0.01));
+  out.trajectory = std::move(chosen);
+  out.code = TrajectoryStageCode::kSuccess;
+  return out;
+}
+
+std::vector<TrajectorySample> SampleTrajectory(const TimedTrajectory& trajectory, const RobotModel& robot,
+                                               double period, const Eigen::Vector3d& gravity) {
+  std::vector<TrajectorySample> samples = trajectory.Sample(period);
+  const bool effort = HasInertia(robot);
+  DynamicsOptions dynamics;
+  dynamics.gravity = gravity;
+  for (TrajectorySample& sample : samples) {
+    sample.q = sample.q.cwiseMax(robot.lower_limits()).cwiseMin(robot.upper_limits());
+    if (effort) sample.effort = InverseDynamics(robot, sample.q, sample.qd, sample.qdd, dynamics);
+  }
+  return samples;
+}
+
+OptimizeOutcome OptimizePath(const OptimizeQuery& query, const Termination& termination) {
+  const auto t_start = Clock::now();
+  if (!query.checker) ThrowInvalid("robot/scene: no collision checker was built for the query");
+  const CollisionChecker& checker = *query.checker;
+  const RobotModel& robot = checker.robot();
+  if (query.path.empty()) ThrowInvalid("path has no waypoints: give at least one (or a trajectory with points)");
+  for (std::size_t k = 0; k < query.path.size(); ++k) {
+    robot.ValidateConfiguration(query.path[k], "path[" + std::to_string(k) + "].positions");
+  }
+  if (!std::isfinite(query.sample_period) || query.sample_period < 1e-4 || query.sample_period > 1.0) {
+    ThrowInvalid("options.sample_period = " + FormatNumber(query.sample_period) + " must be within [0.0001, 1]");
+  }
+  if (!std::isfinite(query.collision_resolution) || query.collision_resolution < 1e-4 ||
+      query.collision_resolution > 0.1) {
+    ThrowInvalid("collision_resolution = " + FormatNumber(query.collision_resolution) + " must be within [0.0001, 0.1]");
+  }
+  OptimizeOutcome out;
+  const auto finish = [&](TrajectoryStageCode code, std::string message) {
+    out.code = code;
+    out.message = std::move(message);
+    out.total_seconds = SecondsSince(t_start);
+    return out;
+  };
+  ResolveLimits(robot, query.trajectory);  // named errors before any work
+  // The user's path must be collision-free: say which segment is not, and why.
+  const auto describe = [](const CollisionResult& contact) {
+    return "link '" + contact.link_a + "' touches " + (contact.self_collision ? "link '" : "'") + contact.other + "'";
+  };
+  if (query.path.size() == 1 && !checker.IsValid(query.path.front())) {
+    return finish(TrajectoryStageCode::kVerificationFailed,
+                  "the input path is not collision-free: path[0]: " + describe(checker.Check(query.path.front())));
+  }
+  for (std::size_t k = 0; k + 1 < query.path.size(); ++k) {
+    const Eigen::VectorXd& a = query.path[k];
+    const Eigen::VectorXd& b = query.path[k + 1];
+    if (checker.IsMotionValid(a, b, query.collision_resolution)) continue;
+    std::string where = "segment path[" + std::to_string(k) + "] → path[" + std::to_string(k + 1) + "]";
+    std::string what = "it collides between its checked states";
+    const int steps = std::max(1, static_cast<int>(std::ceil((b - a).cwiseAbs().maxCoeff() / query.collision_resolution)));
+    for (int s = 0; s <= steps; ++s) {
+      const double fraction = static_cast<double>(s) / steps;
+      const CollisionResult contact = checker.Check(a + (b - a) * fraction);
+      if (!contact.in_collision) continue;
+      what = "at s = " + FormatNumber(fraction) + " " + describe(contact);
+      break;
+    }
+    return finish(TrajectoryStageCode::kVerificationFailed, "the input path is not collision-free: " + where + " " + what);
+  }
+  out.stage = RunTrajectoryStage(query.path, checker, query.trajectory, std::min(0.005, query.collision_resolution),
+                                 termination);
+  if (out.stage.code != TrajectoryStageCode::kSuccess) return finish(out.stage.code, out.stage.message);
+  out.samples = SampleTrajectory(out.stage.trajectory, robot, query.sample_period, query.trajectory.gravity);
+  std::string message = std::string(ToString(out.stage.optimizer.used)) + " trajectory of " +
+                        FormatNumber(out.stage.trajectory.duration()) + " s, verified at " +
+                        std::to_string(out.stage.verification.states_checked) + " states";
+  if (out.stage.optimizer.fell_back) message += "; " + out.stage.optimizer.message;
+  return finish(TrajectoryStageCode::kSuccess, message);
+}
+
+}  // namespace chasles
