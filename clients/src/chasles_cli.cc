@@ -37,10 +37,16 @@ const char kUsage[] =
     "Commands:\n"
     "  health                          ask the server's gRPC health service (exit 0 when SERVING)\n"
     "  planners                        list planners with their parameters, defaults and ranges\n"
-    "  plan REQUEST.json [--out F]     send a chasles.v1.PlanRequest (protobuf JSON); print a summary;\n"
+    "  plan REQUEST.json [--out F] [--method M]\n"
+    "                                  send a chasles.v1.PlanRequest (protobuf JSON); print a summary;\n"
     "                                  --out F.json writes the response, --out F.csv the trajectory\n"
     "                                  (columns t, q_<joint>..., qd_<joint>..., qdd_<joint>...);\n"
+    "                                  --method topp|collocation|spline|none sets the post-processing;\n"
     "                                  exit 0 only when a trajectory came back\n"
+    "  optimize REQUEST.json [--out F] [--method M]\n"
+    "                                  send a chasles.v1.OptimizeRequest (protobuf JSON: your own path\n"
+    "                                  or timed trajectory); print the optimised trajectory's quality;\n"
+    "                                  --out and --method as for plan\n"
     "  ik REQUEST.json                 send a chasles.v1.InverseKinematicsRequest (protobuf JSON); print\n"
     "                                  each solution with its manipulability; exit 0 only when solved\n"
     "  upload-robot FILE.urdf [--srdf FILE.srdf] [--mesh NAME=FILE]...\n"
@@ -76,6 +82,7 @@ struct Options {
   std::string origin;  // X,Y,Z
   std::string max_range;
   std::string resolution;
+  std::string method;  // plan / optimize: post-processing
   std::vector<std::string> positional;
 };
 
@@ -244,13 +251,64 @@ std::string FormatPositions(const google::protobuf::RepeatedField<double>& value
   return out + "]";
 }
 
+v1::TrajectoryOptions::PostProcessing MethodOrExit(const std::string& method) {
+  if (method == "topp") return v1::TrajectoryOptions::TOPP;
+  if (method == "collocation") return v1::TrajectoryOptions::COLLOCATION;
+  if (method == "spline") return v1::TrajectoryOptions::SPLINE;
+  if (method == "none") return v1::TrajectoryOptions::NONE;
+  UsageError("--method '" + method + "' must be topp, collocation, spline or none");
+}
+
+void PrintOptimizer(const v1::OptimizerStatistics& o, const v1::TrajectoryQuality& q) {
+  std::printf("trajectory  %s (asked: %s)%s%s\n", o.used().c_str(), o.requested().c_str(),
+              o.fell_back() ? " — fell back: " : "", o.fell_back() ? o.message().c_str() : "");
+  if (!o.solver_status().empty()) {
+    std::printf("solver      %s, %d iterations, %.1f ms, violation %.2g, time scale %.6f\n", o.solver_status().c_str(),
+                o.iterations(), 1e3 * o.solve_seconds(), o.constraint_violation(), o.time_scale());
+  }
+  if (o.blends() > 0 || o.blends_tightened() > 0) {
+    std::printf("blends      %d corners blended (%d tightened off obstacles)\n", o.blends(), o.blends_tightened());
+  }
+  std::printf("quality     max |qd|/v %.3f  |qdd|/a %.3f  |jerk| %.4g rad/s³%s  deviation %.4g rad  clearance %.4g m  "
+              "∫jerk² %.4g\n",
+              q.max_velocity_ratio(), q.max_acceleration_ratio(), q.max_jerk(),
+              q.max_effort_ratio() > 0 ? (" |τ|/τmax " + std::to_string(q.max_effort_ratio())).c_str() : "",
+              q.max_deviation(), q.min_clearance(), q.jerk_integral());
+}
+
+/// Writes the response (.json) or its trajectory (.csv); prints where. False on failure.
+bool WriteOut(const std::string& file, const google::protobuf::Message& response, const v1::JointTrajectory& trajectory) {
+  std::ofstream out(file, std::ios::binary);
+  if (!out) {
+    std::cerr << "chasles: cannot write '" << file << "': " << std::strerror(errno) << "\n";
+    return false;
+  }
+  if (EndsWith(file, ".csv")) {
+    chasles::WriteTrajectoryCsv(trajectory, out);
+  } else {
+    google::protobuf::util::JsonPrintOptions print;
+    print.add_whitespace = true;
+    print.preserve_proto_field_names = true;
+    std::string json;
+    google::protobuf::util::MessageToJsonString(response, &json, print);
+    out << json;
+  }
+  if (!out.good()) {
+    std::cerr << "chasles: writing '" << file << "' failed\n";
+    return false;
+  }
+  std::printf("wrote       %s\n", file.c_str());
+  return true;
+}
+
 int Plan(const Options& options) {
   if (options.positional.size() != 2) UsageError("plan takes one REQUEST.json");
   if (!options.out.empty() && !EndsWith(options.out, ".json") && !EndsWith(options.out, ".csv")) {
     UsageError("--out '" + options.out + "' must end in .json or .csv");
   }
   const std::string& path = options.positional[1];
-  const v1::PlanRequest request = ParseJsonFileOrExit<v1::PlanRequest>(path);
+  v1::PlanRequest request = ParseJsonFileOrExit<v1::PlanRequest>(path);
+  if (!options.method.empty()) request.mutable_trajectory()->set_post_processing(MethodOrExit(options.method));
 
   auto stub = v1::Planning::NewStub(MakeChannel(options));
   grpc::ClientContext context;
@@ -270,9 +328,11 @@ int Plan(const Options& options) {
   std::printf("waypoints   %d (planner returned %u)\n", response.path_size(), response.statistics().raw_waypoints());
   std::printf("samples     %d\n", response.trajectory().points_size());
   std::printf("path length %.4f rad\n", response.statistics().path_length());
-  std::printf("timings ms  validate %.1f  plan %.1f  shortcut %.1f  parameterize %.1f  verify %.1f  total %.1f\n",
-              1e3 * t.validate(), 1e3 * t.plan(), 1e3 * t.shortcut(), 1e3 * t.parameterize(), 1e3 * t.verify(),
-              1e3 * t.total());
+  std::printf("timings ms  validate %.1f  plan %.1f  shortcut %.1f  parameterize %.1f  optimize %.1f  verify %.1f  "
+              "total %.1f\n",
+              1e3 * t.validate(), 1e3 * t.plan(), 1e3 * t.shortcut(), 1e3 * t.parameterize(), 1e3 * t.optimize(),
+              1e3 * t.verify(), 1e3 * t.total());
+  PrintOptimizer(response.optimizer(), response.quality());
   std::printf("verified    %u states at step %.4g rad, max |qd|/v %.3f, max |qdd|/a %.3f\n", v.states_checked(),
               v.max_joint_step(), v.max_velocity_ratio(), v.max_acceleration_ratio());
   if (response.has_reached_goal()) {
@@ -285,28 +345,44 @@ int Plan(const Options& options) {
   }
   if (max_effort >= 0.0) std::printf("max |effort| %.4g N·m (N for prismatic joints)\n", max_effort);
 
-  if (!options.out.empty()) {
-    std::ofstream out(options.out, std::ios::binary);
-    if (!out) {
-      std::cerr << "chasles: cannot write '" << options.out << "': " << std::strerror(errno) << "\n";
-      return kExitFailed;
-    }
-    if (EndsWith(options.out, ".csv")) {
-      chasles::WriteTrajectoryCsv(response.trajectory(), out);
-    } else {
-      google::protobuf::util::JsonPrintOptions print;
-      print.add_whitespace = true;
-      print.preserve_proto_field_names = true;
-      std::string json;
-      google::protobuf::util::MessageToJsonString(response, &json, print);
-      out << json;
-    }
-    if (!out.good()) {
-      std::cerr << "chasles: writing '" << options.out << "' failed\n";
-      return kExitFailed;
-    }
-    std::printf("wrote       %s\n", options.out.c_str());
+  if (!options.out.empty() && !WriteOut(options.out, response, response.trajectory())) return kExitFailed;
+  if (response.outcome() != v1::SUCCESS || response.trajectory().points_size() == 0) {
+    std::cerr << "chasles: no trajectory: " << v1::PlanOutcome_Name(response.outcome()) << ": " << response.message()
+              << "\n";
+    return kExitFailed;
   }
+  return kExitOk;
+}
+
+// --- optimize ----------------------------------------------------------------------------------
+
+int Optimize(const Options& options) {
+  if (options.positional.size() != 2) UsageError("optimize takes one REQUEST.json");
+  if (!options.out.empty() && !EndsWith(options.out, ".json") && !EndsWith(options.out, ".csv")) {
+    UsageError("--out '" + options.out + "' must end in .json or .csv");
+  }
+  v1::OptimizeRequest request = ParseJsonFileOrExit<v1::OptimizeRequest>(options.positional[1]);
+  if (!options.method.empty()) request.mutable_options()->set_post_processing(MethodOrExit(options.method));
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  const double budget = request.time_budget() > 0 ? request.time_budget() : 10.0;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : budget + 30.0);
+  v1::OptimizeResponse response;
+  const grpc::Status status = stub->Optimize(&context, request, &response);
+  if (!status.ok()) return ReportRpcError("Optimize", options, status);
+  const v1::StageTimings& t = response.timings();
+  std::printf("request     %s\n", response.request_id().c_str());
+  std::printf("outcome     %s\n", v1::PlanOutcome_Name(response.outcome()).c_str());
+  std::printf("message     %s\n", response.message().c_str());
+  std::printf("duration    %.4f s%s\n", response.duration(),
+              response.input_duration() > 0
+                  ? (" (input " + std::to_string(response.input_duration()) + " s)").c_str()
+                  : "");
+  std::printf("samples     %d\n", response.trajectory().points_size());
+  std::printf("timings ms  parameterize %.1f  optimize %.1f  verify %.1f  total %.1f\n", 1e3 * t.parameterize(),
+              1e3 * t.optimize(), 1e3 * t.verify(), 1e3 * t.total());
+  PrintOptimizer(response.optimizer(), response.quality());
+  if (!options.out.empty() && !WriteOut(options.out, response, response.trajectory())) return kExitFailed;
   if (response.outcome() != v1::SUCCESS || response.trajectory().points_size() == 0) {
     std::cerr << "chasles: no trajectory: " << v1::PlanOutcome_Name(response.outcome()) << ": " << response.message()
               << "\n";
@@ -538,6 +614,8 @@ int main(int argc, char** argv) {
       options.max_range = value();
     } else if (arg == "--resolution") {
       options.resolution = value();
+    } else if (arg == "--method") {
+      options.method = value();
     } else if (arg.size() > 1 && arg[0] == '-') {
       UsageError("unknown option '" + arg + "'");
     } else {
@@ -551,6 +629,7 @@ int main(int argc, char** argv) {
     return command == "health" ? Health(options) : Planners(options);
   }
   if (command == "plan") return Plan(options);
+  if (command == "optimize") return Optimize(options);
   if (command == "ik") return InverseKinematics(options);
   if (command == "upload-robot") return UploadRobot(options);
   if (command == "upload-scene") return UploadScene(options);

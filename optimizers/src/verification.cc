@@ -359,20 +359,25 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
       }
     }
   }
-  // Sampled figures.
+  // Sampled figures: states spaced by at most `step` of joint motion within each piece, and
+  // every piece boundary (where a waypoint is passed exactly when the robot stops there).
   double total_travel = 0.0;
   for (const Piece& piece : trajectory.pieces()) total_travel += Travel(piece);
-  const int samples = std::max(2, std::min(2000, static_cast<int>(std::ceil(total_travel / max_joint_step)) + 1));
+  const double step = std::max(max_joint_step, total_travel / 2000.0);
   const bool effort = checker != nullptr && limits.max_effort.size() == n && HasInertia(checker->robot());
   DynamicsOptions dynamics;
   dynamics.gravity = limits.gravity;
   std::vector<Eigen::VectorXd> states;
-  states.reserve(samples);
-  const int clearance_every = std::max(1, samples / 200);
-  for (int s = 0; s < samples; ++s) {
-    const TrajectorySample x = trajectory.Evaluate(trajectory.duration() * s / (samples - 1));
+  std::vector<TrajectorySample> samples;
+  for (const Piece& piece : trajectory.pieces()) {
+    const int m = std::max(1, static_cast<int>(std::ceil(Travel(piece) / step)));
+    for (int i = samples.empty() ? 0 : 1; i <= m; ++i) samples.push_back(trajectory.Evaluate(piece.t0 + piece.duration * i / m));
+  }
+  const int clearance_every = std::max<int>(1, static_cast<int>(samples.size()) / 200);
+  for (std::size_t s = 0; s < samples.size(); ++s) {
+    const TrajectorySample& x = samples[s];
     states.push_back(x.q);
-    if (checker != nullptr && (s % clearance_every == 0 || s == samples - 1)) {
+    if (checker != nullptr && (s % clearance_every == 0 || s + 1 == samples.size())) {
       out.min_clearance = std::min(out.min_clearance, checker->Clearance(x.q));
     }
     if (effort) {
