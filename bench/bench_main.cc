@@ -2,10 +2,11 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|families|grpc|kinematics|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
+//                 [--segments N] [--paths N] [--knots K] [--methods topp,collocation,spline]
 
 #include <algorithm>
 #include <chrono>
@@ -13,6 +14,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <random>
 #include <sstream>
@@ -23,7 +25,11 @@
 #include <grpcpp/grpcpp.h>
 
 #include "chasles/collision/collision_checker.h"
+#include "chasles/optimizers/collocation.h"
 #include "chasles/optimizers/shortcut.h"
+#include "chasles/optimizers/spline_smoothing.h"
+#include "chasles/optimizers/time_parameterization.h"
+#include "chasles/optimizers/verification.h"
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/planners/registry.h"
 #include "chasles/robot/dynamics.h"
@@ -54,6 +60,10 @@ struct Options {
   int ik_poses = 1000;
   double resolution = 0.005;  // motion-check resolution of the planning queries [rad]
   std::vector<std::string> problems = {"maze", "office", "drone_course", "panda_shelf"};
+  int segments = 200;   // trajectory: straight rest-to-rest segments
+  int paths = 200;      // trajectory: planner-produced paths of 5–10 waypoints
+  int knots = 100;      // trajectory: collocation knots
+  std::vector<std::string> methods = {"topp", "collocation", "spline"};
 };
 
 std::string ReadFile(const std::string& path) {
@@ -645,6 +655,201 @@ void BenchKinematics(const Options& options) {
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+// Trajectory optimisation (issue 5): the time-optimal parameterisation, collocation and spline
+// smoothing on straight segments (against the exact minimum time T*) and on planner paths
+// (against the time-optimal parameterisation of the same path), in one run.
+
+/// Median over `repeats` runs of the time of `call()` [ms].
+template <typename Call>
+double MedianMillis(int repeats, Call&& call) {
+  std::vector<double> ms;
+  for (int r = 0; r < repeats; ++r) {
+    const auto t0 = Clock::now();
+    call();
+    ms.push_back(1e3 * std::chrono::duration<double>(Clock::now() - t0).count());
+  }
+  return Quantile(ms, 0.5);
+}
+
+struct MethodRow {
+  std::vector<double> ratio, ms, iterations, velocity, acceleration, jerk_integral, deviation, clearance;
+  int fell_back = 0, failed_verification = 0, runs = 0;
+};
+
+void PrintMethodRows(const std::string& what, const std::string& ratio_name, std::map<std::string, MethodRow>& rows,
+                     const std::vector<std::string>& order, double topp_ms_median) {
+  std::printf("| %s | method | runs | %s median | %s p95 | %s max | compute median [ms] | compute p95 [ms] | "
+              "vs topp compute | iterations median | max |q̇|/v | max |q̈|/a | deviation median [rad] | "
+              "min clearance [m] | fell back |\n",
+              what.c_str(), ratio_name.c_str(), ratio_name.c_str(), ratio_name.c_str());
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const std::string& m : order) {
+    if (rows.count(m) == 0) continue;
+    MethodRow& r = rows[m];
+    const double ms = Quantile(r.ms, 0.5);
+    double vmax = 0, amax = 0, cmin = std::numeric_limits<double>::infinity();
+    for (double v : r.velocity) vmax = std::max(vmax, v);
+    for (double a : r.acceleration) amax = std::max(amax, a);
+    for (double c : r.clearance) cmin = std::min(cmin, c);
+    std::printf("| %s | %s | %d | %.6f | %.6f | %.6f | %.4f | %.4f | %.1f× | %.0f | %.6f | %.6f | %.4f | %s | %d%s |\n",
+                what.c_str(), m.c_str(), r.runs, Quantile(r.ratio, 0.5), Quantile(r.ratio, 0.95),
+                r.ratio.empty() ? std::nan("") : *std::max_element(r.ratio.begin(), r.ratio.end()), ms,
+                Quantile(r.ms, 0.95), ms / topp_ms_median, Quantile(r.iterations, 0.5), vmax, amax,
+                Quantile(r.deviation, 0.5), std::isfinite(cmin) ? std::to_string(cmin).c_str() : "no obstacles",
+                r.fell_back, r.failed_verification > 0 ? (" (" + std::to_string(r.failed_verification) + " failed verification)").c_str() : "");
+  }
+}
+
+void BenchTrajectory(const Options& options) {
+  auto robot = LoadRobot("panda");
+  const int n = robot->num_dofs();
+  KinematicLimits limits;
+  limits.max_velocity = robot->velocity_limits();
+  limits.max_acceleration = 2.0 * robot->velocity_limits();  // the server's default
+  const bool want_collocation =
+      std::find(options.methods.begin(), options.methods.end(), "collocation") != options.methods.end();
+  const bool want_spline = std::find(options.methods.begin(), options.methods.end(), "spline") != options.methods.end();
+  CollocationOptions collocation;
+  collocation.knots = options.knots;
+  SplineOptions spline;
+
+  // 1. Straight rest-to-rest segments in free space.
+  auto free_space = std::make_shared<const CollisionChecker>(robot, std::make_shared<Scene>());
+  std::mt19937_64 rng(options.seed);
+  std::map<std::string, MethodRow> rows;
+  for (int k = 0; k < options.segments; ++k) {
+    // Endpoints and the line between them free of self-collision, so verification applies.
+    Eigen::VectorXd a, b;
+    do {
+      a = RandomConfiguration(*robot, &rng);
+      b = RandomConfiguration(*robot, &rng);
+    } while (!free_space->IsValid(a) || !free_space->IsValid(b) || !free_space->IsMotionValid(a, b, 0.005));
+    double v = std::numeric_limits<double>::infinity(), acc = v;
+    for (int i = 0; i < n; ++i) {
+      const double d = std::abs(b[i] - a[i]);
+      if (d == 0) continue;
+      v = std::min(v, limits.max_velocity[i] / d);
+      acc = std::min(acc, limits.max_acceleration[i] / d);
+    }
+    const double t_star = v * v > acc ? 2.0 / std::sqrt(acc) : 1.0 / v + v / acc;
+    TimedTrajectory topp;
+    const double topp_ms = MedianMillis(21, [&] { topp = ParameterizeTimeOptimal({a, b}, limits); });
+    const auto record = [&](const std::string& method, const TimedTrajectory& traj, double ms, const OptimizerReport* report) {
+      MethodRow& row = rows[method];
+      ++row.runs;
+      if (report != nullptr && !report->ok) {
+        ++row.fell_back;
+        return;
+      }
+      const TrajectoryQuality q = MeasureTrajectory(traj, limits, {a, b}, nullptr);
+      row.ratio.push_back(traj.duration() / t_star);
+      row.ms.push_back(ms);
+      row.iterations.push_back(report != nullptr ? report->iterations : 0);
+      row.velocity.push_back(q.max_velocity_ratio);
+      row.acceleration.push_back(q.max_acceleration_ratio);
+      row.deviation.push_back(q.max_deviation);
+      if (!VerifyTrajectory(traj, a, b, *free_space, limits).ok) ++row.failed_verification;
+    };
+    record("topp", topp, topp_ms, nullptr);
+    if (want_collocation) {
+      CollocationResult result;
+      const auto t0 = Clock::now();
+      result = OptimizeByCollocation(topp, limits, collocation, free_space.get());
+      record("collocation", result.trajectory, 1e3 * std::chrono::duration<double>(Clock::now() - t0).count(), &result.report);
+    }
+    if (want_spline) {
+      SplineResult result;
+      const auto t0 = Clock::now();
+      result = SmoothWithBSpline(topp, limits, spline, free_space.get());
+      record("spline", result.trajectory, 1e3 * std::chrono::duration<double>(Clock::now() - t0).count(), &result.report);
+    }
+  }
+  std::printf("\n## Trajectory optimisation (panda, v = model limits, a = 2·v per second)\n\n");
+  std::printf("%d seeded straight rest-to-rest segments between random configurations (free space, no self-collision "
+              "on the line), T* = 1/V + V/A "
+              "(or 2/√A); collocation with K = %d knots. compute = one call (topp: median of 21 repeats).\n\n",
+              options.segments, options.knots);
+  const std::vector<std::string> order = {"topp", "collocation", "spline"};
+  PrintMethodRows("straight", "T/T*", rows, order, Quantile(rows["topp"].ms, 0.5));
+  std::fflush(stdout);
+
+  // 2. Planner paths of 5–10 waypoints in the shelf scene.
+  PlannerRegistry registry;
+  RegisterDefaultPlanners(&registry);
+  const PlanningPipeline pipeline(registry);
+  auto shelf = std::make_shared<const CollisionChecker>(robot, LoadScene("shelf"));
+  std::vector<JointPath> paths;
+  int attempts = 0;
+  std::uint64_t seed = options.seed;
+  while (static_cast<int>(paths.size()) < options.paths && attempts < 50 * std::max(1, options.paths)) {
+    const auto queries = MakeQueries(*shelf, 20, seed++);
+    for (const auto& [start, goal] : queries) {
+      if (static_cast<int>(paths.size()) >= options.paths) break;
+      ++attempts;
+      PlanQuery query;
+      query.checker = shelf;
+      query.start = start;
+      query.goal = goal;
+      query.planner_id = "rrt_connect";
+      query.seed = seed * 1000 + attempts;
+      query.shortcut_attempts = 20;
+      query.trajectory.method = PostProcessing::kNone;
+      const PlanOutcome out = pipeline.Plan(query, Termination::After(std::chrono::duration<double>(1.0)));
+      if (out.code != PlanOutcomeCode::kSuccess) continue;
+      if (out.path.size() < 5 || out.path.size() > 10) continue;
+      paths.push_back(out.path);
+    }
+  }
+  std::map<std::string, MethodRow> path_rows;
+  std::vector<double> waypoints;
+  for (const JointPath& path : paths) {
+    waypoints.push_back(static_cast<double>(path.size()));
+    TimeOptimalOptions topp_options;
+    TimedTrajectory topp;
+    const double topp_ms =
+        MedianMillis(5, [&] { topp = ParameterizeTimeOptimal(path, limits, topp_options, shelf.get()); });
+    const double base = topp.duration();
+    const auto record = [&](const std::string& method, const TimedTrajectory& traj, double ms, const OptimizerReport* report) {
+      MethodRow& row = path_rows[method];
+      ++row.runs;
+      if (report != nullptr && !report->ok) {
+        ++row.fell_back;
+        return;
+      }
+      const TrajectoryQuality q = MeasureTrajectory(traj, limits, path, shelf.get());
+      row.ratio.push_back(traj.duration() / base);
+      row.ms.push_back(ms);
+      row.iterations.push_back(report != nullptr ? report->iterations : 0);
+      row.velocity.push_back(q.max_velocity_ratio);
+      row.acceleration.push_back(q.max_acceleration_ratio);
+      row.deviation.push_back(q.max_deviation);
+      row.clearance.push_back(q.min_clearance);
+      if (!VerifyTrajectory(traj, path.front(), path.back(), *shelf, limits).ok) ++row.failed_verification;
+    };
+    record("topp", topp, topp_ms, nullptr);
+    TimedTrajectory stops;
+    const double stops_ms = MedianMillis(5, [&] { stops = ParameterizeRestToRest(path, limits); });
+    record("none (stops)", stops, stops_ms, nullptr);
+    if (want_collocation) {
+      const auto t0 = Clock::now();
+      const CollocationResult result = OptimizeByCollocation(topp, limits, collocation, shelf.get());
+      record("collocation", result.trajectory, 1e3 * std::chrono::duration<double>(Clock::now() - t0).count(), &result.report);
+    }
+    if (want_spline) {
+      const auto t0 = Clock::now();
+      const SplineResult result = SmoothWithBSpline(topp, limits, spline, shelf.get());
+      record("spline", result.trajectory, 1e3 * std::chrono::duration<double>(Clock::now() - t0).count(), &result.report);
+    }
+  }
+  std::printf("\n%zu RRT-Connect paths in the shelf scene with 5–10 waypoints after 20 shortcut attempts (median %.0f "
+              "waypoints); ratios are durations over the time-optimal parameterisation of the same path (max_deviation "
+              "0.05 rad), so 'none' shows what blending gains and the optimisers what they gain over it.\n\n",
+              paths.size(), Quantile(waypoints, 0.5));
+  PrintMethodRows("path", "T/T_topp", path_rows, {"topp", "none (stops)", "collocation", "spline"},
+                  Quantile(path_rows["topp"].ms, 0.5));
+}
+
 int Main(int argc, char** argv) {
   Options options;
   examples_dir = CHASLES_EXAMPLES_DIR;
@@ -667,12 +872,18 @@ int Main(int argc, char** argv) {
     else if (arg == "--resolution") options.resolution = std::stod(value());
     else if (arg == "--ik-poses") options.ik_poses = std::stoi(value());
     else if (arg == "--problems") options.problems = Split(value());
+    else if (arg == "--segments") options.segments = std::stoi(value());
+    else if (arg == "--paths") options.paths = std::stoi(value());
+    else if (arg == "--knots") options.knots = std::stoi(value());
+    else if (arg == "--methods") options.methods = Split(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|families|grpc|kinematics|all] [--queries N] [--seed S]\n"
+                   "usage: chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|all] [--queries N]\n"
+                   "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
                    "                     [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]\n"
-                   "                     [--problems maze,office,drone_course,panda_shelf]\n");
+                   "                     [--problems maze,office,drone_course,panda_shelf]\n"
+                   "                     [--segments N] [--paths N] [--knots K] [--methods topp,collocation,spline]\n");
       return arg == "--help" ? 0 : 2;
     }
   }
@@ -681,6 +892,7 @@ int Main(int argc, char** argv) {
   if (options.section == "families" || options.section == "all") BenchFamilies(options);
   if (options.section == "grpc" || options.section == "all") BenchGrpc(options);
   if (options.section == "kinematics" || options.section == "all") BenchKinematics(options);
+  if (options.section == "trajectory" || options.section == "all") BenchTrajectory(options);
   return 0;
 }
 
