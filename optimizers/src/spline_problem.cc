@@ -16,7 +16,7 @@ constexpr double kClearanceScale = 0.05;  // [m] per unit of a clearance constra
 
 bool Layout::Fixed(int i) const {
   if (i == 0 || i == num_control_points - 1) return true;
-  if (i < first_free()) return start_at_rest;  // P₁, P₂ at rest; P₁ derived when moving
+  if (i < first_free()) return start_at_rest;  // P₁ (and P₂) at rest; P₁ derived when moving
   if (i > last_free()) return end_at_rest;
   return false;
 }

@@ -23,8 +23,9 @@ namespace spline {
 constexpr double kLimitMargin = 1e-5;
 
 /// Which control points are variables. P₀ = start and P_{K−1} = goal always. An end at rest
-/// also fixes the next two (P₁ = P₂ = start, P_{K−3} = P_{K−2} = goal: zero velocity and
-/// acceleration there); a moving end fixes its velocity v through the next one,
+/// also fixes the next one (P₁ = start, P_{K−2} = goal: zero velocity) and, when
+/// zero_rest_acceleration (K >= 6), the one after (P₂ = start, P_{K−3} = goal: zero
+/// acceleration); a moving end fixes its velocity v through the next one,
 /// P₁ = start + v₀·Δ₀/p and P_{K−2} = goal − v₁·Δ_{m−1}/p (a function of the span duration).
 /// Variables x: the free control points joint by joint (P_{first_free} … P_{last_free} of
 /// joint 0, then joint 1, …), then the m span durations.
@@ -36,10 +37,11 @@ struct Layout {
   Eigen::VectorXd start_velocity, end_velocity;  ///< zero at an end at rest
   bool start_at_rest = true;
   bool end_at_rest = true;
+  bool zero_rest_acceleration = true;
 
   int num_spans() const { return num_control_points - degree; }
-  int first_free() const { return start_at_rest ? 3 : 2; }
-  int last_free() const { return end_at_rest ? num_control_points - 4 : num_control_points - 3; }
+  int first_free() const { return start_at_rest && zero_rest_acceleration ? 3 : 2; }
+  int last_free() const { return num_control_points - 1 - (end_at_rest && zero_rest_acceleration ? 3 : 2); }
   int free_per_joint() const { return last_free() - first_free() + 1; }
   int num_variables() const { return num_dofs * free_per_joint() + num_spans(); }
   /// Variable index of control point i of `joint`, or −1 when it is fixed or derived.

@@ -26,7 +26,7 @@ using spline::JointSpline;
 using spline::Layout;
 using spline::Problem;
 
-constexpr int kMaxControlPoints = 200;
+constexpr int kMaxControlPoints = 500;
 /// NLopt's tolerance on the constraints (dimensionless limit rows, clearance rows in units of
 /// 0.05 m).
 constexpr double kConstraintTolerance = 1e-8;
@@ -56,13 +56,11 @@ void ValidateOptions(const SplineOptions& options) {
   if (options.degree != 3 && options.degree != 5) {
     ThrowInvalid("spline degree = " + std::to_string(options.degree) + " must be 3 or 5");
   }
-  const int min_points = std::max(options.degree + 1, 6);
   if (options.control_points != 0 &&
-      (options.control_points < min_points || options.control_points > kMaxControlPoints)) {
+      (options.control_points < options.degree + 1 || options.control_points > kMaxControlPoints)) {
     ThrowInvalid("spline control_points = " + std::to_string(options.control_points) + " must be 0 (chosen from " +
-                 "the path) or within [" + std::to_string(min_points) + ", " + std::to_string(kMaxControlPoints) +
-                 "] (at least degree + 1 = " + std::to_string(options.degree + 1) +
-                 ", and 3 fixed at each end for its position, velocity and acceleration)");
+                 "the path) or within [degree + 1 = " + std::to_string(options.degree + 1) + ", " +
+                 std::to_string(kMaxControlPoints) + "]");
   }
   if (!std::isfinite(options.jerk_weight) || !(options.jerk_weight >= 0.0)) {
     ThrowInvalid("spline jerk_weight = " + FormatNumber(options.jerk_weight) + " must be finite and >= 0");
@@ -339,6 +337,11 @@ SplineResult SmoothWithBSpline(const TimedTrajectory& initial, const KinematicLi
     ThrowInvalid("spline initial trajectory has " + std::to_string(n) + " joints, the checker's robot has " +
                  std::to_string(checker->robot().num_dofs()));
   }
+  if (options.control_points != 0 && options.control_points < 6 && limits.max_jerk.size() != 0) {
+    ThrowInvalid("spline control_points = " + std::to_string(options.control_points) +
+                 " must be >= 6 with max_jerk set (three control points at each end at rest, for a zero "
+                 "acceleration there)");
+  }
   if (checker != nullptr && limits.max_effort.size() != 0 && !HasInertia(checker->robot())) {
     ThrowInvalid("max_effort needs a robot with inertia on every moving link");  // as VerifyTrajectory
   }
@@ -377,6 +380,7 @@ SplineResult SmoothWithBSpline(const TimedTrajectory& initial, const KinematicLi
   layout.end_at_rest = last.qd.cwiseAbs().maxCoeff() <= rest;
   layout.start_velocity = layout.start_at_rest ? Eigen::VectorXd::Zero(n) : first.qd;
   layout.end_velocity = layout.end_at_rest ? Eigen::VectorXd::Zero(n) : last.qd;
+  layout.zero_rest_acceleration = layout.num_control_points >= 6;
   const int m = layout.num_spans();
 
   // Warm start: least squares on uniform spans over the initial duration, then every span

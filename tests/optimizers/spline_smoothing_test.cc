@@ -129,17 +129,20 @@ TEST(SplineProblem, GradientsMatchCentralDifferences) {
   const ObstacleProximity proximity(checker);
   test::Random rng(test::TestSeed() + 71);
   for (int degree : {3, 5}) {
-    for (int ends = 0; ends < 2; ++ends) {
-      SCOPED_TRACE("degree " + std::to_string(degree) + (ends ? ", moving ends" : ", ends at rest"));
+    for (int ends = 0; ends < 3; ++ends) {
+      // ends: 0 at rest, 1 moving, 2 at rest with K = 5 (no zero acceleration; cubic only)
+      if (ends == 2 && degree == 5) continue;
+      SCOPED_TRACE("degree " + std::to_string(degree) + ", ends " + std::to_string(ends));
       spline::Layout layout;
       layout.num_dofs = 2;
       layout.degree = degree;
-      layout.num_control_points = degree + 6;
+      layout.num_control_points = ends == 2 ? 5 : degree + 6;
+      layout.zero_rest_acceleration = ends != 2;
       layout.start = Eigen::Vector2d(0.3, 2.4);
       layout.goal = Eigen::Vector2d(2.6, 2.5);
-      layout.start_at_rest = layout.end_at_rest = ends == 0;
-      layout.start_velocity = ends ? Eigen::VectorXd(Eigen::Vector2d(0.4, -0.2)) : Eigen::VectorXd::Zero(2);
-      layout.end_velocity = ends ? Eigen::VectorXd(Eigen::Vector2d(0.3, 0.5)) : Eigen::VectorXd::Zero(2);
+      layout.start_at_rest = layout.end_at_rest = ends != 1;
+      layout.start_velocity = ends == 1 ? Eigen::VectorXd(Eigen::Vector2d(0.4, -0.2)) : Eigen::VectorXd::Zero(2);
+      layout.end_velocity = ends == 1 ? Eigen::VectorXd(Eigen::Vector2d(0.3, 0.5)) : Eigen::VectorXd::Zero(2);
       KinematicLimits limits = Limits(2, 1.5, 4.0);
       limits.max_jerk = Eigen::Vector2d(20.0, 30.0);
       spline::ClearanceSetup clearance;
@@ -190,6 +193,31 @@ TEST(SplineSmoothing, StraightSegmentIsC2WithinLimitsAndNearTheMinimumTime) {
     std::cout << "[ figures  ] straight, degree " << degree << ": " << traj.duration() << " s vs minimum " << best
               << " s (x" << traj.duration() / best << "), " << result.report.iterations << " evaluations, "
               << result.report.solve_seconds * 1e3 << " ms, " << result.report.status << "\n";
+  }
+}
+
+TEST(SplineSmoothing, TheFewestControlPointsStillMeetTheLimits) {
+  // K = degree + 1: one span, a single polynomial. A cubic of 4 control points starts and ends
+  // at rest with a non-zero acceleration; a quintic of 6 with a zero one.
+  const auto checker = FreeChecker(2);
+  const KinematicLimits limits = Limits(2, 1.0, 2.0);
+  const JointPath path{Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(1.0, 0.5), Eigen::Vector2d(2.0, -0.5)};
+  const TimedTrajectory initial = ParameterizeTimeOptimal(path, limits);
+  for (int degree : {3, 5}) {
+    SCOPED_TRACE("degree " + std::to_string(degree));
+    SplineOptions options;
+    options.degree = degree;
+    options.control_points = degree + 1;
+    options.max_deviation = 2.0;
+    const SplineResult result = SmoothWithBSpline(initial, limits, options, checker.get());
+    ExpectOk(result);
+    ASSERT_EQ(result.trajectory.pieces().size(), 1u);
+    ExpectLimitsAtOneKilohertz(result.trajectory, limits);
+    const VerificationReport verified = VerifyTrajectory(result.trajectory, path.front(), path.back(), *checker, limits);
+    EXPECT_TRUE(verified.ok) << verified.reason;
+    const double start_acceleration = result.trajectory.Evaluate(0.0).qdd.cwiseAbs().maxCoeff();
+    if (degree == 5) EXPECT_EQ(start_acceleration, 0.0);
+    if (degree == 3) EXPECT_GT(start_acceleration, 0.0);
   }
 }
 
@@ -496,14 +524,14 @@ TEST(SplineSmoothing, BadOptionsAreNamedInvalidArguments) {
   };
   ExpectInvalid(with([](SplineOptions& o) { o.degree = 4; }), "spline degree = 4 must be 3 or 5");
   ExpectInvalid(with([](SplineOptions& o) { o.control_points = 2; }),
-                "spline control_points = 2 must be 0 (chosen from the path) or within [6, 200] (at least degree + "
-                "1 = 4, and 3 fixed at each end for its position, velocity and acceleration)");
+                "spline control_points = 2 must be 0 (chosen from the path) or within [degree + 1 = 4, 500]");
   ExpectInvalid(with([](SplineOptions& o) {
                   o.degree = 5;
                   o.control_points = 5;
                 }),
-                "spline control_points = 5 must be 0 (chosen from the path) or within [6, 200] (at least degree + "
-                "1 = 6, and 3 fixed at each end for its position, velocity and acceleration)");
+                "spline control_points = 5 must be 0 (chosen from the path) or within [degree + 1 = 6, 500]");
+  ExpectInvalid(with([](SplineOptions& o) { o.control_points = 501; }),
+                "spline control_points = 501 must be 0 (chosen from the path) or within [degree + 1 = 4, 500]");
   ExpectInvalid(with([](SplineOptions& o) { o.jerk_weight = -1.0; }), "spline jerk_weight = -1 must be finite and >= 0");
   ExpectInvalid(with([](SplineOptions& o) { o.jerk_weight = std::nan(""); }),
                 "spline jerk_weight = nan must be finite and >= 0");
@@ -519,6 +547,13 @@ TEST(SplineSmoothing, BadOptionsAreNamedInvalidArguments) {
   bad = limits;
   bad.max_acceleration[0] = -2.0;
   ExpectInvalid([&] { SmoothWithBSpline(initial, bad, {}); }, "max_acceleration[0] = -2 must be > 0");
+  bad = limits;
+  bad.max_jerk = Eigen::Vector2d(10.0, 10.0);
+  SplineOptions five;
+  five.control_points = 5;
+  ExpectInvalid([&] { SmoothWithBSpline(initial, bad, five); },
+                "spline control_points = 5 must be >= 6 with max_jerk set (three control points at each end at "
+                "rest, for a zero acceleration there)");
   ExpectInvalid([&] { SmoothWithBSpline(TimedTrajectory(), limits, {}); }, "spline initial trajectory is empty");
   const auto checker = FreeChecker(3);
   ExpectInvalid([&] { SmoothWithBSpline(initial, limits, {}, checker.get()); },

@@ -17,8 +17,9 @@ namespace chasles {
 struct SplineOptions {
   int degree = 3;                ///< 3 (C² trajectory) or 5 (C⁴)
   /// K: 0 = one knot span per phase (piece) of the initial trajectory, 4 to 30 spans, plus the
-  /// degree; else within [max(degree + 1, 6), 200] (three control points are fixed at each
-  /// end). The solve grows roughly with K³: ~20 control points of 7 joints take ~0.3 s.
+  /// degree; else within [degree + 1, 500]. With K < 6 (cubic only) an end at rest fixes its
+  /// velocity but not its acceleration, so max_jerk then needs K >= 6. The solve grows
+  /// roughly with K³: ~20 control points of 7 joints take ~0.3 s.
   int control_points = 0;
   /// w >= 0 in the objective T + w·∫‖q⃛‖² dt [s⁶/rad²].
   double jerk_weight = 0.0;
@@ -47,8 +48,8 @@ struct SplineResult {
 ///
 /// Formulation. Degree p, K control points, m = K − p knot spans of durations Δⱼ > 0 (the
 /// variables, with the free control points). Start and end states are those of `initial`:
-/// positions exact; an end at rest has zero velocity and acceleration (three equal control
-/// points); a moving end keeps its velocity. The derivative control points (hodographs) bound
+/// positions exact; an end at rest has zero velocity and, with K >= 6, zero acceleration
+/// (three equal control points); a moving end keeps its velocity. The derivative control points (hodographs) bound
 /// the derivatives everywhere (convex hull), so |C⁽ʳ⁾ᵢ| <= (1 − 1e-5)·limit for velocity,
 /// acceleration and, when max_jerk is set, jerk make the limits exact. Control points stay
 /// within max_deviation of the fit and within the robot's joint limits (with a checker), so
@@ -74,7 +75,8 @@ struct SplineResult {
 ///
 /// A trajectory of zero duration is returned as it is (ok).
 /// \throws Error(kInvalidArgument) naming the option for a degree other than 3 or 5, too few
-///   (or more than 200) control points, negative or non-finite weights, clearance or
+///   (or more than 500) control points, fewer than 6 with max_jerk set, negative or
+///   non-finite weights, clearance or
 ///   max_deviation, an unknown algorithm, max_evaluations < 1, a time_budget not > 0, limits
 ///   that fail Validate, an empty initial trajectory or one with non-finite coefficients, a
 ///   checker for a robot with a different number of joints, or max_effort with a checker
