@@ -64,8 +64,10 @@ Problem::Problem(Layout layout, const KinematicLimits& limits, double jerk_weigh
   }
   joints_.assign(n, JointSpline(p, k, slots_));
 
-  // Limit rows, skipping hodograph points that are identically zero (all their control points
-  // fixed and equal, e.g. the velocity and acceleration at an end at rest).
+  // Limit rows, skipping hodograph points that are constant: identically zero (all their
+  // control points fixed and equal, e.g. the velocity and acceleration at an end at rest) or
+  // a moving end's own velocity (its row could not change, and a velocity at the limit would
+  // violate the margin for good).
   const int max_order = limits_.max_jerk.size() != 0 ? 3 : 2;
   for (int d = 0; d < n; ++d) {
     for (int r = 1; r <= max_order; ++r) {
@@ -76,6 +78,7 @@ Problem::Problem(Layout layout, const KinematicLimits& limits, double jerk_weigh
         bool zero = true;
         for (int l = i; l <= i + r; ++l) zero = zero && layout_.Fixed(l) && fixed_value(l) == fixed_value(i);
         if (zero) continue;
+        if (r == 1 && ((i == 0 && !layout_.start_at_rest) || (i == k - 2 && !layout_.end_at_rest))) continue;
         rows_.push_back(Row{d, r, i, 1.0 / limit[d]});
       }
     }

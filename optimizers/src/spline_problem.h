@@ -81,9 +81,9 @@ struct ClearanceSetup {
 /// min f(x) = ΣΔⱼ + w·Σ_joints ∫‖q⃛‖² dt subject to c(x) <= 0:
 ///   ((C⁽ʳ⁾ᵢ/bound)² − 1)/2, bound = (1 − 1e-5)·limit (a margin for the solver's own
 ///     tolerance), for r = 1 (velocity), 2 (acceleration) and, with max_jerk, 3
-///     (jerk), every joint and index except the ones that are identically zero (one row per
-///     point rather than ±, which keeps SLSQP's dense subproblems small; dimensionless, so a
-///     span that shrinks does not loosen its rows);
+///     (jerk), every joint and index except the constant ones (zero at an end at rest, a
+///     moving end's own velocity); one row per point rather than ±, which keeps SLSQP's
+///     dense subproblems small; dimensionless, so a span that shrinks does not loosen its rows;
 ///   (target − (distance − offset))/0.05 m at every clearance sample, distance the smallest
 ///     link–obstacle distance there (gradient n̂ᵀ·J_v(q, link, point)·∂q/∂x).
 class Problem {

@@ -94,11 +94,11 @@ double Travel(const TimedTrajectory::Piece& piece) {
 }
 
 /// One span per piece of positive duration of the warm start (whose pieces are its phases:
-/// accelerate, cruise, blend, brake), within [4, 30], plus the degree.
+/// accelerate, cruise, blend, brake), within [8, 30], plus the degree.
 int DefaultControlPoints(const TimedTrajectory& initial, int degree) {
   int pieces = 0;
   for (const TimedTrajectory::Piece& piece : initial.pieces()) pieces += piece.duration > 0.0 ? 1 : 0;
-  return std::max(std::min(pieces, 30), 4) + degree;
+  return std::max(std::min(pieces, 30), 8) + degree;
 }
 
 /// Least-squares fit of the free control points to samples of `initial` at the knots of
@@ -149,8 +149,12 @@ double HodographScale(const Layout& layout, const KinematicLimits& limits, const
     const int max_order = limits.max_jerk.size() != 0 ? 3 : 2;
     for (int r = 1; r <= max_order; ++r) {
       const double limit = r == 1 ? limits.max_velocity[d] : (r == 2 ? limits.max_acceleration[d] : limits.max_jerk[d]);
-      const double ratio = spline.hodograph(r).cwiseAbs().maxCoeff() / limit;
-      scale = std::max(scale, std::pow(ratio, 1.0 / r));
+      const Eigen::VectorXd& points = spline.hodograph(r);
+      for (int i = 0; i < points.size(); ++i) {
+        // A moving end's own velocity does not scale (and is the caller's to keep in limits).
+        if (r == 1 && ((i == 0 && !layout.start_at_rest) || (i == k - 2 && !layout.end_at_rest))) continue;
+        scale = std::max(scale, std::pow(std::abs(points[i]) / limit, 1.0 / r));
+      }
     }
   }
   return scale;
@@ -367,7 +371,8 @@ SplineResult SmoothWithBSpline(const TimedTrajectory& initial, const KinematicLi
     return result;
   }
 
-  // Layout: start and end states of the warm start; an end at rest also gets zero acceleration.
+  // Layout: start and end states of the warm start; an end at rest also gets zero acceleration
+  // when K >= 6.
   Layout layout;
   layout.num_dofs = n;
   layout.degree = options.degree;
@@ -384,11 +389,11 @@ SplineResult SmoothWithBSpline(const TimedTrajectory& initial, const KinematicLi
   const int m = layout.num_spans();
 
   // Warm start: least squares on uniform spans over the initial duration, then every span
-  // scaled so the derivative control points sit on their limits (exact at rest ends; a moving
-  // end's velocity does not scale, so repeat).
+  // scaled so the derivative control points sit on their limits (exact at once with the ends
+  // at rest; a moving end's velocity does not scale, so repeat).
   Eigen::VectorXd delta = Eigen::VectorXd::Constant(m, initial_duration / m);
   Eigen::MatrixXd control = FitControlPoints(layout, initial, delta);
-  for (int pass = 0; pass < 8; ++pass) {
+  for (int pass = 0; pass < 100; ++pass) {
     const double scale = HodographScale(layout, limits, control, delta) / (1.0 - spline::kLimitMargin);
     if (!(scale > 0.0) || !std::isfinite(scale) || std::abs(scale - 1.0) <= 1e-12) break;
     delta *= scale;

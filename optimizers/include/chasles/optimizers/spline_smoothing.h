@@ -16,7 +16,7 @@ namespace chasles {
 
 struct SplineOptions {
   int degree = 3;                ///< 3 (C² trajectory) or 5 (C⁴)
-  /// K: 0 = one knot span per phase (piece) of the initial trajectory, 4 to 30 spans, plus the
+  /// K: 0 = one knot span per phase (piece) of the initial trajectory, 8 to 30 spans, plus the
   /// degree; else within [degree + 1, 500]. With K < 6 (cubic only) an end at rest fixes its
   /// velocity but not its acceleration, so max_jerk then needs K >= 6. The solve grows
   /// roughly with K³: ~20 control points of 7 joints take ~0.3 s.
