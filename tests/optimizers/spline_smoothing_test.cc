@@ -187,9 +187,10 @@ TEST(SplineSmoothing, StraightSegmentIsC2WithinLimitsAndNearTheMinimumTime) {
     ExpectLimitsAtOneKilohertz(traj, limits);
     const VerificationReport verified = VerifyTrajectory(traj, path[0], path[1], *checker, limits);
     EXPECT_TRUE(verified.ok) << verified.reason;
-    // The exact minimum time is a lower bound for one joint; the spline gets within 30 %.
+    // The exact minimum time is a lower bound for one joint; the spline gets within 10 % (the
+    // hull bounds the derivatives conservatively; measured 0.02 % cubic, 4 % quintic).
     EXPECT_GE(traj.duration(), best * (1.0 - 1e-9));
-    EXPECT_LE(traj.duration(), 1.3 * best);
+    EXPECT_LE(traj.duration(), 1.1 * best);
     std::cout << "[ figures  ] straight, degree " << degree << ": " << traj.duration() << " s vs minimum " << best
               << " s (x" << traj.duration() / best << "), " << result.report.iterations << " evaluations, "
               << result.report.solve_seconds * 1e3 << " ms, " << result.report.status << "\n";
