@@ -1,2 +1,391 @@
-// Tests are being written.
+// Direct collocation in Ipopt: near-minimum times on straight rest-to-rest segments (exact
+// T* known), exact limits between knots, jerk limits with q̈ = 0 at rest, torque limits on the
+// Panda, the jerk weight, clearance around the planar fixture's post (the straight line
+// collides), named errors, stop(), determinism. Everything ok must pass VerifyTrajectory.
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include "chasles/collision/collision_checker.h"
+#include "chasles/optimizers/collocation.h"
+#include "chasles/optimizers/verification.h"
+#include "chasles/robot/dynamics.h"
+#include "chasles/robot/error.h"
+#include "planar_fixture.h"
+#include "test_util.h"
+
+namespace chasles {
+namespace {
+
+using ::testing::HasSubstr;
+
+/// Exact minimum time of the straight rest-to-rest segment a→b.
+double StraightMinimumTime(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const KinematicLimits& limits) {
+  const Eigen::VectorXd delta = (b - a).cwiseAbs();
+  double V = std::numeric_limits<double>::infinity(), A = V;
+  for (int i = 0; i < delta.size(); ++i) {
+    V = std::min(V, limits.max_velocity[i] / delta[i]);
+    A = std::min(A, limits.max_acceleration[i] / delta[i]);
+  }
+  return V * V <= A ? 1.0 / V + V / A : 2.0 / std::sqrt(A);
+}
+
+/// A lower bound on any rest-to-rest motion a→b: the slowest joint's own minimum time.
+double JointwiseMinimumTime(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const KinematicLimits& limits) {
+  double best = 0.0;
+  for (int i = 0; i < a.size(); ++i) {
+    const double d = std::abs(b[i] - a[i]), v = limits.max_velocity[i], acc = limits.max_acceleration[i];
+    best = std::max(best, v * v <= acc * d ? d / v + v / acc : 2.0 * std::sqrt(d / acc));
+  }
+  return best;
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream out;
+  out << in.rdbuf();
+  return out.str();
+}
+
+/// The example Panda (inertia, friction, sphere geometry) in an empty scene or with a box.
+std::shared_ptr<const CollisionChecker> Panda(bool with_box) {
+  const std::string dir = std::string(CHASLES_SOURCE_DIR) + "/examples/robots/";
+  auto robot = RobotModel::FromUrdf(ReadFile(dir + "panda.urdf"), ReadFile(dir + "panda.srdf"));
+  auto scene = std::make_shared<Scene>();
+  if (with_box) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = Eigen::Vector3d(0.55, 0.0, 0.3);
+    scene->AddObject(SceneObject{"box", Shape::Box(Eigen::Vector3d(0.2, 0.6, 0.6), pose)});
+  }
+  return std::make_shared<CollisionChecker>(robot, scene);
+}
+
+Eigen::VectorXd PandaHome() {
+  Eigen::VectorXd q(7);
+  q << 0.0, -0.6, 0.0, -2.2, 0.0, 1.6, 0.8;
+  return q;
+}
+
+Eigen::VectorXd PandaAway() {
+  Eigen::VectorXd q(7);
+  q << 1.2, 0.3, 0.5, -1.2, 0.6, 2.2, -0.4;
+  return q;
+}
+
+KinematicLimits PandaLimits(const RobotModel& robot) {
+  KinematicLimits limits;
+  limits.max_velocity = robot.velocity_limits();
+  limits.max_acceleration = Eigen::VectorXd::Constant(7, 15.0);
+  return limits;
+}
+
+/// Exact-limit figures of a trajectory, no checker needed.
+void ExpectWithinLimits(const TimedTrajectory& trajectory, const KinematicLimits& limits) {
+  const TrajectoryQuality quality = MeasureTrajectory(trajectory, limits, {}, nullptr);
+  EXPECT_LE(quality.max_velocity_ratio, 1.0 + 1e-9);
+  EXPECT_LE(quality.max_acceleration_ratio, 1.0 + 1e-9);
+  if (limits.max_jerk.size() != 0) {
+    EXPECT_LE(quality.max_jerk_ratio, 1.0 + 1e-9);
+  }
+}
+
+void ExpectReportFigures(const OptimizerReport& report) {
+  EXPECT_TRUE(report.ok) << report.message;
+  EXPECT_EQ(report.status, "Solve_Succeeded");
+  EXPECT_GT(report.iterations, 0);
+  EXPECT_GT(report.solve_seconds, 0.0);
+  EXPECT_LE(report.constraint_violation, 1e-7);
+  EXPECT_GE(report.time_scale, 1.0);
+}
+
+TEST(Collocation, RestToRestStraightSegmentsNearMinimumTime) {
+  test::Random rng(test::TestSeed());
+  const int cases = test::TestCases(2);
+  for (int c = 0; c < cases; ++c) {
+    SCOPED_TRACE("case " + std::to_string(c));
+    KinematicLimits limits;
+    limits.max_velocity = rng.Vector(7, 0.5, 3.0);
+    limits.max_acceleration = rng.Vector(7, 1.0, 10.0);
+    const Eigen::VectorXd a = rng.Vector(7, -2.0, 2.0), b = rng.Vector(7, -2.0, 2.0);
+    const TimedTrajectory warm = ParameterizeTimeOptimal({a, b}, limits);
+    const double tstar = StraightMinimumTime(a, b, limits);
+    ASSERT_NEAR(warm.duration(), tstar, 1e-9 * tstar);
+
+    CollocationOptions options;  // K = 100
+    const CollocationResult result = OptimizeByCollocation(warm, limits, options);
+    ExpectReportFigures(result.report);
+    ASSERT_FALSE(result.trajectory.empty());
+    EXPECT_EQ(static_cast<int>(result.trajectory.pieces().size()), options.knots - 1);
+    EXPECT_EQ(result.trajectory.degree(), 3);
+    // Off the straight line the joints may beat T*, never their own minimum times.
+    EXPECT_LE(result.trajectory.duration(), 1.01 * tstar);
+    EXPECT_GE(result.trajectory.duration(), JointwiseMinimumTime(a, b, limits) * (1.0 - 1e-9));
+    EXPECT_NEAR(result.report.objective, result.trajectory.duration() / result.report.time_scale,
+                1e-9 * tstar);
+    ExpectWithinLimits(result.trajectory, limits);
+    const TrajectorySample first = result.trajectory.Evaluate(0.0);
+    const TrajectorySample last = result.trajectory.Evaluate(result.trajectory.duration());
+    EXPECT_TRUE(test::BitEqual(first.q, a));
+    EXPECT_TRUE(test::BitEqual(last.q, b));
+    EXPECT_EQ(first.qd.cwiseAbs().maxCoeff(), 0.0);  // the first knot's own value
+    EXPECT_LE(last.qd.cwiseAbs().maxCoeff(), 1e-8);   // the last cubic's end: defects close to ~1e-9
+  }
+}
+
+TEST(Collocation, PassesVerificationOnThePandaAroundABox) {
+  const auto checker = Panda(true);
+  const KinematicLimits limits = PandaLimits(checker->robot());
+  ASSERT_FALSE(checker->IsMotionValid(PandaHome(), PandaAway(), 0.005)) << "the box must be in the way";
+  Eigen::VectorXd via(7);
+  via << 0.95, -0.81, -0.1, -2.38, -0.35, 2.36, 0.25;
+  const JointPath path{PandaHome(), via, PandaAway()};
+  ASSERT_TRUE(checker->IsMotionValid(path[0], path[1], 0.005) && checker->IsMotionValid(path[1], path[2], 0.005));
+  const TimedTrajectory warm = ParameterizeTimeOptimal(path, limits, {}, checker.get());
+  CollocationOptions options;
+  options.knots = 40;
+  const CollocationResult result = OptimizeByCollocation(warm, limits, options, checker.get());
+  ExpectReportFigures(result.report);
+  const VerificationReport verified = VerifyTrajectory(result.trajectory, path.front(), path.back(), *checker, limits);
+  EXPECT_TRUE(verified.ok) << verified.reason;
+  EXPECT_LT(result.trajectory.duration(), warm.duration());
+}
+
+TEST(Collocation, JerkLimitsHoldAndTheAccelerationIsZeroAtRest) {
+  const auto checker = Panda(false);
+  KinematicLimits limits = PandaLimits(checker->robot());
+  limits.max_jerk = Eigen::VectorXd::Constant(7, 60.0);
+  const TimedTrajectory warm = ParameterizeRestToRest({PandaHome(), PandaAway()}, limits);
+  CollocationOptions options;
+  options.knots = 40;
+  const CollocationResult result = OptimizeByCollocation(warm, limits, options, checker.get());
+  ExpectReportFigures(result.report);
+  ExpectWithinLimits(result.trajectory, limits);
+  EXPECT_EQ(result.trajectory.Evaluate(0.0).qdd.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LE(result.trajectory.Evaluate(result.trajectory.duration()).qdd.cwiseAbs().maxCoeff(), 1e-9);
+  // The straight jerk-limited profile is feasible, so collocation does as well up to its
+  // tie-breaking regularisation (1e-3·T₀-relative at most; measured ~1e-5).
+  EXPECT_LE(result.trajectory.duration(), warm.duration() * (1.0 + 1e-4));
+  const VerificationReport verified = VerifyTrajectory(result.trajectory, PandaHome(), PandaAway(), *checker, limits);
+  EXPECT_TRUE(verified.ok) << verified.reason;
+  EXPECT_LE(verified.max_jerk_ratio, 1.0 + 1e-9);
+}
+
+TEST(Collocation, TorqueLimitsOnThePandaHold) {
+  const auto checker = Panda(false);
+  const RobotModel& robot = checker->robot();
+  ASSERT_TRUE(HasInertia(robot));
+  KinematicLimits limits = PandaLimits(robot);
+  const TimedTrajectory warm = ParameterizeTimeOptimal({PandaHome(), PandaAway()}, limits);
+  CollocationOptions options;
+  options.knots = 30;
+  const CollocationResult free = OptimizeByCollocation(warm, limits, options, checker.get());
+  ASSERT_TRUE(free.report.ok) << free.report.message;
+
+  // Half the unconstrained solution's peak torques (never below what holding still needs).
+  Eigen::VectorXd peak = Eigen::VectorXd::Zero(7), hold = Eigen::VectorXd::Zero(7);
+  for (const TrajectorySample& s : free.trajectory.Sample(0.002)) {
+    peak = peak.cwiseMax(InverseDynamics(robot, s.q, s.qd, s.qdd).cwiseAbs());
+    hold = hold.cwiseMax(GravityTorques(robot, s.q).cwiseAbs());
+  }
+  limits.max_effort = (0.5 * peak).cwiseMax(1.2 * hold + Eigen::VectorXd::Constant(7, 1.0));
+  ASSERT_GT(MeasureTrajectory(free.trajectory, limits, {}, checker.get()).max_effort_ratio, 1.05)
+      << "the limits must bind";
+
+  const CollocationResult tight = OptimizeByCollocation(warm, limits, options, checker.get());
+  ExpectReportFigures(tight.report);
+  const VerificationReport verified = VerifyTrajectory(tight.trajectory, PandaHome(), PandaAway(), *checker, limits);
+  EXPECT_TRUE(verified.ok) << verified.reason;
+  EXPECT_LE(verified.max_effort_ratio, 1.0 + 1e-9);
+  EXPECT_LE(MeasureTrajectory(tight.trajectory, limits, {}, checker.get(), 0.002).max_effort_ratio, 1.0 + 1e-3);
+  EXPECT_GE(tight.trajectory.duration(), free.trajectory.duration() * (1.0 - 1e-6));
+}
+
+TEST(Collocation, JerkWeightLowersTheJerkIntegral) {
+  const auto checker = Panda(false);
+  const KinematicLimits limits = PandaLimits(checker->robot());
+  const TimedTrajectory warm = ParameterizeTimeOptimal({PandaHome(), PandaAway()}, limits);
+  CollocationOptions options;
+  options.knots = 30;
+  const CollocationResult plain = OptimizeByCollocation(warm, limits, options, checker.get());
+  options.jerk_weight = 1e-4;
+  const CollocationResult smooth = OptimizeByCollocation(warm, limits, options, checker.get());
+  ASSERT_TRUE(plain.report.ok) << plain.report.message;
+  ExpectReportFigures(smooth.report);
+  const TrajectoryQuality q0 = MeasureTrajectory(plain.trajectory, limits, {}, nullptr);
+  const TrajectoryQuality q1 = MeasureTrajectory(smooth.trajectory, limits, {}, nullptr);
+  EXPECT_LT(q1.jerk_integral, 0.5 * q0.jerk_integral);
+  EXPECT_GE(q1.duration, q0.duration * (1.0 - 1e-6));
+  EXPECT_NEAR(smooth.report.objective, q1.duration + options.jerk_weight * q1.jerk_integral,
+              1e-6 * smooth.report.objective);
+  const VerificationReport verified = VerifyTrajectory(smooth.trajectory, PandaHome(), PandaAway(), *checker, limits);
+  EXPECT_TRUE(verified.ok) << verified.reason;
+}
+
+TEST(Collocation, ClearanceAroundThePostWhereTheStraightLineCollides) {
+  const auto checker = test::PlanarCheckerWithPost();
+  const JointPath path = test::ZigZagAroundPost();
+  ASSERT_FALSE(checker->IsMotionValid(path.front(), path.back(), 0.005));
+  KinematicLimits limits;
+  limits.max_velocity = Eigen::Vector2d(2.0, 2.0);
+  limits.max_acceleration = Eigen::Vector2d(4.0, 4.0);
+  const TimedTrajectory warm = ParameterizeTimeOptimal(path, limits, {}, checker.get());
+  CollocationOptions options;
+  options.knots = 40;
+  const CollocationResult result = OptimizeByCollocation(warm, limits, options, checker.get());
+  ExpectReportFigures(result.report);
+  const VerificationReport verified = VerifyTrajectory(result.trajectory, path.front(), path.back(), *checker, limits);
+  EXPECT_TRUE(verified.ok) << verified.reason;
+  // The clearance holds at every knot and interval midpoint (not the ends: they are given).
+  const auto& pieces = result.trajectory.pieces();
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    const double t0 = pieces[k].t0, h = pieces[k].duration;
+    if (k > 0) {
+      EXPECT_GE(checker->Clearance(result.trajectory.Evaluate(t0).q), options.clearance - 1e-6) << k;
+    }
+    EXPECT_GE(checker->Clearance(result.trajectory.Evaluate(t0 + h / 2).q), options.clearance - 1e-6) << k;
+  }
+  EXPECT_GT(MeasureTrajectory(result.trajectory, limits, path, checker.get(), 0.001).min_clearance, 0.0);
+  EXPECT_LT(result.trajectory.duration(), 0.6 * warm.duration());
+}
+
+TEST(Collocation, KeepsNonZeroEndVelocitiesOfTheWarmStart) {
+  KinematicLimits limits;
+  limits.max_velocity = Eigen::Vector3d(1.0, 2.0, 1.5);
+  limits.max_acceleration = Eigen::Vector3d(3.0, 4.0, 2.0);
+  const JointPath path{Eigen::Vector3d(0.0, 0.0, 0.0), Eigen::Vector3d(1.0, 0.5, -0.5)};
+  TimeOptimalOptions timing;
+  timing.start_velocity = 0.3 * (path[1] - path[0]);
+  timing.end_velocity = 0.2 * (path[1] - path[0]);
+  const TimedTrajectory warm = ParameterizeTimeOptimal(path, limits, timing);
+  CollocationOptions options;
+  options.knots = 20;
+  const CollocationResult result = OptimizeByCollocation(warm, limits, options);
+  ExpectReportFigures(result.report);
+  EXPECT_EQ(result.report.time_scale, 1.0);
+  EXPECT_LE((result.trajectory.Evaluate(0.0).qd - timing.start_velocity).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LE((result.trajectory.Evaluate(result.trajectory.duration()).qd - timing.end_velocity).cwiseAbs().maxCoeff(),
+            1e-8);
+  ExpectWithinLimits(result.trajectory, limits);
+}
+
+TEST(Collocation, RepeatsBitForBit) {
+  KinematicLimits limits;
+  limits.max_velocity = Eigen::Vector3d(1.0, 2.0, 1.5);
+  limits.max_acceleration = Eigen::Vector3d(3.0, 4.0, 2.0);
+  const TimedTrajectory warm =
+      ParameterizeTimeOptimal({Eigen::Vector3d(0.0, 0.0, 0.0), Eigen::Vector3d(1.0, -0.5, 0.7)}, limits);
+  CollocationOptions options;
+  options.knots = 20;
+  const CollocationResult a = OptimizeByCollocation(warm, limits, options);
+  const CollocationResult b = OptimizeByCollocation(warm, limits, options);
+  ASSERT_TRUE(a.report.ok) << a.report.message;
+  ASSERT_EQ(a.trajectory.pieces().size(), b.trajectory.pieces().size());
+  EXPECT_EQ(a.report.iterations, b.report.iterations);
+  for (std::size_t k = 0; k < a.trajectory.pieces().size(); ++k) {
+    EXPECT_EQ(a.trajectory.pieces()[k].duration, b.trajectory.pieces()[k].duration);
+    EXPECT_TRUE(a.trajectory.pieces()[k].coefficients == b.trajectory.pieces()[k].coefficients);
+  }
+}
+
+TEST(Collocation, AWarmStartThatDoesNotMoveStays) {
+  KinematicLimits limits;
+  limits.max_velocity = Eigen::Vector2d(1.0, 1.0);
+  limits.max_acceleration = Eigen::Vector2d(1.0, 1.0);
+  const Eigen::Vector2d q(0.3, -0.2);
+  const CollocationResult result = OptimizeByCollocation(ParameterizeRestToRest({q}, limits), limits, {});
+  EXPECT_TRUE(result.report.ok);
+  EXPECT_EQ(result.trajectory.duration(), 0.0);
+  EXPECT_TRUE(test::BitEqual(result.trajectory.Evaluate(0.0).q, q));
+}
+
+TEST(Collocation, StopEndsTheSolveWithoutATrajectory) {
+  KinematicLimits limits;
+  limits.max_velocity = Eigen::Vector2d(1.0, 1.0);
+  limits.max_acceleration = Eigen::Vector2d(1.0, 1.0);
+  const TimedTrajectory warm = ParameterizeTimeOptimal({Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(1.0, 2.0)}, limits);
+  CollocationOptions options;
+  options.knots = 20;
+  options.stop = [] { return true; };
+  const CollocationResult result = OptimizeByCollocation(warm, limits, options);
+  EXPECT_FALSE(result.report.ok);
+  EXPECT_EQ(result.report.status, "User_Requested_Stop");
+  EXPECT_THAT(result.report.message, HasSubstr("stopped by the caller"));
+  EXPECT_TRUE(result.trajectory.empty());
+}
+
+TEST(Collocation, ImpossibleTorqueLimitsAreReportedNotOk) {
+  const auto checker = Panda(false);
+  const KinematicLimits kinematic = PandaLimits(checker->robot());
+  const TimedTrajectory warm = ParameterizeTimeOptimal({PandaHome(), PandaAway()}, kinematic);
+  KinematicLimits limits = kinematic;
+  limits.max_effort = Eigen::VectorXd::Constant(7, 2.0);  // the shoulder cannot even hold the arm
+  CollocationOptions options;
+  options.knots = 10;
+  options.max_iterations = 100;
+  const CollocationResult result = OptimizeByCollocation(warm, limits, options, checker.get());
+  EXPECT_FALSE(result.report.ok);
+  EXPECT_FALSE(result.report.message.empty());
+  EXPECT_TRUE(result.trajectory.empty());
+}
+
+void ExpectInvalid(const std::function<void()>& call, const std::string& message) {
+  try {
+    call();
+    ADD_FAILURE() << "no exception, expected: " << message;
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_EQ(std::string(e.what()), message);
+  }
+}
+
+TEST(Collocation, NamedErrors) {
+  KinematicLimits limits;
+  limits.max_velocity = Eigen::Vector2d(1.0, 1.0);
+  limits.max_acceleration = Eigen::Vector2d(1.0, 1.0);
+  const TimedTrajectory warm = ParameterizeTimeOptimal({Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(1.0, 2.0)}, limits);
+  const auto with = [&](auto change) {
+    CollocationOptions options;
+    change(options);
+    return [options, &warm, &limits] { OptimizeByCollocation(warm, limits, options); };
+  };
+  ExpectInvalid(with([](CollocationOptions& o) { o.knots = 1; }), "collocation knots = 1 must be >= 2");
+  ExpectInvalid(with([](CollocationOptions& o) { o.jerk_weight = -1.0; }),
+                "collocation jerk_weight = -1 must be finite and >= 0");
+  ExpectInvalid(with([](CollocationOptions& o) { o.jerk_weight = std::nan(""); }),
+                "collocation jerk_weight = nan must be finite and >= 0");
+  ExpectInvalid(with([](CollocationOptions& o) { o.clearance = -0.5; }),
+                "collocation clearance = -0.5 must be finite and >= 0");
+  ExpectInvalid(with([](CollocationOptions& o) { o.activation_distance = -1.0; }),
+                "collocation activation_distance = -1 must be finite and >= 0");
+  ExpectInvalid(with([](CollocationOptions& o) { o.max_iterations = 0; }),
+                "collocation max_iterations = 0 must be >= 1");
+  ExpectInvalid(with([](CollocationOptions& o) { o.tolerance = 0.0; }),
+                "collocation tolerance = 0 must be finite and > 0");
+  ExpectInvalid(with([](CollocationOptions& o) { o.time_budget = -2.0; }),
+                "collocation time_budget = -2 must be > 0");
+  ExpectInvalid([&] { OptimizeByCollocation(TimedTrajectory(), limits, {}); }, "collocation warm_start is empty");
+  KinematicLimits bad = limits;
+  bad.max_velocity[1] = 0.0;
+  ExpectInvalid([&] { OptimizeByCollocation(warm, bad, {}); }, "max_velocity[1] = 0 must be > 0");
+  bad = limits;
+  bad.max_acceleration[0] = -3.0;
+  ExpectInvalid([&] { OptimizeByCollocation(warm, bad, {}); }, "max_acceleration[0] = -3 must be > 0");
+  bad = limits;
+  bad.max_effort = Eigen::Vector2d(5.0, 5.0);
+  ExpectInvalid([&] { OptimizeByCollocation(warm, bad, {}); },
+                "max_effort needs a robot with inertia on every moving link (pass its checker to collocation)");
+  const auto panda = Panda(false);
+  ExpectInvalid([&] { OptimizeByCollocation(warm, limits, {}, panda.get()); },
+                "collocation warm_start has 2 joints, robot has 7");
+}
+
+}  // namespace
+}  // namespace chasles

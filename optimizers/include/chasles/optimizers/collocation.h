@@ -18,11 +18,17 @@ struct CollocationOptions {
   /// w >= 0 in the objective T + w·∫‖q⃛‖² dt [s⁶/rad²]; 0 = minimum time only.
   double jerk_weight = 0.0;
   /// Required distance between every link and every obstacle at each knot and each interval
-  /// midpoint [m], >= 0; used only with a checker whose scene has obstacles.
+  /// midpoint [m], >= 0; used only with a checker whose scene has obstacles. Where the warm
+  /// start itself passes closer, its own distance there is required instead.
   double clearance = 0.01;
-  int max_iterations = 500;     ///< Ipopt max_iter, >= 1
-  double tolerance = 1e-8;      ///< Ipopt tol, > 0
-  double time_budget = 5.0;     ///< [s] of solver time (Ipopt max_cpu_time), > 0
+  /// >= 0 [m]: a link that comes within clearance + activation_distance of an obstacle anywhere
+  /// along the warm start is constrained at every knot and midpoint from the first solve; any
+  /// other link found too close after a solve is added, and the problem solved again.
+  double activation_distance = 0.05;
+  int max_iterations = 500;     ///< Ipopt max_iter per solve, >= 1
+  double tolerance = 1e-8;      ///< Ipopt tol, finite and > 0
+  /// [s] > 0 for the whole call: Ipopt's max_cpu_time, and a wall-clock check every iteration.
+  double time_budget = 5.0;
   /// Optional: polled every iteration; true stops the solve (the result is then not ok).
   std::function<bool()> stop;
 };
@@ -35,15 +41,51 @@ struct CollocationResult {
 /// Direct collocation on the triple integrator q⃛ = u with states (q, q̇, q̈) at K knots,
 /// piecewise-constant jerk u and a free duration hₖ per interval, so each interval is an
 /// exact cubic (Hermite–Simpson collocation is exact for it). The start and end states
-/// (position, velocity) are those of `warm_start`, which also initialises every variable.
-/// Constraints: position, velocity and acceleration limits at the knots, jerk limits on u,
-/// torque limits via inverse dynamics at the knots (max_effort, robot with inertia), and the
-/// clearance at knots and midpoints (distances and point Jacobians). After the solve the
-/// trajectory is slowed uniformly if needed (OptimizerReport::time_scale) so the limits hold
-/// between knots exactly too.
+/// (position, velocity) are those of `warm_start`, which also initialises every variable (its
+/// states at K evenly spaced times). The result has one cubic piece per interval.
+///
+/// Objective: T + w·∫‖q⃛‖² dt, plus a tie-breaking term of at most 1e-3·T₀-relative size that
+/// keeps the knots evenly spread along a cruise and the joints that do not limit the time
+/// smooth (minimum time alone has a flat optimum Ipopt drifts on). hₖ >= a tenth of an even
+/// split of the duration's lower bound maxᵢ |Δqᵢ|/vᵢ.
+///
+/// Constraints: position limits (with a checker) and velocity and acceleration limits at the
+/// knots; the velocity over each interval through its middle Bernstein coefficient (the
+/// velocity is quadratic in an interval, and free durations would otherwise let it overshoot
+/// between knots); jerk limits on u; with max_jerk, q̈ = 0 at an end at rest. With max_effort
+/// (robot with inertia): |τ| <= max_effort − Coulomb friction at the knots and interval
+/// midpoints, τ = RNEA + viscous damping, its Jacobian by central differences of RNEA (∂τ/∂q̈
+/// = M(q) exactly). With a checker whose scene has obstacles: the clearance at the knots and
+/// midpoints, distances and nearest points from ObstacleProximity (gradient n̂ᵀ·J_v of the
+/// nearest link point; in contact, where no direction exists, the last outside value is
+/// continued linearly), and the joint-space motion over each half interval bounded by
+/// max(0.05 rad, twice the warm start's average) so a link cannot cross an obstacle between
+/// two checked instants. After each solve the checked instants are verified and the motion is
+/// searched for contact every 0.005 rad; a violating link is then constrained everywhere and
+/// the problem solved again (at most 5 solves; from the warm start when a link touched).
+///
+/// Afterwards the exact maxima of velocity, acceleration and jerk over each cubic give
+/// r = max(velocity ratio, √acceleration ratio, ∛jerk ratio); r > 1 (rounding, bound
+/// relaxation) slows the trajectory by r (OptimizerReport::time_scale). With max_effort the
+/// torques are rechecked at the states VerifyTrajectory uses (every 0.005 rad) and the
+/// smallest further slow-down that meets them is applied, when one exists.
+///
+/// With a checker, a result is ok only if it passes VerifyTrajectory (default options, the
+/// warm start's end velocities) with the same limits; self-collision is not constrained, only
+/// verified.
+///
+/// Not ok (report.message says why; the caller falls back to an exact parameterisation):
+/// Ipopt did not converge (Infeasible_Problem_Detected, iteration or time limit, stop()),
+/// defects left open by more than 1e-7, position limits left between knots, a clearance still
+/// violated after 5 solves, torques no slow-down meets, a slow-down that would change a
+/// non-zero end velocity, or a failed verification.
+/// Deterministic for the same input (unless the time budget cuts a solve short).
+///
 /// \throws Error(kInvalidArgument) naming the option for knots < 2, negative or non-finite
-///   weights/clearance, max_iterations < 1, tolerance/time_budget not > 0, an empty
-///   warm start, or limits that fail Validate.
+///   weight/clearance/activation_distance, max_iterations < 1, tolerance not finite and > 0,
+///   time_budget not > 0, an empty warm start or one with a non-finite end state, a checker
+///   whose robot has another number of joints, limits that fail Validate, or max_effort
+///   without a checker whose robot has inertia.
 CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const KinematicLimits& limits,
                                         const CollocationOptions& options,
                                         const CollisionChecker* checker = nullptr);

@@ -1,0 +1,176 @@
+#pragma once
+// The Ipopt transcription behind OptimizeByCollocation (private to chasles_optimizers; the
+// public header never sees Ipopt).
+//
+// Variables, knot by knot (k = 0 … N, N = K − 1 intervals): qₖ, q̇ₖ, q̈ₖ (n each) and, for
+// k < N, the duration hₖ of interval k. The jerk of interval k is uₖ = (q̈ₖ₊₁ − q̈ₖ)/hₖ: it is
+// not a variable of its own (a variable would range over A/h_min … A/h₀, orders of magnitude
+// apart as intervals shrink, while q̈ stays within its limits), but the motion is the same
+// triple integrator with piecewise-constant jerk. Its exact steps are the defects
+//   qₖ₊₁ − qₖ − q̇ₖ hₖ − (2q̈ₖ + q̈ₖ₊₁) hₖ²/6 = 0,   q̇ₖ₊₁ − q̇ₖ − (q̈ₖ + q̈ₖ₊₁) hₖ/2 = 0,
+// i.e. qₖ + q̇ₖh + q̈ₖh²/2 + uₖh³/6 and q̇ₖ + q̈ₖh + uₖh²/2 with uₖ eliminated.
+// Objective Σ hₖ + w Σₖ ‖q̈ₖ₊₁ − q̈ₖ‖²/hₖ (= T + w∫‖q⃛‖² dt exactly) + a small regularisation
+// (Transcription::regularization).
+// Bounds: q within the joint limits, |q̇| and |q̈| within theirs at the knots (q̈ is linear in
+// each interval, so that is exact), hₖ >= min_interval, start/end q and q̇ fixed.
+// Rows, in this order:
+//   defects                    2n per interval
+//   velocity control points    n per interval: |q̇ₖ + q̈ₖhₖ/2| <= v_max, the middle Bernstein
+//                              coefficient of the quadratic velocity; with the knot bounds this
+//                              bounds the velocity over the whole interval (convex hull)
+//   jerk limits                2n per interval: q̈ₖ₊₁ − q̈ₖ ± Jhₖ (linear), with max_jerk
+//   torques                    n per knot and per interval midpoint, with max_effort
+//   clearances                 one per (instant, link) pair
+//   half-interval motion       2 per interval with clearance pairs: ‖q(hₖ/2) − qₖ‖² and
+//                              ‖qₖ₊₁ − q(hₖ/2)‖² <= max_step²
+// Hessian: exact for the objective, defects, velocity control points and motion rows (all
+// polynomial); torque and clearance rows contribute no curvature (measured: Ipopt's
+// limited-memory mode needed 5-7× the iterations).
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <IpTNLP.hpp>
+
+#include "chasles/collision/proximity.h"
+#include "chasles/robot/dynamics.h"
+#include "chasles/robot/robot_model.h"
+
+namespace chasles::collocation {
+
+/// A time on the trajectory: interval k at the fraction σ ∈ [0, 1) of its duration (σ = 0 is
+/// knot k).
+struct Instant {
+  int interval = 0;
+  double fraction = 0.0;
+  bool operator<(const Instant& o) const { return interval != o.interval ? interval < o.interval : fraction < o.fraction; }
+  bool operator==(const Instant& o) const { return interval == o.interval && fraction == o.fraction; }
+};
+
+/// A clearance constraint: distance(link, nearest obstacle) >= minimum at an instant.
+struct ClearancePair {
+  Instant at;
+  int link = 0;          ///< index into RobotModel::links()
+  double minimum = 0.0;  ///< required distance [m]
+};
+
+/// Everything the transcription needs; sizes are checked by the caller.
+struct Transcription {
+  int num_dofs = 0;
+  int knots = 0;
+  double jerk_weight = 0.0;
+  /// ρ [s]: tie-breaking terms ρ/h₀ Σ (hₖ₊₁ − hₖ)² + ρ/n Σₖ hₖ Σᵢ (q̈ₖᵢ/Aᵢ)² added to the
+  /// objective. Minimum time alone leaves a flat optimal face (where the knots sit along a
+  /// cruise, how a joint that does not limit the time gets there); Ipopt then drifts on it
+  /// without converging. Both terms are <= ρ·(T/h₀ + T) for any trajectory.
+  double regularization = 0.0;
+  Eigen::VectorXd position_lower, position_upper;  ///< ±inf when unknown
+  Eigen::VectorXd max_velocity, max_acceleration;
+  Eigen::VectorXd max_jerk;    ///< empty = none
+  Eigen::VectorXd max_effort;  ///< empty = none (then `robot` may be null)
+  Eigen::VectorXd start_q, start_v, end_q, end_v;
+  bool start_at_rest_acceleration = false;  ///< q̈₀ = 0 (jerk-limited start at rest)
+  bool end_at_rest_acceleration = false;
+  double min_interval = 0.0;      ///< lower bound on every hₖ [s], > 0
+  /// Every interval's motion between its knots and its midpoint is bounded:
+  /// ‖q(hₖ/2) − qₖ‖² <= max_step² and ‖qₖ₊₁ − q(hₖ/2)‖² <= max_step² (2 rows per interval).
+  bool bounded_motion = false;
+  double max_step = 0.0;  ///< [rad], Euclidean in joint space
+  double nominal_interval = 0.0;  ///< warm-start hₖ [s] (scaling)
+  const RobotModel* robot = nullptr;
+  DynamicsOptions dynamics;
+  const ObstacleProximity* proximity = nullptr;
+  std::vector<ClearancePair> pairs;  ///< sorted by instant
+  std::function<bool()> stop;
+};
+
+/// Index arithmetic of the variable vector.
+struct Layout {
+  int n = 0, intervals = 0;
+  int stride() const { return 3 * n + 1; }
+  int q(int k, int i) const { return k * stride() + i; }
+  int v(int k, int i) const { return k * stride() + n + i; }
+  int a(int k, int i) const { return k * stride() + 2 * n + i; }
+  int h(int k) const { return k * stride() + 3 * n; }
+  int size() const { return intervals * stride() + 3 * n; }
+};
+
+/// State (q, q̇, q̈) at point p (knot or interval midpoint) of the variable vector x.
+void PointState(const Layout& layout, const double* x, int point, Eigen::VectorXd* q, Eigen::VectorXd* v,
+                Eigen::VectorXd* a);
+/// Position at an instant of the variable vector x.
+Eigen::VectorXd PositionAt(const Layout& layout, const double* x, Instant at);
+
+class CollocationNlp : public Ipopt::TNLP {
+ public:
+  /// `initial` is the starting point (Layout::size() values).
+  CollocationNlp(const Transcription& transcription, Eigen::VectorXd initial);
+
+  const Eigen::VectorXd& solution() const { return solution_; }
+  /// Largest violation of any constraint or bound at the solution, unscaled.
+  double violation() const { return violation_; }
+  bool stopped() const { return stopped_; }
+
+  bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g, Ipopt::Index& nnz_h_lag,
+                    IndexStyleEnum& index_style) override;
+  bool get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt::Number* x_u, Ipopt::Index m, Ipopt::Number* g_l,
+                       Ipopt::Number* g_u) override;
+  bool get_scaling_parameters(Ipopt::Number& obj_scaling, bool& use_x_scaling, Ipopt::Index n,
+                              Ipopt::Number* x_scaling, bool& use_g_scaling, Ipopt::Index m,
+                              Ipopt::Number* g_scaling) override;
+  bool get_starting_point(Ipopt::Index n, bool init_x, Ipopt::Number* x, bool init_z, Ipopt::Number* z_L,
+                          Ipopt::Number* z_U, Ipopt::Index m, bool init_lambda, Ipopt::Number* lambda) override;
+  bool eval_f(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Number& obj_value) override;
+  bool eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Number* grad_f) override;
+  bool eval_g(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Index m, Ipopt::Number* g) override;
+  bool eval_jac_g(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Index m, Ipopt::Index nele_jac,
+                  Ipopt::Index* iRow, Ipopt::Index* jCol, Ipopt::Number* values) override;
+  bool eval_h(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Number obj_factor, Ipopt::Index m,
+              const Ipopt::Number* lambda, bool new_lambda, Ipopt::Index nele_hess, Ipopt::Index* iRow,
+              Ipopt::Index* jCol, Ipopt::Number* values) override;
+  void finalize_solution(Ipopt::SolverReturn status, Ipopt::Index n, const Ipopt::Number* x,
+                         const Ipopt::Number* z_L, const Ipopt::Number* z_U, Ipopt::Index m,
+                         const Ipopt::Number* g, const Ipopt::Number* lambda, Ipopt::Number obj_value,
+                         const Ipopt::IpoptData* ip_data, Ipopt::IpoptCalculatedQuantities* ip_cq) override;
+  bool intermediate_callback(Ipopt::AlgorithmMode mode, Ipopt::Index iter, Ipopt::Number obj_value,
+                             Ipopt::Number inf_pr, Ipopt::Number inf_du, Ipopt::Number mu, Ipopt::Number d_norm,
+                             Ipopt::Number regularization_size, Ipopt::Number alpha_du, Ipopt::Number alpha_pr,
+                             Ipopt::Index ls_trials, const Ipopt::IpoptData* ip_data,
+                             Ipopt::IpoptCalculatedQuantities* ip_cq) override;
+
+ private:
+  void BuildStructure();
+  void UpdateTorques(const double* x, bool derivatives);
+  /// Joint i's motion over the first (half 0) or second (half 1) half of interval k.
+  double HalfMotion(const double* x, int k, int i, int half) const;
+  void UpdateClearances(const double* x);
+  void Bounds(std::vector<double>* x_l, std::vector<double>* x_u, std::vector<double>* g_l,
+              std::vector<double>* g_u) const;
+
+  const Transcription& t_;
+  Layout layout_;
+  Eigen::VectorXd initial_, solution_;
+  double violation_ = 0.0;
+  bool stopped_ = false;
+  int rows_defects_ = 0, rows_velocity_ = 0, rows_jerk_ = 0, rows_torque_ = 0, rows_clearance_ = 0, rows_motion_ = 0;
+  std::vector<int> jac_rows_, jac_cols_, hess_rows_, hess_cols_;
+  // Caches for the current x (Ipopt's new_x).
+  bool torques_valid_ = false, torque_derivatives_valid_ = false, clearances_valid_ = false;
+  Eigen::MatrixXd torque_;                    ///< n × (2K − 1): knots and midpoints
+  std::vector<Eigen::MatrixXd> torque_jac_;   ///< per point n × 3n (∂τ/∂q, ∂τ/∂q̇, ∂τ/∂q̈)
+  std::vector<Instant> instants_;             ///< distinct instants of pairs, sorted
+  std::vector<double> distance_;              ///< per pair
+  std::vector<Eigen::VectorXd> distance_grad_;  ///< per pair, ∂d/∂q at its instant
+  struct OutsideModel {  ///< per pair: the last evaluation out of contact
+    bool valid = false;
+    Eigen::VectorXd q, gradient;
+    double distance = 0.0;
+  };
+  std::vector<OutsideModel> outside_;
+  int motion_start_ = 0;  ///< first motion row
+  std::vector<int> link_slot_;                ///< link index → position in proximity->links(), -1
+};
+
+}  // namespace chasles::collocation
