@@ -29,7 +29,7 @@ using Clock = std::chrono::steady_clock;
 using Piece = TimedTrajectory::Piece;
 
 constexpr int kMaxClearanceRounds = 5;       // solves with added clearance pairs
-constexpr int kMaxEffortScalings = 20;       // growing slow-downs tried for torques between points
+constexpr int kMaxEffortScalings = 20;       // growing slow-downs tried for torques
 constexpr double kEffortStep = 0.005;        // [rad] torque recheck spacing (VerifyTrajectory's default)
 constexpr double kCollisionStep = 0.005;     // [rad] contact search spacing (VerifyTrajectory's default)
 constexpr double kClearanceTolerance = 1e-6;  // [m] below a requirement that still counts as met
@@ -178,6 +178,30 @@ double MaxEffortRatio(const TimedTrajectory& trajectory, const RobotModel& robot
     }
   }
   return worst;
+}
+
+/// The smallest slow-down s >= 1 (to 1e-6 relative) after which every torque is within its limit
+/// at the states MaxEffortRatio checks; +inf when kMaxEffortScalings growing tries find none
+/// (`ratio` and `where` then describe the last try). Slowing by s divides the inertial torques
+/// by s² but leaves gravity and friction, so there may be none.
+double EffortSlowDown(const TimedTrajectory& trajectory, const RobotModel& robot, const KinematicLimits& limits,
+                      double* ratio, double* where) {
+  const auto fits = [&](double s) {
+    *ratio = MaxEffortRatio(s == 1.0 ? trajectory : trajectory.TimeScaled(s), robot, limits, where);
+    return *ratio <= 1.0 + 1e-9;
+  };
+  if (fits(1.0)) return 1.0;
+  double lo = 1.0, hi = *ratio;
+  for (int round = 0; !fits(hi); ++round) {
+    if (round + 1 >= kMaxEffortScalings) return std::numeric_limits<double>::infinity();
+    lo = hi;
+    hi *= std::max(*ratio, 1.01);
+  }
+  while (hi > lo * (1.0 + 1e-6)) {
+    const double mid = std::sqrt(lo * hi);
+    (fits(mid) ? hi : lo) = mid;
+  }
+  return hi;
 }
 
 /// What a check of a solution's clearance found.
@@ -398,13 +422,11 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   t.start_at_rest_acceleration = jerk_limited && start_rest;
   t.end_at_rest_acceleration = jerk_limited && end_rest;
   const Layout layout{n, options.knots - 1};
-  t.nominal_interval = total / layout.intervals;
   // hₖ >= a tenth of an even split of a lower bound on the duration (no joint can beat
   // |Δqᵢ|/vᵢ), and never below a thousandth of the warm start's interval.
   double lower_bound = 0.0;
   for (int i = 0; i < n; ++i) lower_bound = std::max(lower_bound, std::abs(last.q[i] - first.q[i]) / limits.max_velocity[i]);
   t.min_interval = kMinIntervalFraction * std::max(lower_bound, 0.01 * total) / layout.intervals;
-  t.regularization = kRegularization * total;
   if (effort) {
     t.robot = &checker->robot();
     t.dynamics.gravity = limits.gravity;
@@ -412,10 +434,24 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   const double deadline = std::isfinite(options.time_budget) ? options.time_budget : 1e300;
   t.stop = [&] { return (options.stop && options.stop()) || elapsed() > deadline; };
 
-  // The warm start, sampled at K evenly spaced times.
+  // The warm start, sampled at K evenly spaced times; with max_effort and both ends at rest,
+  // first slowed down until its torques are within their limits (when a slow-down can).
+  TimedTrajectory slowed;
+  const TimedTrajectory* initial = &warm_start;
+  if (effort && start_rest && end_rest) {
+    double ratio = 0.0, where = 0.0;
+    const double slow = EffortSlowDown(warm_start, checker->robot(), limits, &ratio, &where);
+    if (std::isfinite(slow) && slow > 1.0) {
+      slowed = warm_start.TimeScaled(slow);
+      initial = &slowed;
+    }
+  }
+  const double span = initial->duration();
+  t.nominal_interval = span / layout.intervals;
+  t.regularization = kRegularization * span;
   Eigen::VectorXd warm(layout.size());
   for (int k = 0; k <= layout.intervals; ++k) {
-    const TrajectorySample s = k == layout.intervals ? last : warm_start.Evaluate(total * k / layout.intervals);
+    const TrajectorySample s = k == layout.intervals ? initial->Evaluate(span) : initial->Evaluate(span * k / layout.intervals);
     for (int i = 0; i < n; ++i) {
       warm[layout.q(k, i)] = s.q[i];
       warm[layout.v(k, i)] = std::clamp(s.qd[i], -limits.max_velocity[i], limits.max_velocity[i]);
@@ -555,34 +591,15 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   };
   if (problem.empty() && scale > 1.0) rescale(scale);
   if (problem.empty() && effort) {
-    // Torques between the checked points: the smallest further slow-down (to 1e-6) that
-    // brings every torque within its limit at the states VerifyTrajectory checks. Slowing by s
-    // divides the inertial torques by s² but leaves gravity and friction, so there may be none.
-    double where = 0.0;
-    const auto fits = [&](double s, double* ratio) {
-      *ratio = MaxEffortRatio(s == 1.0 ? trajectory : trajectory.TimeScaled(s), checker->robot(), limits, &where);
-      return *ratio <= 1.0 + 1e-9;
-    };
-    double ratio = 0.0;
-    if (!fits(1.0, &ratio)) {
-      double lo = 1.0, hi = ratio;
-      double hi_ratio = 0.0;
-      int round = 0;
-      for (; round < kMaxEffortScalings && !fits(hi, &hi_ratio); ++round) {
-        lo = hi;
-        hi *= std::max(hi_ratio, 1.01);
-      }
-      if (round == kMaxEffortScalings) {
-        problem = "a torque exceeds its limit by a factor " + FormatNumber(hi_ratio) + " at t = " + FormatNumber(where) +
-                  " s even after slowing by " + FormatNumber(hi);
-      } else {
-        while (hi > lo * (1.0 + 1e-6)) {
-          const double mid = std::sqrt(lo * hi);
-          double mid_ratio;
-          (fits(mid, &mid_ratio) ? hi : lo) = mid;
-        }
-        rescale(hi);
-      }
+    // Torques between the checked points: the smallest further slow-down that meets them at the
+    // states VerifyTrajectory checks.
+    double ratio = 0.0, where = 0.0;
+    const double slow = EffortSlowDown(trajectory, checker->robot(), limits, &ratio, &where);
+    if (std::isinf(slow)) {
+      problem = "a torque exceeds its limit by a factor " + FormatNumber(ratio) + " at t = " + FormatNumber(where) +
+                " s (of the trajectory slowed down " + std::to_string(kMaxEffortScalings) + " times)";
+    } else if (slow > 1.0) {
+      rescale(slow);
     }
   }
   if (problem.empty() && checker != nullptr) {

@@ -59,8 +59,13 @@ CollocationNlp::CollocationNlp(const Transcription& transcription, Eigen::Vector
   rows_defects_ = 2 * n * intervals;
   rows_velocity_ = n * intervals;
   rows_jerk_ = t_.max_jerk.size() != 0 ? 2 * n * intervals : 0;
-  const int points = 2 * intervals + 1;  // knots and midpoints
-  rows_torque_ = t_.max_effort.size() != 0 ? n * points : 0;
+  if (t_.max_effort.size() != 0) {
+    for (int p = 0; p < 2 * intervals + 1; ++p) {
+      if (p % 2 == 0 || t_.torque_at_midpoints) torque_points_.push_back(p);
+    }
+  }
+  const int points = static_cast<int>(torque_points_.size());
+  rows_torque_ = n * points;
   rows_clearance_ = static_cast<int>(t_.pairs.size());
   rows_motion_ = t_.bounded_motion ? 2 * intervals : 0;
   motion_start_ = rows_defects_ + rows_velocity_ + rows_jerk_ + rows_torque_ + rows_clearance_;
@@ -109,7 +114,7 @@ void CollocationNlp::BuildStructure() {
       }
     }
   }
-  for (int p = 0; p < (rows_torque_ > 0 ? 2 * L.intervals + 1 : 0); ++p) {
+  for (int p : torque_points_) {
     const int k = p / 2;
     for (int i = 0; i < n; ++i, ++row) {
       for (int j = 0; j < n; ++j) jac(row, L.q(k, j));
@@ -357,8 +362,9 @@ void CollocationNlp::UpdateTorques(const double* x, bool derivatives) {
   DynamicsOptions frictionless = t_.dynamics;
   frictionless.include_friction = false;
   Eigen::VectorXd q(n), v(n), a(n);
-  for (int k = 0; k < 2 * L.intervals + 1; ++k) {  // k: point (knot or midpoint)
-    PointState(L, x, k, &q, &v, &a);
+  for (std::size_t slot = 0; slot < torque_points_.size(); ++slot) {
+    const int k = static_cast<int>(slot);  // column of torque_ / entry of torque_jac_
+    PointState(L, x, torque_points_[slot], &q, &v, &a);
     // The smooth part of the torque: RNEA + viscous damping. Coulomb friction (a step of
     // ±fᵢ in q̇ᵢ) is taken off the bounds instead (Bounds), so |τ| <= τmax holds whatever the
     // sign of q̇ near the knot.
@@ -462,8 +468,8 @@ bool CollocationNlp::eval_g(Ipopt::Index, const Ipopt::Number* x, bool new_x, Ip
   }
   if (rows_torque_ > 0) {
     UpdateTorques(x, false);
-    for (int p = 0; p < 2 * L.intervals + 1; ++p) {
-      for (int i = 0; i < n; ++i) g[row++] = torque_(i, p);
+    for (std::size_t slot = 0; slot < torque_points_.size(); ++slot) {
+      for (int i = 0; i < n; ++i) g[row++] = torque_(i, slot);
     }
   }
   if (rows_clearance_ > 0) {
@@ -535,8 +541,9 @@ bool CollocationNlp::eval_jac_g(Ipopt::Index, const Ipopt::Number* x, bool new_x
   }
   if (rows_torque_ > 0) {
     UpdateTorques(x, true);
-    for (int p = 0; p < 2 * L.intervals + 1; ++p) {
-      const Eigen::MatrixXd& J = torque_jac_[p];
+    for (std::size_t slot = 0; slot < torque_points_.size(); ++slot) {
+      const int p = torque_points_[slot];
+      const Eigen::MatrixXd& J = torque_jac_[slot];
       if (p % 2 == 0) {
         for (int i = 0; i < n; ++i) {
           for (int j = 0; j < 3 * n; ++j) *out++ = J(i, j);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -385,6 +386,78 @@ TEST(Collocation, NamedErrors) {
   const auto panda = Panda(false);
   ExpectInvalid([&] { OptimizeByCollocation(warm, limits, {}, panda.get()); },
                 "collocation warm_start has 2 joints, robot has 7");
+}
+
+}  // namespace
+}  // namespace chasles
+
+namespace chasles {
+namespace {
+
+// Figures for docs/ (no assertions on time): random straight rest-to-rest 7-DOF segments with
+// random limits at K = 100, as the benchmark aim. Run with
+//   optimizers_collocation_test --gtest_also_run_disabled_tests --gtest_filter=*Figures*
+// (CHASLES_TEST_CASES sets the number of segments, default 20; CHASLES_COLLOCATION_KNOTS the
+// knots, default 100).
+TEST(Collocation, DISABLED_FiguresForTheDocs) {
+  test::Random rng(test::TestSeed());
+  const int cases = test::TestCases(20);
+  double worst_ratio = 0.0, sum_ratio = 0.0, sum_ms = 0.0, max_ms = 0.0, sum_iterations = 0.0;
+  int max_iterations = 0, not_ok = 0;
+  for (int c = 0; c < cases; ++c) {
+    KinematicLimits limits;
+    limits.max_velocity = rng.Vector(7, 0.5, 3.0);
+    limits.max_acceleration = rng.Vector(7, 1.0, 10.0);
+    const Eigen::VectorXd a = rng.Vector(7, -2.0, 2.0), b = rng.Vector(7, -2.0, 2.0);
+    const TimedTrajectory warm = ParameterizeTimeOptimal({a, b}, limits);
+    CollocationOptions options;
+    if (const char* knots = std::getenv("CHASLES_COLLOCATION_KNOTS")) options.knots = std::atoi(knots);
+    const CollocationResult result = OptimizeByCollocation(warm, limits, options);
+    if (!result.report.ok) {
+      ++not_ok;
+      continue;
+    }
+    const double ratio = result.trajectory.duration() / StraightMinimumTime(a, b, limits);
+    const double ms = 1e3 * result.report.solve_seconds;
+    worst_ratio = std::max(worst_ratio, ratio);
+    sum_ratio += ratio;
+    sum_ms += ms;
+    max_ms = std::max(max_ms, ms);
+    sum_iterations += result.report.iterations;
+    max_iterations = std::max(max_iterations, result.report.iterations);
+  }
+  const int ok = cases - not_ok;
+  std::printf("K = %d, %d segments, %d not ok: duration/T* mean %.5f max %.5f; %.0f ms mean, %.0f ms max; "
+              "iterations mean %.1f, max %d\n",
+              std::getenv("CHASLES_COLLOCATION_KNOTS") ? std::atoi(std::getenv("CHASLES_COLLOCATION_KNOTS")) : 100,
+              cases, not_ok, sum_ratio / ok, worst_ratio, sum_ms / ok, max_ms, sum_iterations / ok, max_iterations);
+
+  // The Panda around the box (clearance), and with torque limits, at the same K.
+  const auto checker = Panda(true);
+  KinematicLimits limits = PandaLimits(checker->robot());
+  Eigen::VectorXd via(7);
+  via << 0.95, -0.81, -0.1, -2.38, -0.35, 2.36, 0.25;
+  const TimedTrajectory warm = ParameterizeTimeOptimal({PandaHome(), via, PandaAway()}, limits, {}, checker.get());
+  CollocationOptions options;
+  if (const char* knots = std::getenv("CHASLES_COLLOCATION_KNOTS")) options.knots = std::atoi(knots);
+  const CollocationResult around = OptimizeByCollocation(warm, limits, options, checker.get());
+  std::printf("Panda around the box: ok %d, %.3f s (warm start %.3f s), %.0f ms, %d iterations; %s\n", around.report.ok,
+              around.trajectory.empty() ? 0.0 : around.trajectory.duration(), warm.duration(),
+              1e3 * around.report.solve_seconds, around.report.iterations, around.report.message.c_str());
+  const auto empty = Panda(false);
+  const TimedTrajectory straight = ParameterizeTimeOptimal({PandaHome(), PandaAway()}, limits);
+  const CollocationResult free = OptimizeByCollocation(straight, limits, options, empty.get());
+  Eigen::VectorXd peak = Eigen::VectorXd::Zero(7), hold = Eigen::VectorXd::Zero(7);
+  for (const TrajectorySample& s : free.trajectory.Sample(0.002)) {
+    peak = peak.cwiseMax(InverseDynamics(empty->robot(), s.q, s.qd, s.qdd).cwiseAbs());
+    hold = hold.cwiseMax(GravityTorques(empty->robot(), s.q).cwiseAbs());
+  }
+  limits.max_effort = (0.5 * peak).cwiseMax(1.2 * hold + Eigen::VectorXd::Constant(7, 1.0));
+  const CollocationResult torque = OptimizeByCollocation(straight, limits, options, empty.get());
+  std::printf("Panda with half the peak torques: ok %d, %.3f s (free %.3f s), %.0f ms (free %.0f ms), %d iterations; %s\n",
+              torque.report.ok, torque.trajectory.empty() ? 0.0 : torque.trajectory.duration(),
+              free.trajectory.duration(), 1e3 * torque.report.solve_seconds, 1e3 * free.report.solve_seconds,
+              torque.report.iterations, torque.report.message.c_str());
 }
 
 }  // namespace

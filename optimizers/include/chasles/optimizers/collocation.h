@@ -53,16 +53,17 @@ struct CollocationResult {
 /// knots; the velocity over each interval through its middle Bernstein coefficient (the
 /// velocity is quadratic in an interval, and free durations would otherwise let it overshoot
 /// between knots); jerk limits on u; with max_jerk, q̈ = 0 at an end at rest. With max_effort
-/// (robot with inertia): |τ| <= max_effort − Coulomb friction at the knots and interval
-/// midpoints, τ = RNEA + viscous damping, its Jacobian by central differences of RNEA (∂τ/∂q̈
-/// = M(q) exactly). With a checker whose scene has obstacles: the clearance at the knots and
-/// midpoints, distances and nearest points from ObstacleProximity (gradient n̂ᵀ·J_v of the
-/// nearest link point; in contact, where no direction exists, the last outside value is
-/// continued linearly), and the joint-space motion over each half interval bounded by
-/// max(0.05 rad, twice the warm start's average) so a link cannot cross an obstacle between
-/// two checked instants. After each solve the checked instants are verified and the motion is
-/// searched for contact every 0.005 rad; a violating link is then constrained everywhere and
-/// the problem solved again (at most 5 solves; from the warm start when a link touched).
+/// (robot with inertia): |τ| <= max_effort − Coulomb friction at the knots, τ = RNEA + viscous
+/// damping, its Jacobian by central differences of RNEA (∂τ/∂q̈ = M(q) exactly); a warm start
+/// at rest at both ends is first slowed down until its torques fit.
+/// With a checker whose scene has obstacles: the clearance at the knots and midpoints, from
+/// ObstacleProximity's distances and nearest points (gradient n̂ᵀ·J_v at the nearest link point;
+/// in contact, where there is no direction, the last outside value is continued linearly), and
+/// the joint-space motion over each half interval at most max(0.05 rad, twice the warm start's
+/// average), so that a link cannot cross an obstacle between two checked instants. After each
+/// solve the checked instants are verified and the motion searched for contact every 0.005 rad;
+/// a violating link is then constrained everywhere and the problem solved again (at most 5
+/// solves; from the warm start again when a link touched).
 ///
 /// Afterwards the exact maxima of velocity, acceleration and jerk over each cubic give
 /// r = max(velocity ratio, √acceleration ratio, ∛jerk ratio); r > 1 (rounding, bound
