@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -341,6 +342,14 @@ class ClearanceGuard {
   double clearance_, activation_;
 };
 
+/// Serialises Ipopt in this process: Debian's sequential MUMPS keeps state in Fortran module
+/// variables, and two solves in two threads abort it ("PB allocation in DMUMPS_LOAD_INIT",
+/// reproduced with 4 threads). Held from the application's creation to its destruction.
+std::timed_mutex& IpoptLock() {
+  static std::timed_mutex mutex;
+  return mutex;
+}
+
 /// Sets the Ipopt options every solve shares.
 Ipopt::SmartPtr<Ipopt::IpoptApplication> MakeIpopt(const CollocationOptions& options) {
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
@@ -490,13 +499,25 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   t.max_step = std::max(kSweepStep, length / layout.intervals);
   t.bounded_motion = !t.pairs.empty();
 
-  // The solves: one, plus one per round of clearance pairs added after a violation.
-  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = MakeIpopt(options);
+  // The solves: one, plus one per round of clearance pairs added after a violation. Only one
+  // thread of the process may use Ipopt at a time (IpoptLock).
   Eigen::VectorXd start = warm;
   Eigen::VectorXd x;
   bool solved = false;
   int rounds = 0;
   std::string failure;
+  std::unique_lock<std::timed_mutex> lock(IpoptLock(), std::defer_lock);
+  while (!lock.try_lock_for(std::chrono::milliseconds(10))) {
+    if (t.stop()) {
+      report.status = "User_Requested_Stop";
+      report.message = options.stop && options.stop() ? "stopped by the caller while waiting for another solve"
+                                                      : "time budget of " + FormatNumber(options.time_budget) +
+                                                            " s exceeded while waiting for another solve";
+      report.solve_seconds = elapsed();
+      return result;
+    }
+  }
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = MakeIpopt(options);
   for (;; ++rounds) {
     const double remaining = options.time_budget - elapsed();
     app->Options()->SetNumericValue("max_cpu_time", std::max(1e-3, std::min(remaining, 1e6)));
@@ -544,6 +565,8 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     t.bounded_motion = true;
     start = found.contact ? warm : x;
   }
+  app = nullptr;  // MUMPS' instance ends with the application, still under the lock
+  lock.unlock();
   report.message = failure;
   if (!solved) {
     report.solve_seconds = elapsed();

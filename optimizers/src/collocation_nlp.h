@@ -24,8 +24,9 @@
 //   half-interval motion       2 per interval with clearance pairs: ‖q(hₖ/2) − qₖ‖² and
 //                              ‖qₖ₊₁ − q(hₖ/2)‖² <= max_step²
 // Hessian: exact for the objective, defects, velocity control points and motion rows (all
-// polynomial); torque and clearance rows contribute no curvature (measured: Ipopt's
-// limited-memory mode needed 5-7× the iterations).
+// polynomial); torque and clearance rows contribute no curvature. Measured against Ipopt's
+// limited-memory mode: a Panda segment at K = 30 took 181 instead of 26 iterations, and with
+// torque limits or around the planar post it did not finish within 5 s.
 
 #include <functional>
 #include <string>

@@ -11,6 +11,8 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -293,6 +295,31 @@ TEST(Collocation, RepeatsBitForBit) {
   for (std::size_t k = 0; k < a.trajectory.pieces().size(); ++k) {
     EXPECT_EQ(a.trajectory.pieces()[k].duration, b.trajectory.pieces()[k].duration);
     EXPECT_TRUE(a.trajectory.pieces()[k].coefficients == b.trajectory.pieces()[k].coefficients);
+  }
+}
+
+TEST(Collocation, ConcurrentCallsAgreeWithASequentialOne) {
+  // Ipopt runs one solve at a time per process (Debian's MUMPS aborts on concurrent solves);
+  // callers in several threads get the same result as alone.
+  KinematicLimits limits;
+  limits.max_velocity = Eigen::Vector3d(1.0, 2.0, 1.5);
+  limits.max_acceleration = Eigen::Vector3d(3.0, 4.0, 2.0);
+  const TimedTrajectory warm =
+      ParameterizeTimeOptimal({Eigen::Vector3d(0.0, 0.0, 0.0), Eigen::Vector3d(1.0, -0.5, 0.7)}, limits);
+  CollocationOptions options;
+  options.knots = 20;
+  const CollocationResult alone = OptimizeByCollocation(warm, limits, options);
+  ASSERT_TRUE(alone.report.ok) << alone.report.message;
+  std::vector<CollocationResult> results(4);
+  std::vector<std::thread> threads;
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    threads.emplace_back([&, i] { results[i] = OptimizeByCollocation(warm, limits, options); });
+  }
+  for (std::thread& thread : threads) thread.join();
+  for (const CollocationResult& result : results) {
+    EXPECT_TRUE(result.report.ok) << result.report.message;
+    EXPECT_EQ(result.report.iterations, alone.report.iterations);
+    EXPECT_EQ(result.trajectory.duration(), alone.trajectory.duration());
   }
 }
 

@@ -82,6 +82,10 @@ struct CollocationResult {
 /// non-zero end velocity, or a failed verification.
 /// Deterministic for the same input (unless the time budget cuts a solve short).
 ///
+/// Thread-safe, but the Ipopt solves of all threads run one at a time (Debian's sequential
+/// MUMPS aborts when two run at once); waiting counts towards time_budget and polls stop().
+/// Cost is dominated by MUMPS factorising the KKT system (about 7·n·K rows).
+///
 /// \throws Error(kInvalidArgument) naming the option for knots < 2, negative or non-finite
 ///   weight/clearance/activation_distance, max_iterations < 1, tolerance not finite and > 0,
 ///   time_budget not > 0, an empty warm start or one with a non-finite end state, a checker
