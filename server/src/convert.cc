@@ -657,10 +657,10 @@ TrajectorySpec TrajectorySpecFromProto(const v1::TrajectoryOptions& options, con
   const v1::CollocationOptions& c = options.collocation();
   const std::string cf = field + ".collocation";
   if (c.knots() != 0 && c.knots() < 2) {
-    ThrowInvalid(cf + ".knots = " + std::to_string(c.knots()) + " must be >= 2 (0 = 100)");
+    ThrowInvalid(cf + ".knots = " + std::to_string(c.knots()) + " must be >= 2 (0 = 50)");
   }
   if (c.knots() > 2000) ThrowInvalid(cf + ".knots = " + std::to_string(c.knots()) + " must be at most 2000");
-  spec.collocation.knots = c.knots() == 0 ? 100 : c.knots();
+  spec.collocation.knots = c.knots() == 0 ? 50 : c.knots();
   spec.collocation.jerk_weight = weight(c.jerk_weight(), cf + ".jerk_weight");
   if (c.has_clearance()) spec.collocation.clearance = weight(c.clearance(), cf + ".clearance");
   if (c.max_iterations() < 0) {
