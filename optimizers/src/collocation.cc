@@ -152,23 +152,12 @@ double MaxEffortRatio(const TimedTrajectory& trajectory, const RobotModel& robot
   dynamics.gravity = limits.gravity;
   const int n = trajectory.num_dofs();
   double worst = 0.0;
-  Eigen::VectorXd q(n), qd(n), qdd(n);
   for (const Piece& piece : trajectory.pieces()) {
-    double travel = 0.0;
-    for (int i = 0; i < n; ++i) {
-      const Eigen::VectorXd c = piece.coefficients.row(i).transpose();
-      travel = std::max(travel, poly::MaxAbsDerivative(c.data(), 4, 1, piece.duration) * piece.duration);
-    }
-    const int m = std::max(1, static_cast<int>(std::ceil(travel / kEffortStep)));
+    const int m = std::max(1, static_cast<int>(std::ceil(piece.MaxJointTravel() / kEffortStep)));
     for (int s = 0; s <= m; ++s) {
       const double tau = piece.duration * s / m;
-      for (int i = 0; i < n; ++i) {
-        const Eigen::VectorXd c = piece.coefficients.row(i).transpose();
-        q[i] = poly::Eval(c.data(), 4, tau);
-        qd[i] = poly::EvalDerivative(c.data(), 4, 1, tau);
-        qdd[i] = poly::EvalDerivative(c.data(), 4, 2, tau);
-      }
-      const Eigen::VectorXd effort = InverseDynamics(robot, q, qd, qdd, dynamics);
+      const TrajectorySample x = piece.State(tau);
+      const Eigen::VectorXd effort = InverseDynamics(robot, x.q, x.qd, x.qdd, dynamics);
       for (int i = 0; i < n; ++i) {
         const double ratio = std::abs(effort[i]) / limits.max_effort[i];
         if (ratio > worst) {

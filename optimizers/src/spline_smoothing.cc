@@ -82,17 +82,6 @@ void ValidateOptions(const SplineOptions& options) {
   }
 }
 
-/// Largest joint travel bound over a piece: maxᵢ max|q̇ᵢ|·duration [rad].
-double Travel(const TimedTrajectory::Piece& piece) {
-  double travel = 0.0;
-  for (int i = 0; i < piece.coefficients.rows(); ++i) {
-    const Eigen::VectorXd c = piece.coefficients.row(i).transpose();
-    travel = std::max(travel, poly::MaxAbsDerivative(c.data(), static_cast<int>(c.size()), 1, piece.duration) *
-                                  piece.duration);
-  }
-  return travel;
-}
-
 /// One span per piece of positive duration of the warm start (whose pieces are its phases:
 /// accelerate, cruise, blend, brake), within [8, 30], plus the degree.
 int DefaultControlPoints(const TimedTrajectory& initial, int degree) {
@@ -226,7 +215,7 @@ int CheckClearance(const TimedTrajectory& trajectory, const CollisionChecker& ch
   for (std::size_t j = 0; j < pieces.size(); ++j) {
     const TimedTrajectory::Piece& piece = pieces[j];
     const int states =
-        std::max(1, static_cast<int>(std::ceil(std::max(Travel(piece) / kCheckStep, piece.duration / kCheckPeriod))));
+        std::max(1, static_cast<int>(std::ceil(std::max(piece.MaxJointTravel() / kCheckStep, piece.duration / kCheckPeriod))));
     double span_gap = 0.0, span_fraction = 0.0;
     Eigen::VectorXd q(piece.coefficients.rows());
     for (int s = 0; s <= states; ++s) {
@@ -445,7 +434,7 @@ SplineResult SmoothWithBSpline(const TimedTrajectory& initial, const KinematicLi
     const TimedTrajectory warm = Problem(layout, limits, 0.0, {}).Trajectory(x.data());
     for (int j = 0; j < m; ++j) {
       const int count = std::min(kMaxSamplesPerSpan,
-                                 std::max(2, static_cast<int>(std::ceil(Travel(warm.pieces()[j]) / kSampleStep))));
+                                 std::max(2, static_cast<int>(std::ceil(warm.pieces()[j].MaxJointTravel() / kSampleStep))));
       for (int s = 0; s < count; ++s) clearance.samples.push_back(ClearanceSample{j, (s + 0.5) / count, 0.0, 0.0});
     }
   }

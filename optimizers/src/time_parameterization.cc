@@ -210,20 +210,9 @@ std::vector<int> CollidingBlends(const TimedTrajectory& trajectory, const std::v
   for (std::size_t p = 0; p < trajectory.pieces().size(); ++p) {
     if (owners[p] >= 0) continue;
     const Piece& piece = trajectory.pieces()[p];
-    double travel = 0.0;
-    for (int i = 0; i < piece.coefficients.rows(); ++i) {
-      const Eigen::VectorXd row = piece.coefficients.row(i).transpose();
-      travel = std::max(travel, poly::MaxAbsDerivative(row.data(), static_cast<int>(row.size()), 1, piece.duration) *
-                                    piece.duration);
-    }
-    const int samples = std::max(2, static_cast<int>(std::ceil(travel / step)) + 1);
+    const int samples = std::max(2, static_cast<int>(std::ceil(piece.MaxJointTravel() / step)) + 1);
     for (int s = 0; s < samples; ++s) {
-      const double tau = piece.duration * s / (samples - 1);
-      Eigen::VectorXd q(piece.coefficients.rows());
-      for (int i = 0; i < q.size(); ++i) {
-        const Eigen::VectorXd row = piece.coefficients.row(i).transpose();
-        q[i] = poly::Eval(row.data(), static_cast<int>(row.size()), tau);
-      }
+      const Eigen::VectorXd q = piece.State(piece.duration * s / (samples - 1)).q;
       if (!checker.IsValid(q)) {
         out.push_back(-owners[p] - 1);
         break;
@@ -244,24 +233,10 @@ EffortExcess WorstEffort(const TimedTrajectory& trajectory, const RobotModel& ro
   EffortExcess worst;
   for (std::size_t p = 0; p < trajectory.pieces().size(); ++p) {
     const Piece& piece = trajectory.pieces()[p];
-    double travel = 0.0;
-    for (int i = 0; i < piece.coefficients.rows(); ++i) {
-      const Eigen::VectorXd row = piece.coefficients.row(i).transpose();
-      travel = std::max(travel, poly::MaxAbsDerivative(row.data(), static_cast<int>(row.size()), 1, piece.duration) *
-                                    piece.duration);
-    }
-    const int samples = std::max(2, static_cast<int>(std::ceil(travel / step)) + 1);
+    const int samples = std::max(2, static_cast<int>(std::ceil(piece.MaxJointTravel() / step)) + 1);
     for (int s = 0; s < samples; ++s) {
-      const TrajectorySample x = trajectory.Evaluate(piece.t0 + piece.duration * s / (samples - 1));
-      // Evaluate takes the right limit at a boundary; this piece's own end state is wanted.
-      TrajectorySample own = x;
-      if (s == samples - 1) {
-        for (int i = 0; i < piece.coefficients.rows(); ++i) {
-          const Eigen::VectorXd row = piece.coefficients.row(i).transpose();
-          own.qd[i] = poly::EvalDerivative(row.data(), static_cast<int>(row.size()), 1, piece.duration);
-          own.qdd[i] = poly::EvalDerivative(row.data(), static_cast<int>(row.size()), 2, piece.duration);
-        }
-      }
+      // This piece's own state, also at its end (where Evaluate would take the next piece).
+      const TrajectorySample own = piece.State(piece.duration * s / (samples - 1));
       const Eigen::VectorXd tau = InverseDynamics(robot, own.q, own.qd, own.qdd, dynamics);
       for (int i = 0; i < tau.size(); ++i) {
         const double ratio = std::abs(tau[i]) / limits.max_effort[i];

@@ -150,43 +150,51 @@ int TimedTrajectory::degree() const {
   return out;
 }
 
-namespace {
+double TimedTrajectory::Piece::Derivative(int joint, int order, double tau) const {
+  const Eigen::VectorXd c = coefficients.row(joint).transpose();
+  return poly::EvalDerivative(c.data(), static_cast<int>(c.size()), order, tau);
+}
 
-TrajectorySample EvaluatePiece(const TimedTrajectory::Piece& piece, double tau) {
-  const Eigen::Index n = piece.coefficients.rows();
-  const int size = static_cast<int>(piece.coefficients.cols());
+TrajectorySample TimedTrajectory::Piece::State(double tau) const {
+  const Eigen::Index n = coefficients.rows();
+  const int size = static_cast<int>(coefficients.cols());
   TrajectorySample out;
-  out.t = piece.t0 + tau;
+  out.t = t0 + tau;
   out.q.resize(n);
   out.qd.resize(n);
   out.qdd.resize(n);
   out.jerk.resize(n);
   for (Eigen::Index i = 0; i < n; ++i) {
-    double c[16];
-    for (int k = 0; k < size && k < 16; ++k) c[k] = piece.coefficients(i, k);
-    const int m = std::min(size, 16);
-    out.q[i] = tau == 0.0 ? c[0] : poly::Eval(c, m, tau);
-    out.qd[i] = poly::EvalDerivative(c, m, 1, tau);
-    out.qdd[i] = poly::EvalDerivative(c, m, 2, tau);
-    out.jerk[i] = poly::EvalDerivative(c, m, 3, tau);
+    const Eigen::VectorXd c = coefficients.row(i).transpose();
+    out.q[i] = tau == 0.0 ? c[0] : poly::Eval(c.data(), size, tau);
+    out.qd[i] = poly::EvalDerivative(c.data(), size, 1, tau);
+    out.qdd[i] = poly::EvalDerivative(c.data(), size, 2, tau);
+    out.jerk[i] = poly::EvalDerivative(c.data(), size, 3, tau);
   }
   return out;
 }
 
-}  // namespace
+double TimedTrajectory::Piece::MaxJointTravel() const {
+  double travel = 0.0;
+  for (Eigen::Index i = 0; i < coefficients.rows(); ++i) {
+    const Eigen::VectorXd c = coefficients.row(i).transpose();
+    travel = std::max(travel, poly::MaxAbsDerivative(c.data(), static_cast<int>(c.size()), 1, duration) * duration);
+  }
+  return travel;
+}
 
 TrajectorySample TimedTrajectory::Evaluate(double t) const {
   if (pieces_.empty()) {
     throw Error(ErrorCode::kFailedPrecondition, "cannot evaluate an empty trajectory");
   }
   const double end = duration();
-  if (!(t > 0.0)) return EvaluatePiece(pieces_.front(), 0.0);  // also catches NaN
+  if (!(t > 0.0)) return pieces_.front().State(0.0);  // also catches NaN
   if (t >= end) {
     // The last piece of positive duration gives the end state (a zero-duration tail piece
     // would report its own, possibly zero, derivatives).
     auto last = pieces_.end() - 1;
     while (last != pieces_.begin() && !(last->duration > 0.0)) --last;
-    TrajectorySample out = EvaluatePiece(*last, last->duration);
+    TrajectorySample out = last->State(last->duration);
     out.t = end;
     if (end_position_.size() != 0) out.q = end_position_;
     return out;
@@ -196,7 +204,7 @@ TrajectorySample TimedTrajectory::Evaluate(double t) const {
                              [](double value, const Piece& piece) { return value < piece.t0; });
   const Piece& piece = (it == pieces_.begin()) ? pieces_.front() : *(it - 1);
   const double tau = std::min(std::max(0.0, t - piece.t0), piece.duration);
-  TrajectorySample out = EvaluatePiece(piece, tau);
+  TrajectorySample out = piece.State(tau);
   out.t = t;
   return out;
 }

@@ -18,30 +18,6 @@ std::string At(double t) { return " at t = " + FormatNumber(t) + " s"; }
 /// Row i of a piece as a contiguous coefficient vector.
 Eigen::VectorXd Row(const Piece& piece, int i) { return piece.coefficients.row(i).transpose(); }
 
-/// Derivative k of joint i at local time tau (the piece's own one-sided value at its ends).
-double Derivative(const Piece& piece, int i, int k, double tau) {
-  const Eigen::VectorXd c = Row(piece, i);
-  return poly::EvalDerivative(c.data(), static_cast<int>(c.size()), k, tau);
-}
-
-/// The largest joint travel bound over a piece: maxᵢ max|q̇ᵢ|·duration [rad].
-double Travel(const Piece& piece) {
-  double travel = 0.0;
-  for (int i = 0; i < piece.coefficients.rows(); ++i) {
-    const Eigen::VectorXd c = Row(piece, i);
-    travel = std::max(travel, poly::MaxAbsDerivative(c.data(), static_cast<int>(c.size()), 1, piece.duration) *
-                                  piece.duration);
-  }
-  return travel;
-}
-
-/// Position of a piece at local time tau.
-Eigen::VectorXd PositionIn(const Piece& piece, double tau) {
-  Eigen::VectorXd q(piece.coefficients.rows());
-  for (int i = 0; i < q.size(); ++i) q[i] = tau == 0.0 ? piece.coefficients(i, 0) : Derivative(piece, i, 0, tau);
-  return q;
-}
-
 class Verifier {
  public:
   Verifier(const CollisionChecker& checker, const KinematicLimits& limits, const VerificationOptions& options,
@@ -112,7 +88,7 @@ class Verifier {
   bool CheckState(const Piece& piece, double tau) {
     const double t = piece.t0 + tau;
     // CheckLimits has passed: any excess over a position limit is rounding (<= 1e-12 relative).
-    const Eigen::VectorXd q = PositionIn(piece, tau).cwiseMax(robot_.lower_limits()).cwiseMin(robot_.upper_limits());
+    const Eigen::VectorXd q = piece.State(tau).q.cwiseMax(robot_.lower_limits()).cwiseMin(robot_.upper_limits());
     ++report_->states_checked;
     if (!checker_.IsValid(q, &counters_)) {
       const CollisionResult contact = checker_.Check(q);
@@ -124,12 +100,8 @@ class Verifier {
     }
     if (limits_.max_effort.size() == 0) return true;
     const int n = static_cast<int>(q.size());
-    Eigen::VectorXd qd(n), qdd(n);
-    for (int i = 0; i < n; ++i) {
-      qd[i] = Derivative(piece, i, 1, tau);
-      qdd[i] = Derivative(piece, i, 2, tau);
-    }
-    const Eigen::VectorXd effort = InverseDynamics(robot_, q, qd, qdd, dynamics_);
+    const TrajectorySample x = piece.State(tau);
+    const Eigen::VectorXd effort = InverseDynamics(robot_, q, x.qd, x.qdd, dynamics_);
     for (int i = 0; i < n; ++i) {
       const double ratio = std::abs(effort[i]) / limits_.max_effort[i];
       report_->max_effort_ratio = std::max(report_->max_effort_ratio, ratio);
@@ -174,18 +146,18 @@ std::string PieceDefect(const TimedTrajectory& trajectory, std::size_t k, int n,
     return name + " starts at t = " + FormatNumber(piece.t0) + " s, expected " + FormatNumber(expected_t0) + " s";
   }
   for (int i = 0; i < n; ++i) {
-    const double jump = std::abs(piece.coefficients(i, 0) - Derivative(previous, i, 0, previous.duration));
+    const double jump = std::abs(piece.coefficients(i, 0) - previous.Derivative(i, 0, previous.duration));
     if (!(jump <= options.endpoint_tolerance)) {
       return name + " does not start where piece " + std::to_string(k - 1) + " ends: joint " + std::to_string(i) +
              " jumps " + FormatNumber(jump) + " rad" + At(piece.t0);
     }
-    const double velocity_jump = std::abs(Derivative(piece, i, 1, 0.0) - Derivative(previous, i, 1, previous.duration));
+    const double velocity_jump = std::abs(piece.Derivative(i, 1, 0.0) - previous.Derivative(i, 1, previous.duration));
     if (!(velocity_jump <= velocity_tolerance)) {
       return name + " velocity of joint " + std::to_string(i) + " jumps " + FormatNumber(velocity_jump) + " rad/s" +
              At(piece.t0);
     }
     if (jerk_limited) {
-      const double jump2 = std::abs(Derivative(piece, i, 2, 0.0) - Derivative(previous, i, 2, previous.duration));
+      const double jump2 = std::abs(piece.Derivative(i, 2, 0.0) - previous.Derivative(i, 2, previous.duration));
       if (!(jump2 <= velocity_tolerance)) {
         return name + " acceleration of joint " + std::to_string(i) + " jumps " + FormatNumber(jump2) +
                " rad/s² (an infinite jerk; max_jerk is set)" + At(piece.t0);
@@ -293,7 +265,7 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
   constexpr double kMaxStatesPerPiece = 1e8;
   for (std::size_t k = 0; k < pieces.size(); ++k) {
     const Piece& piece = pieces[k];
-    const double steps = std::ceil(Travel(piece) / options.max_joint_step);
+    const double steps = std::ceil(piece.MaxJointTravel() / options.max_joint_step);
     if (steps > kMaxStatesPerPiece) {
       report.reason = "piece " + std::to_string(k) + " would need more than 1e8 checks at max_joint_step = " +
                       FormatNumber(options.max_joint_step);
@@ -362,7 +334,7 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
   // Sampled figures: states spaced by at most `step` of joint motion within each piece, and
   // every piece boundary (where a waypoint is passed exactly when the robot stops there).
   double total_travel = 0.0;
-  for (const Piece& piece : trajectory.pieces()) total_travel += Travel(piece);
+  for (const Piece& piece : trajectory.pieces()) total_travel += piece.MaxJointTravel();
   const double step = std::max(max_joint_step, total_travel / 2000.0);
   const bool effort = checker != nullptr && limits.max_effort.size() == n && HasInertia(checker->robot());
   DynamicsOptions dynamics;
@@ -370,7 +342,7 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
   std::vector<Eigen::VectorXd> states;
   std::vector<TrajectorySample> samples;
   for (const Piece& piece : trajectory.pieces()) {
-    const int m = std::max(1, static_cast<int>(std::ceil(Travel(piece) / step)));
+    const int m = std::max(1, static_cast<int>(std::ceil(piece.MaxJointTravel() / step)));
     for (int i = samples.empty() ? 0 : 1; i <= m; ++i) samples.push_back(trajectory.Evaluate(piece.t0 + piece.duration * i / m));
   }
   const int clearance_every = std::max<int>(1, static_cast<int>(samples.size()) / 200);

@@ -217,8 +217,12 @@ TEST(SplineSmoothing, TheFewestControlPointsStillMeetTheLimits) {
     const VerificationReport verified = VerifyTrajectory(result.trajectory, path.front(), path.back(), *checker, limits);
     EXPECT_TRUE(verified.ok) << verified.reason;
     const double start_acceleration = result.trajectory.Evaluate(0.0).qdd.cwiseAbs().maxCoeff();
-    if (degree == 5) EXPECT_EQ(start_acceleration, 0.0);
-    if (degree == 3) EXPECT_GT(start_acceleration, 0.0);
+    if (degree == 5) {
+      EXPECT_EQ(start_acceleration, 0.0);
+    }
+    if (degree == 3) {
+      EXPECT_GT(start_acceleration, 0.0);
+    }
   }
 }
 

@@ -34,6 +34,14 @@ class TimedTrajectory {
     double duration = 0.0;          ///< [s], >= 0
     Eigen::MatrixXd coefficients;   ///< num_dofs × (degree + 1), lowest power first
     int degree() const { return static_cast<int>(coefficients.cols()) - 1; }
+    /// The `order`-th time derivative of joint `joint` at local time tau (this piece's own
+    /// polynomial, also at its ends).
+    double Derivative(int joint, int order, double tau) const;
+    /// q, q̇, q̈ and jerk at local time tau from this piece's polynomials (t = t0 + tau); τ = 0
+    /// gives the constant coefficients bit-exactly.
+    TrajectorySample State(double tau) const;
+    /// maxᵢ max_τ |q̇ᵢ(τ)| · duration: a bound on how far any joint moves over the piece [rad].
+    double MaxJointTravel() const;
   };
 
   TimedTrajectory() = default;
