@@ -301,11 +301,26 @@ bool WriteOut(const std::string& file, const google::protobuf::Message& response
   return true;
 }
 
-int Plan(const Options& options) {
-  if (options.positional.size() != 2) UsageError("plan takes one REQUEST.json");
+void RequireOutFormat(const Options& options) {
   if (!options.out.empty() && !EndsWith(options.out, ".json") && !EndsWith(options.out, ".csv")) {
     UsageError("--out '" + options.out + "' must end in .json or .csv");
   }
+}
+
+/// Writes --out when given; exit 0 only when a trajectory came back.
+int FinishWithTrajectory(const Options& options, const google::protobuf::Message& response, v1::PlanOutcome outcome,
+                         const std::string& message, const v1::JointTrajectory& trajectory) {
+  if (!options.out.empty() && !WriteOut(options.out, response, trajectory)) return kExitFailed;
+  if (outcome != v1::SUCCESS || trajectory.points_size() == 0) {
+    std::cerr << "chasles: no trajectory: " << v1::PlanOutcome_Name(outcome) << ": " << message << "\n";
+    return kExitFailed;
+  }
+  return kExitOk;
+}
+
+int Plan(const Options& options) {
+  if (options.positional.size() != 2) UsageError("plan takes one REQUEST.json");
+  RequireOutFormat(options);
   const std::string& path = options.positional[1];
   v1::PlanRequest request = ParseJsonFileOrExit<v1::PlanRequest>(path);
   if (!options.method.empty()) request.mutable_trajectory()->set_post_processing(MethodOrExit(options.method));
@@ -345,22 +360,14 @@ int Plan(const Options& options) {
   }
   if (max_effort >= 0.0) std::printf("max |effort| %.4g N·m (N for prismatic joints)\n", max_effort);
 
-  if (!options.out.empty() && !WriteOut(options.out, response, response.trajectory())) return kExitFailed;
-  if (response.outcome() != v1::SUCCESS || response.trajectory().points_size() == 0) {
-    std::cerr << "chasles: no trajectory: " << v1::PlanOutcome_Name(response.outcome()) << ": " << response.message()
-              << "\n";
-    return kExitFailed;
-  }
-  return kExitOk;
+  return FinishWithTrajectory(options, response, response.outcome(), response.message(), response.trajectory());
 }
 
 // --- optimize ----------------------------------------------------------------------------------
 
 int Optimize(const Options& options) {
   if (options.positional.size() != 2) UsageError("optimize takes one REQUEST.json");
-  if (!options.out.empty() && !EndsWith(options.out, ".json") && !EndsWith(options.out, ".csv")) {
-    UsageError("--out '" + options.out + "' must end in .json or .csv");
-  }
+  RequireOutFormat(options);
   v1::OptimizeRequest request = ParseJsonFileOrExit<v1::OptimizeRequest>(options.positional[1]);
   if (!options.method.empty()) request.mutable_options()->set_post_processing(MethodOrExit(options.method));
   auto stub = v1::Planning::NewStub(MakeChannel(options));
@@ -382,13 +389,7 @@ int Optimize(const Options& options) {
   std::printf("timings ms  parameterize %.1f  optimize %.1f  verify %.1f  total %.1f\n", 1e3 * t.parameterize(),
               1e3 * t.optimize(), 1e3 * t.verify(), 1e3 * t.total());
   PrintOptimizer(response.optimizer(), response.quality());
-  if (!options.out.empty() && !WriteOut(options.out, response, response.trajectory())) return kExitFailed;
-  if (response.outcome() != v1::SUCCESS || response.trajectory().points_size() == 0) {
-    std::cerr << "chasles: no trajectory: " << v1::PlanOutcome_Name(response.outcome()) << ": " << response.message()
-              << "\n";
-    return kExitFailed;
-  }
-  return kExitOk;
+  return FinishWithTrajectory(options, response, response.outcome(), response.message(), response.trajectory());
 }
 
 // --- ik ----------------------------------------------------------------------------------------
