@@ -259,6 +259,60 @@ TimedTrajectory TimedTrajectory::TimeScaled(double factor) const {
   return TimedTrajectory(std::move(pieces), end_position_);
 }
 
+TimedTrajectory HoldTrajectory(const Eigen::VectorXd& q, double duration) {
+  if (q.size() == 0 || !q.allFinite()) ThrowInvalid("hold position must be non-empty and finite");
+  if (!std::isfinite(duration) || duration < 0.0) {
+    ThrowInvalid("hold duration = " + FormatNumber(duration) + " s must be finite and >= 0");
+  }
+  TimedTrajectory::Piece piece;
+  piece.duration = duration;
+  piece.coefficients = q;
+  return TimedTrajectory({std::move(piece)}, q);
+}
+
+TimedTrajectory ConcatenateTrajectories(const std::vector<TimedTrajectory>& parts) {
+  std::vector<TimedTrajectory::Piece> pieces;
+  Eigen::VectorXd end;
+  double t = 0.0;
+  int dofs = -1;
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const TimedTrajectory& part = parts[k];
+    if (part.empty()) continue;
+    if (dofs >= 0 && part.num_dofs() != dofs) {
+      ThrowInvalid("trajectory part " + std::to_string(k) + " has " + std::to_string(part.num_dofs()) +
+                   " joints, the parts before it " + std::to_string(dofs));
+    }
+    dofs = part.num_dofs();
+    for (const TimedTrajectory::Piece& piece : part.pieces()) {
+      pieces.push_back(piece);
+      pieces.back().t0 = t + piece.t0;
+    }
+    t += part.duration();
+    end = part.Evaluate(part.duration()).q;
+  }
+  if (pieces.empty()) return TimedTrajectory();
+  return TimedTrajectory(std::move(pieces), std::move(end));
+}
+
+TimedTrajectory DelayedTrajectory(const TimedTrajectory& trajectory, double delay) {
+  if (!std::isfinite(delay) || delay < 0.0) ThrowInvalid("delay = " + FormatNumber(delay) + " s must be finite and >= 0");
+  if (trajectory.empty() || delay == 0.0) return trajectory;
+  return ConcatenateTrajectories({HoldTrajectory(trajectory.Evaluate(0.0).q, delay), trajectory});
+}
+
+TimedTrajectory TrajectoryRows(const TimedTrajectory& trajectory, int first, int count) {
+  if (first < 0 || count < 1 || first + count > trajectory.num_dofs()) {
+    ThrowInvalid("joints [" + std::to_string(first) + ", " + std::to_string(first + count) +
+                 ") are outside the trajectory's " + std::to_string(trajectory.num_dofs()) + " joints");
+  }
+  std::vector<TimedTrajectory::Piece> pieces = trajectory.pieces();
+  for (TimedTrajectory::Piece& piece : pieces) {
+    piece.coefficients = Eigen::MatrixXd(piece.coefficients.middleRows(first, count));
+  }
+  Eigen::VectorXd end = trajectory.Evaluate(trajectory.duration()).q.segment(first, count);
+  return TimedTrajectory(std::move(pieces), std::move(end));
+}
+
 TimedTrajectory::Piece LinePiece(double t0, double duration, const Eigen::VectorXd& origin,
                                  const Eigen::VectorXd& direction, double s0, double s1, double s2, double s3) {
   TimedTrajectory::Piece piece;

@@ -175,6 +175,9 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
   if (!std::isfinite(options.max_joint_step) || !(options.max_joint_step > 0.0)) {
     ThrowInvalid("verification max_joint_step = " + FormatNumber(options.max_joint_step) + " must be finite and > 0");
   }
+  if (!std::isfinite(options.max_time_step) || options.max_time_step < 0.0) {
+    ThrowInvalid("verification max_time_step = " + FormatNumber(options.max_time_step) + " must be finite and >= 0");
+  }
   if (!std::isfinite(options.endpoint_tolerance) || !(options.endpoint_tolerance >= 0.0)) {
     ThrowInvalid("verification endpoint_tolerance = " + FormatNumber(options.endpoint_tolerance) +
                  " must be finite and >= 0");
@@ -265,10 +268,12 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
   constexpr double kMaxStatesPerPiece = 1e8;
   for (std::size_t k = 0; k < pieces.size(); ++k) {
     const Piece& piece = pieces[k];
-    const double steps = std::ceil(piece.MaxJointTravel() / options.max_joint_step);
+    double steps = std::ceil(piece.MaxJointTravel() / options.max_joint_step);
+    if (options.max_time_step > 0.0) steps = std::max(steps, std::ceil(piece.duration / options.max_time_step));
     if (steps > kMaxStatesPerPiece) {
       report.reason = "piece " + std::to_string(k) + " would need more than 1e8 checks at max_joint_step = " +
-                      FormatNumber(options.max_joint_step);
+                      FormatNumber(options.max_joint_step) + " rad, max_time_step = " +
+                      FormatNumber(options.max_time_step) + " s";
       return report;
     }
     const int m = std::max(1, static_cast<int>(steps));

@@ -87,6 +87,23 @@ class TimedTrajectory {
   Eigen::VectorXd end_position_;
 };
 
+/// Standing still at `q` for `duration` [s] (>= 0): one constant piece from t = 0.
+/// \throws Error(kInvalidArgument) when q is empty or not finite, or duration is not finite and >= 0.
+TimedTrajectory HoldTrajectory(const Eigen::VectorXd& q, double duration);
+
+/// The parts one after another on one time line (each part's pieces shifted to start when the
+/// previous part ends); the end position is the last part's. Empty parts are skipped.
+/// Continuity between parts is the caller's (VerifyTrajectory checks it).
+/// \throws Error(kInvalidArgument) when the parts have different numbers of joints.
+TimedTrajectory ConcatenateTrajectories(const std::vector<TimedTrajectory>& parts);
+
+/// The same motion starting `delay` [s] (>= 0) later, standing at its start before.
+TimedTrajectory DelayedTrajectory(const TimedTrajectory& trajectory, double delay);
+
+/// Joints [first, first + count) of every piece (and of the end position).
+/// \throws Error(kInvalidArgument) when the range is outside the trajectory's joints.
+TimedTrajectory TrajectoryRows(const TimedTrajectory& trajectory, int first, int count);
+
 /// Appends a piece that moves along the line q = origin + s·direction with the scalar profile
 /// s(τ) = s0 + s1·τ + s2·τ² + s3·τ³ (unused terms 0) for τ ∈ [0, duration], starting at time t0.
 TimedTrajectory::Piece LinePiece(double t0, double duration, const Eigen::VectorXd& origin,

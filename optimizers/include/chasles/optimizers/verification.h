@@ -13,6 +13,10 @@ namespace chasles {
 
 struct VerificationOptions {
   double max_joint_step = 0.005;   ///< resample so no joint moves more than this between checks [rad]
+  /// Also resample so consecutive checked states are no more than this apart in time [s]; 0 = no
+  /// time bound (a robot standing still is then checked once per piece). Multi-robot
+  /// verification sets it, since other robots move while one stands.
+  double max_time_step = 0.0;
   double endpoint_tolerance = 1e-6;  ///< |q(0) − start|∞, |q(T) − goal|∞ and piece-to-piece jumps [rad]
   double limit_tolerance = 1e-9;   ///< relative slack on velocity/acceleration/jerk/effort limits
   /// Expected velocity at the start / end [rad/s]; empty = at rest. Checked to
@@ -39,7 +43,7 @@ struct VerificationReport {
 /// 3. piece by piece in time order, exactly at the extrema of each polynomial: position limits
 ///    (to 1e-12 relative), velocity, acceleration and (when limited) jerk limits;
 /// 4. states spaced so no joint moves more than max_joint_step between consecutive ones
-///    (m = ⌈maxᵢ max|q̇ᵢ|·duration / step⌉ per piece): collisions (self + scene) and, with
+///    (m = ⌈maxᵢ max|q̇ᵢ|·duration / step⌉ per piece, or ⌈duration / max_time_step⌉ if more): collisions (self + scene) and, with
 ///    max_effort on a robot with inertia, the inverse-dynamics torques.
 /// `reason` says what failed and where, e.g.
 /// `collision at t = 1.234 s between link 'panda_link5' and 'shelf_top'`,

@@ -1,0 +1,125 @@
+#pragma once
+/// \file
+/// Multi-robot coordination: conflict-free timed trajectories for several robots sharing a
+/// workspace, by prioritized space-time planning, composite configuration-space planning,
+/// decoupled paths with velocity tuning, or one robot after another; jointly verified.
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "chasles/collision/scene.h"
+#include "chasles/multi/team.h"
+#include "chasles/pipeline/plan_pipeline.h"
+#include "chasles/planners/registry.h"
+#include "chasles/planners/termination.h"
+
+namespace chasles {
+
+enum class CoordinationMethod { kAuto, kPrioritized, kComposite, kVelocityTuning, kSequential };
+/// "auto", "prioritized", "composite", "velocity_tuning", "sequential".
+const char* ToString(CoordinationMethod method);
+
+/// One robot of a team.
+struct TeamRobotSpec {
+  PlacedRobot placement;                  ///< name, model, base pose (frozen_at unused)
+  Eigen::VectorXd start;
+  Eigen::VectorXd goal;                   ///< joint goal; ignored when pose_goal is set
+  std::optional<PoseGoalSpec> pose_goal;  ///< in the robot's base frame; first collision-free IK solution
+  int priority = 0;                       ///< larger plans first; ties keep the given order
+  Eigen::VectorXd max_velocity;           ///< empty = the model's; else > 0, capped at the model's
+  Eigen::VectorXd max_acceleration;       ///< empty = 2 × the velocity limits
+};
+
+/// A trajectory committed in a workcell, as a moving obstacle: the robot is at
+/// trajectory(t − begin) for t in [begin, begin + duration], at its end until `until`, and absent
+/// outside [begin, until]. Times are on the query's time line (t = 0 = the team's start).
+struct CommittedMotion {
+  std::string id;                  ///< reservation id, for messages
+  PlacedRobot placement;           ///< its robot (frozen_at unused)
+  TimedTrajectory trajectory;
+  double begin = 0.0;              ///< [s]
+  double until = 0.0;              ///< [s] >= begin + duration
+};
+
+struct CoordinationQuery {
+  std::shared_ptr<const Scene> scene;
+  std::vector<TeamRobotSpec> robots;   ///< 1 to 16
+  CoordinationMethod method = CoordinationMethod::kAuto;
+  std::string planner_id = "rrt_connect";
+  ParameterValues parameters;
+  double time_budget = 30.0;           ///< [s] (the termination given to Coordinate also applies)
+  std::uint64_t seed = 1;
+  double collision_resolution = 0.005; ///< [rad]
+  double time_step = 1e-3;             ///< [s] joint verification
+  double sample_period = 0.01;         ///< [s]
+  double robot_padding = 0.0;          ///< [m] kept between robots
+  int max_reorderings = 0;             ///< 0 = 2 × robots
+  std::vector<CommittedMotion> committed;  ///< workcell reservations to avoid
+
+  /// \throws Error(kInvalidArgument) naming the field (proto names: `robots[1].name`,
+  ///         `robots[0].start.positions has 6 values, robot 'left' has 7 joints`, …), duplicate
+  ///         names, sizes, non-finite values, limits; Error(kNotFound) for an unknown planner.
+  void Validate(const PlannerRegistry& registry) const;
+};
+
+enum class CoordinationCode {
+  kSuccess,
+  kNoSolution,         ///< no method succeeded within the budget (attempts say why)
+  kStartInCollision,   ///< one robot's start against the scene or itself
+  kGoalInCollision,
+  kGoalUnreachable,    ///< pose goal without a collision-free IK solution
+  kStartsInConflict,   ///< two robots' starts (or a start and a committed motion) collide
+  kGoalsInConflict,    ///< two robots' goals collide (or a goal and a committed motion's hold)
+  kVerificationFailed, ///< the joint verification failed (nothing is returned)
+  kCancelled,
+  kDeadlineExceeded,
+};
+const char* ToString(CoordinationCode code);
+
+struct MethodAttemptReport {
+  CoordinationMethod method = CoordinationMethod::kAuto;
+  bool succeeded = false;
+  std::string message;
+  double seconds = 0.0;
+  double makespan = 0.0;
+};
+
+struct RobotPlan {
+  std::string name;
+  TimedTrajectory trajectory;  ///< from t = 0 to `duration` (waits included)
+  std::vector<TrajectorySample> samples;
+  double duration = 0.0;       ///< [s] until it stands at its goal for good
+  double start_delay = 0.0;
+  double wait_time = 0.0;
+  JointPath path;
+  Eigen::VectorXd goal;
+  KinematicLimits limits;
+};
+
+struct CoordinationOutcome {
+  CoordinationCode code = CoordinationCode::kNoSolution;
+  std::string message;
+  std::vector<RobotPlan> robots;   ///< request order (kSuccess)
+  double makespan = 0.0;
+  double sum_of_durations = 0.0;
+  CoordinationMethod method = CoordinationMethod::kAuto;  ///< whose result is returned
+  std::vector<MethodAttemptReport> attempts;
+  std::vector<std::string> order;  ///< priority order used
+  int reorderings = 0;
+  TeamVerificationReport verification;
+  double seconds = 0.0;
+};
+
+/// Runs the query: validation, starts/goals (scene, self, pairwise: the named conflict
+/// outcomes), the method(s), then VerifyTeam of the result (nothing unverified is returned).
+/// \throws Error for invalid input (Validate).
+CoordinationOutcome Coordinate(const CoordinationQuery& query, const PlannerRegistry& registry,
+                               const Termination& termination);
+
+}  // namespace chasles

@@ -1,0 +1,88 @@
+#pragma once
+/// \file
+/// Several robots in one world: a composite RobotModel (so one CollisionChecker checks robot
+/// against robot, scene and itself), their trajectories side by side on one time line, and the
+/// joint verification of a coordinated set.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "chasles/collision/collision_checker.h"
+#include "chasles/optimizers/time_parameterization.h"
+#include "chasles/optimizers/timed_trajectory.h"
+#include "chasles/robot/robot_model.h"
+
+namespace chasles {
+
+/// One robot placed in the world.
+struct PlacedRobot {
+  std::string name;                          ///< link/joint prefix: "<name>/<link>"; non-empty, unique
+  std::shared_ptr<const RobotModel> model;
+  Eigen::Isometry3d base_pose = Eigen::Isometry3d::Identity();  ///< its root link frame in the world
+  /// Non-empty: the robot stands at this configuration for good; its joints become fixed joints,
+  /// so it is an obstacle of the composite with no configuration entries.
+  Eigen::VectorXd frozen_at;
+};
+
+struct CompositionOptions {
+  /// Check each robot's links against its own other links (its ACM applies). Off: only pairs of
+  /// links of different robots are checked (the pair checkers of moving obstacles, where each
+  /// robot's own self-collision is checked separately).
+  bool self_collisions = true;
+};
+
+/// A model whose configuration is the movable robots' configurations concatenated in order.
+/// Links: a geometry-free root "world", then each robot's links renamed "<name>/<link>"; joints
+/// renamed "<name>/<joint>", each robot's root fixed to "world" at its base pose (a frozen
+/// robot's joints fixed at frozen_at). Allowed collisions: every pair within one robot that its
+/// own ACM allows (or every pair within one robot when !self_collisions); pairs of links of
+/// different robots are always checked. Motion model: the movable robot's when there is exactly
+/// one; kArm when several movable robots are all arms, planar bodies or free flyers.
+/// \throws Error(kInvalidArgument) for an empty list, empty or duplicate names, a null model,
+///         a non-finite base pose, a frozen configuration of the wrong size or outside limits;
+///         Error(kFailedPrecondition) when several movable robots include a car.
+std::shared_ptr<const RobotModel> ComposeRobots(const std::vector<PlacedRobot>& robots,
+                                                const CompositionOptions& options = {});
+
+/// Offset of each movable robot's first configuration entry in the composite, and the total.
+std::vector<int> CompositeOffsets(const std::vector<PlacedRobot>& robots);
+
+/// The robots' trajectories on one time line, all from t = 0: the piece boundaries are the union
+/// of every trajectory's; a trajectory that has ended holds its end position. Rows in order.
+/// \throws Error(kInvalidArgument) for an empty list or an empty trajectory.
+TimedTrajectory ComposeTrajectories(const std::vector<TimedTrajectory>& trajectories);
+
+/// Per-robot limits concatenated in order (max_velocity, max_acceleration; jerk and effort are
+/// not supported by coordination and must be empty).
+KinematicLimits ComposeLimits(const std::vector<KinematicLimits>& limits);
+
+struct TeamVerificationOptions {
+  double time_step = 1e-3;       ///< [s] largest time step between checked team states
+  double max_joint_step = 0.005; ///< [rad] largest joint step of any robot between checked states
+};
+
+struct TeamVerificationReport {
+  bool ok = false;
+  std::string reason;  ///< empty when ok; names robots ("<name>/<link>"), time and joint
+  std::uint64_t states_checked = 0;
+  double max_velocity_ratio = 0.0;
+  double max_acceleration_ratio = 0.0;
+};
+
+/// Verifies a coordinated set: each robot's limits exactly, starts and goals, and every team
+/// state at most time_step and max_joint_step apart against the scene, each robot itself and
+/// every other robot. `team_checker` is the composite of the same robots (self_collisions on)
+/// over the scene; trajectories, starts, goals and limits are per robot in its order.
+TeamVerificationReport VerifyTeam(const CollisionChecker& team_checker,
+                                  const std::vector<TimedTrajectory>& trajectories,
+                                  const std::vector<Eigen::VectorXd>& starts,
+                                  const std::vector<Eigen::VectorXd>& goals,
+                                  const std::vector<KinematicLimits>& limits,
+                                  const TeamVerificationOptions& options = {});
+
+}  // namespace chasles
