@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Writes the primitive sources of the mobile-robot maps: examples/scenes/maze.json, office.json and
-drone_course.json (a seeded maze; fixed office and drone-course layouts). Voxelise them with
+"""Writes the primitive sources of the mobile-robot maps: examples/scenes/maze.json, office.json,
+drone_course.json and pillar_room.json (a seeded maze; fixed office, drone-course and room layouts). Voxelise them with
 chasles-scene-to-octomap as examples/scenes/README.md shows.
 
 Usage: python3 examples/tools/make_maps.py OUT_DIR   (e.g. examples/scenes)"""
@@ -131,8 +131,23 @@ def drone_scene():
         cyls.append(cyl(f"pillar_{k}", x, y, 0.3, 0, 4))
     return {"boxes": boxes, "cylinders": cyls}
 
+def pillar_room_scene():
+    # An 8 m x 8 m room for the four-base swap (examples/requests/make_coordination.py): outer walls
+    # 0.1 m thick on the lines 0.1 and 7.9 (like the maze), 1.0 m tall; four pillars r 0.25 m
+    # outside the 3 m square whose corners the bases swap, one beside the middle of each side.
+    boxes, cyls = [], []
+    H = 1.0
+    boxes.append(box("outer_south", 0.05, 7.95, 0.05, 0.15, 0, H))
+    boxes.append(box("outer_north", 0.05, 7.95, 7.85, 7.95, 0, H))
+    boxes.append(box("outer_west", 0.05, 0.15, 0.15, 7.85, 0, H))
+    boxes.append(box("outer_east", 7.85, 7.95, 0.15, 7.85, 0, H))
+    for k, (x, y) in enumerate([(4.0, 1.4), (6.6, 4.0), (4.0, 6.6), (1.4, 4.0)]):
+        cyls.append(cyl(f"pillar_{k}", x, y, 0.25, 0, H))
+    return {"boxes": boxes, "cylinders": cyls}
+
 out = sys.argv[1] if len(sys.argv) > 1 else "examples/scenes"
-for name, scene in [("maze", maze_scene()), ("office", office_scene()), ("drone_course", drone_scene())]:
+for name, scene in [("maze", maze_scene()), ("office", office_scene()), ("drone_course", drone_scene()),
+                    ("pillar_room", pillar_room_scene())]:
     with open(f"{out}/{name}.json", "w") as f:
         json.dump(scene, f, indent=2); f.write("\n")
     print(name, len(scene.get("boxes", [])), "boxes", len(scene.get("cylinders", [])), "cylinders")
