@@ -61,10 +61,33 @@ const char kUsage[] =
     "                                  stored scene's OctoMap by ray casting from the sensor origin;\n"
     "                                  prints the updated scene_id (default scene: the server's own;\n"
     "                                  --max-range 0 = unlimited; --resolution of a new map, 0 = 0.05)\n"
+    "  coordinate REQUEST.json [--method M] [--out F.json]\n"
+    "                                  send a chasles.v1.CoordinateRequest (protobuf JSON: a scene and\n"
+    "                                  several robots); print the outcome, the method that succeeded,\n"
+    "                                  makespan, sum of durations, each robot's duration, start delay\n"
+    "                                  and waiting, every method attempted and the joint verification;\n"
+    "                                  --method auto|prioritized|composite|velocity_tuning|sequential\n"
+    "                                  overrides the request's; --out F.json writes the response;\n"
+    "                                  exit 0 only when a coordinated set came back\n"
+    "  workcell NAME                   create a workcell for reservations (an existing one is kept);\n"
+    "                                  prints its active reservations and clock\n"
+    "  commit --workcell W --robot-name N --trajectory F.json [--robot R | --robot-id ID]\n"
+    "         [--base-pose X,Y,Z[,YAW]] [--start-time T] [--hold S]\n"
+    "                                  reserve the space-time of robot N's trajectory in workcell W: the\n"
+    "                                  trajectory of a saved PlanResponse (plan --out F.json), or robot\n"
+    "                                  N's entry of a saved CoordinateResponse (coordinate --out F.json);\n"
+    "                                  R is a chasles.v1.RobotModel in protobuf JSON or a .urdf file (with\n"
+    "                                  --srdf); --base-pose places it in the workcell (yaw about z [rad]);\n"
+    "                                  T = workcell clock at the trajectory's start [s since the epoch],\n"
+    "                                  0 = now; S = seconds it keeps its final configuration afterwards;\n"
+    "                                  prints the reservation id\n"
+    "  release --workcell W (--reservation ID | --robot-name N)\n"
+    "                                  release one reservation, or all of robot N's\n"
     "\n"
     "Options:\n"
     "  --server ADDR   server address (default 127.0.0.1:50051)\n"
-    "  --timeout S     gRPC deadline in seconds (default: 10; plan: the request's budget + 30)\n"
+    "  --timeout S     gRPC deadline in seconds (default: 10; plan, optimize, coordinate: the request's\n"
+    "                  budget + 30)\n"
     "  --help          show this help\n";
 
 struct Options {
@@ -82,7 +105,17 @@ struct Options {
   std::string origin;  // X,Y,Z
   std::string max_range;
   std::string resolution;
-  std::string method;  // plan / optimize: post-processing
+  std::string method;  // plan / optimize: post-processing; coordinate: coordination method
+  // commit / release
+  std::string workcell;
+  std::string robot_name;
+  std::string trajectory;  // PlanResponse / CoordinateResponse JSON file
+  std::string robot;       // RobotModel JSON or URDF file
+  std::string robot_id;
+  std::string base_pose;   // X,Y,Z[,YAW]
+  std::string start_time;
+  std::string hold;
+  std::string reservation;
   std::vector<std::string> positional;
 };
 
@@ -571,6 +604,196 @@ int UpdateScene(const Options& options) {
   return kExitOk;
 }
 
+// --- coordinate --------------------------------------------------------------------------------
+
+v1::CoordinateRequest::Method CoordinationMethodOrExit(const std::string& method) {
+  if (method == "auto") return v1::CoordinateRequest::AUTO;
+  if (method == "prioritized") return v1::CoordinateRequest::PRIORITIZED;
+  if (method == "composite") return v1::CoordinateRequest::COMPOSITE;
+  if (method == "velocity_tuning") return v1::CoordinateRequest::VELOCITY_TUNING;
+  if (method == "sequential") return v1::CoordinateRequest::SEQUENTIAL;
+  UsageError("--method '" + method + "' must be auto, prioritized, composite, velocity_tuning or sequential");
+}
+
+int Coordinate(const Options& options) {
+  if (options.positional.size() != 2) UsageError("coordinate takes one REQUEST.json");
+  if (!options.out.empty() && !EndsWith(options.out, ".json")) {
+    UsageError("--out '" + options.out + "' must end in .json (coordinate writes the whole response)");
+  }
+  v1::CoordinateRequest request = ParseJsonFileOrExit<v1::CoordinateRequest>(options.positional[1]);
+  if (!options.method.empty()) request.set_method(CoordinationMethodOrExit(options.method));
+
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  const double budget = request.time_budget() > 0 ? request.time_budget() : 30.0;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : budget + 30.0);
+  v1::CoordinateResponse response;
+  const grpc::Status status = stub->Coordinate(&context, request, &response);
+  if (!status.ok()) return ReportRpcError("Coordinate", options, status);
+
+  std::printf("request     %s\n", response.request_id().c_str());
+  std::printf("outcome     %s\n", v1::PlanOutcome_Name(response.outcome()).c_str());
+  std::printf("message     %s\n", response.message().c_str());
+  std::string order;
+  for (const std::string& name : response.order()) order += (order.empty() ? "" : ", ") + name;
+  std::printf("method      %s%s%s (%u reorderings)\n", response.method().empty() ? "-" : response.method().c_str(),
+              order.empty() ? "" : ", order ", order.c_str(), response.reorderings());
+  std::printf("makespan    %.4f s   sum of durations %.4f s   server %.1f ms\n", response.makespan(),
+              response.sum_of_durations(), 1e3 * response.seconds());
+  if (response.robots_size() > 0) {
+    std::printf("%-16s %12s %14s %12s %8s\n", "robot", "duration [s]", "start delay [s]", "wait [s]", "samples");
+    for (const v1::RobotTrajectory& robot : response.robots()) {
+      std::printf("%-16s %12.4f %14.4f %12.4f %8d\n", robot.name().c_str(), robot.duration(), robot.start_delay(),
+                  robot.wait_time(), robot.trajectory().points_size());
+    }
+  }
+  for (const v1::MethodAttempt& attempt : response.attempts()) {
+    std::printf("attempt     %-16s %-9s %8.1f ms", attempt.method().c_str(),
+                attempt.succeeded() ? "succeeded" : "failed", 1e3 * attempt.seconds());
+    if (attempt.succeeded()) std::printf("  makespan %.4f s", attempt.makespan());
+    if (!attempt.message().empty()) std::printf("  %s", attempt.message().c_str());
+    std::printf("\n");
+  }
+  if (response.has_verification()) {
+    const v1::TeamVerification& v = response.verification();
+    std::printf("verified    %llu team states at <= %.4g s and <= %.4g rad; min robot distance %.4g m; "
+                "max |qd|/v %.3f, max |qdd|/a %.3f\n",
+                static_cast<unsigned long long>(v.states_checked()), v.time_step(), v.max_joint_step(),
+                v.min_robot_distance(), v.max_velocity_ratio(), v.max_acceleration_ratio());
+  }
+  if (response.start_time() > 0) std::printf("start time  %.3f (workcell clock)\n", response.start_time());
+
+  if (!options.out.empty() && !WriteOut(options.out, response, v1::JointTrajectory())) return kExitFailed;
+  if (response.outcome() != v1::SUCCESS || response.robots_size() == 0) {
+    std::cerr << "chasles: no coordinated trajectories: " << v1::PlanOutcome_Name(response.outcome()) << ": "
+              << response.message() << "\n";
+    return kExitFailed;
+  }
+  return kExitOk;
+}
+
+// --- workcells ---------------------------------------------------------------------------------
+
+int CreateWorkcell(const Options& options) {
+  if (options.positional.size() != 2) UsageError("workcell takes one NAME");
+  v1::CreateWorkcellRequest request;
+  request.set_name(options.positional[1]);
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : 10.0);
+  v1::CreateWorkcellResponse response;
+  const grpc::Status status = stub->CreateWorkcell(&context, request, &response);
+  if (!status.ok()) return ReportRpcError("CreateWorkcell", options, status);
+  std::printf("workcell    %s (%s)\n", request.name().c_str(), response.created() ? "created" : "existed");
+  std::printf("reserved    %u active reservations\n", response.active_reservations());
+  std::printf("clock       %.3f s since the epoch\n", response.now());
+  return kExitOk;
+}
+
+/// The trajectory to commit: a saved PlanResponse's (or OptimizeResponse's) `trajectory`, or the
+/// entry of `robot_name` in a saved CoordinateResponse.
+v1::JointTrajectory CommitTrajectoryOrExit(const std::string& path, const std::string& robot_name) {
+  const std::string text = ReadFileOrExit(path, "trajectory");
+  v1::PlanResponse plan;
+  if (google::protobuf::util::JsonStringToMessage(text, &plan).ok() && plan.has_trajectory()) {
+    return plan.trajectory();
+  }
+  v1::CoordinateResponse coordinated;
+  if (google::protobuf::util::JsonStringToMessage(text, &coordinated).ok() && coordinated.robots_size() > 0) {
+    std::string names;
+    for (const v1::RobotTrajectory& robot : coordinated.robots()) {
+      if (robot.name() == robot_name) return robot.trajectory();
+      names += (names.empty() ? "'" : ", '") + robot.name() + "'";
+    }
+    UsageError("--robot-name '" + robot_name + "' is not a robot of the CoordinateResponse '" + path +
+               "' (robots: " + names + ")");
+  }
+  v1::OptimizeResponse optimized;
+  if (google::protobuf::util::JsonStringToMessage(text, &optimized).ok() && optimized.has_trajectory()) {
+    return optimized.trajectory();
+  }
+  UsageError("--trajectory '" + path +
+             "' is neither a chasles.v1.PlanResponse with a trajectory nor a CoordinateResponse with robots "
+             "(protobuf JSON, as plan/coordinate --out F.json write them)");
+}
+
+/// "X,Y,Z" or "X,Y,Z,YAW" [m, rad] → a pose turned by YAW about z.
+v1::Pose BasePoseOrExit(const std::string& text) {
+  std::vector<std::string> parts;
+  std::istringstream in(text);
+  for (std::string part; std::getline(in, part, ',');) parts.push_back(part);
+  if (parts.size() != 3 && parts.size() != 4) UsageError("--base-pose '" + text + "' must be X,Y,Z or X,Y,Z,YAW");
+  v1::Pose pose;
+  pose.mutable_position()->set_x(ParseNumberOrExit(parts[0], "--base-pose x"));
+  pose.mutable_position()->set_y(ParseNumberOrExit(parts[1], "--base-pose y"));
+  pose.mutable_position()->set_z(ParseNumberOrExit(parts[2], "--base-pose z"));
+  if (parts.size() == 4) {
+    const double yaw = ParseNumberOrExit(parts[3], "--base-pose yaw");
+    pose.mutable_orientation()->set_z(std::sin(yaw / 2));
+    pose.mutable_orientation()->set_w(std::cos(yaw / 2));
+  }
+  return pose;
+}
+
+int CommitTrajectory(const Options& options) {
+  if (options.positional.size() != 1) UsageError("commit takes no positional arguments (use --trajectory FILE)");
+  if (options.workcell.empty()) UsageError("commit needs --workcell W");
+  if (options.robot_name.empty()) UsageError("commit needs --robot-name N (who moves)");
+  if (options.trajectory.empty()) UsageError("commit needs --trajectory F.json (a saved Plan or Coordinate response)");
+  if (!options.robot.empty() && !options.robot_id.empty()) UsageError("commit takes --robot or --robot-id, not both");
+  if (!options.srdf.empty() && !EndsWith(options.robot, ".urdf")) UsageError("--srdf belongs to a --robot FILE.urdf");
+  v1::CommitTrajectoryRequest request;
+  request.set_workcell(options.workcell);
+  request.set_robot_name(options.robot_name);
+  *request.mutable_trajectory() = CommitTrajectoryOrExit(options.trajectory, options.robot_name);
+  if (EndsWith(options.robot, ".urdf")) {
+    v1::UrdfRobot* urdf = request.mutable_robot()->mutable_urdf();
+    urdf->set_urdf(ReadFileOrExit(options.robot, "URDF"));
+    if (!options.srdf.empty()) urdf->set_srdf(ReadFileOrExit(options.srdf, "SRDF"));
+  } else if (!options.robot.empty()) {
+    *request.mutable_robot() = ParseJsonFileOrExit<v1::RobotModel>(options.robot);
+  } else if (!options.robot_id.empty()) {
+    request.set_robot_id(options.robot_id);
+  }
+  if (!options.base_pose.empty()) *request.mutable_base_pose() = BasePoseOrExit(options.base_pose);
+  if (!options.start_time.empty()) request.set_start_time(ParseNumberOrExit(options.start_time, "--start-time"));
+  if (!options.hold.empty()) request.set_hold(ParseNumberOrExit(options.hold, "--hold"));
+
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : 30.0);
+  v1::CommitTrajectoryResponse response;
+  const grpc::Status status = stub->CommitTrajectory(&context, request, &response);
+  if (!status.ok()) return ReportRpcError("CommitTrajectory", options, status);
+  std::printf("reservation %s\n", response.reservation_id().c_str());
+  std::printf("time        %.3f … %.3f s since the epoch (%.3f s), expires at %.3f\n", response.start_time(),
+              response.end_time(), response.end_time() - response.start_time(), response.expires_at());
+  std::printf("reserved    %u active reservations in %s\n", response.active_reservations(), options.workcell.c_str());
+  return kExitOk;
+}
+
+int Release(const Options& options) {
+  if (options.positional.size() != 1) UsageError("release takes no positional arguments");
+  if (options.workcell.empty()) UsageError("release needs --workcell W");
+  if (options.reservation.empty() == options.robot_name.empty()) {
+    UsageError("release takes exactly one of --reservation ID and --robot-name N");
+  }
+  v1::ReleaseRequest request;
+  request.set_workcell(options.workcell);
+  request.set_reservation_id(options.reservation);
+  request.set_robot_name(options.robot_name);
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : 10.0);
+  v1::ReleaseResponse response;
+  const grpc::Status status = stub->Release(&context, request, &response);
+  if (!status.ok()) return ReportRpcError("Release", options, status);
+  std::printf("released    %u reservations; %u active in %s\n", response.released(), response.active_reservations(),
+              options.workcell.c_str());
+  return kExitOk;
+}
+
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -617,6 +840,24 @@ int main(int argc, char** argv) {
       options.resolution = value();
     } else if (arg == "--method") {
       options.method = value();
+    } else if (arg == "--workcell") {
+      options.workcell = value();
+    } else if (arg == "--robot-name") {
+      options.robot_name = value();
+    } else if (arg == "--trajectory") {
+      options.trajectory = value();
+    } else if (arg == "--robot") {
+      options.robot = value();
+    } else if (arg == "--robot-id") {
+      options.robot_id = value();
+    } else if (arg == "--base-pose") {
+      options.base_pose = value();
+    } else if (arg == "--start-time") {
+      options.start_time = value();
+    } else if (arg == "--hold") {
+      options.hold = value();
+    } else if (arg == "--reservation") {
+      options.reservation = value();
     } else if (arg.size() > 1 && arg[0] == '-') {
       UsageError("unknown option '" + arg + "'");
     } else {
@@ -635,5 +876,9 @@ int main(int argc, char** argv) {
   if (command == "upload-robot") return UploadRobot(options);
   if (command == "upload-scene") return UploadScene(options);
   if (command == "update-scene") return UpdateScene(options);
+  if (command == "coordinate") return Coordinate(options);
+  if (command == "workcell") return CreateWorkcell(options);
+  if (command == "commit") return CommitTrajectory(options);
+  if (command == "release") return Release(options);
   UsageError("unknown command '" + command + "'");
 }
