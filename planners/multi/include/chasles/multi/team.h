@@ -38,27 +38,39 @@ struct CompositionOptions {
 
 /// A model whose configuration is the movable robots' configurations concatenated in order.
 /// Links: a geometry-free root "world", then each robot's links renamed "<name>/<link>"; joints
-/// renamed "<name>/<joint>", each robot's root fixed to "world" at its base pose (a frozen
-/// robot's joints fixed at frozen_at). Allowed collisions: every pair within one robot that its
+/// renamed "<name>/<joint>", each robot's root fixed to "world" at its base pose by the fixed
+/// joint "<name>/base" ("<name>/base_2", … if the robot has a joint "base" of its own); a frozen
+/// robot's moving joints become fixed joints at frozen_at (origin · motion(axis, q)). The
+/// configuration is the movable robots' own configurations concatenated in list order; joint
+/// limits, geometry and inertia are the robots' own. The model is named "team". Allowed collisions: every pair within one robot that its
 /// own ACM allows (or every pair within one robot when !self_collisions); pairs of links of
 /// different robots are always checked. Motion model: the movable robot's when there is exactly
 /// one; kArm when several movable robots are all arms, planar bodies or free flyers.
 /// \throws Error(kInvalidArgument) for an empty list, empty or duplicate names, a null model,
-///         a non-finite base pose, a frozen configuration of the wrong size or outside limits;
+///         a non-finite base pose or one whose rotation is not a rotation matrix (to 1e-6),
+///         a frozen configuration of the wrong size or outside limits (messages name
+///         `robots[k] '<name>'`);
 ///         Error(kFailedPrecondition) when several movable robots include a car.
 std::shared_ptr<const RobotModel> ComposeRobots(const std::vector<PlacedRobot>& robots,
                                                 const CompositionOptions& options = {});
 
-/// Offset of each movable robot's first configuration entry in the composite, and the total.
+/// Offset of each robot's first configuration entry in the composite, one per robot in list
+/// order (a frozen robot has no entries: its offset is the next robot's), then the total:
+/// robots.size() + 1 values. \throws Error(kInvalidArgument) for a null model.
 std::vector<int> CompositeOffsets(const std::vector<PlacedRobot>& robots);
 
 /// The robots' trajectories on one time line, all from t = 0: the piece boundaries are the union
-/// of every trajectory's; a trajectory that has ended holds its end position. Rows in order.
+/// of every trajectory's (boundaries within 1e-12·max(1 s, T) of each other are one); on each
+/// piece every robot's polynomial is re-expanded about the piece's start and padded to the
+/// highest degree. A trajectory that has ended holds its end position (its Evaluate at its
+/// duration) at rest. Rows in order; the end position is every robot's end position.
 /// \throws Error(kInvalidArgument) for an empty list or an empty trajectory.
 TimedTrajectory ComposeTrajectories(const std::vector<TimedTrajectory>& trajectories);
 
 /// Per-robot limits concatenated in order (max_velocity, max_acceleration; jerk and effort are
-/// not supported by coordination and must be empty).
+/// not supported by coordination and must be empty). Gravity is the first robot's.
+/// \throws Error(kInvalidArgument) for an empty list, jerk or effort limits, or
+///         max_acceleration and max_velocity of different sizes (naming `limits[k]`).
 KinematicLimits ComposeLimits(const std::vector<KinematicLimits>& limits);
 
 struct TeamVerificationOptions {
@@ -77,7 +89,12 @@ struct TeamVerificationReport {
 /// Verifies a coordinated set: each robot's limits exactly, starts and goals, and every team
 /// state at most time_step and max_joint_step apart against the scene, each robot itself and
 /// every other robot. `team_checker` is the composite of the same robots (self_collisions on)
-/// over the scene; trajectories, starts, goals and limits are per robot in its order.
+/// over the scene; trajectories, starts, goals and limits are per robot in its order. An empty
+/// trajectory is a failed report. A contact between two robots is reported as a
+/// self-collision of the composite, naming both links ("left/link2", "right/link1").
+/// \throws Error(kInvalidArgument) for option values that are not finite and > 0, lists of
+///         different lengths, per-robot sizes that differ from the trajectory's joints, or
+///         joints in all that differ from the team checker's robot.
 TeamVerificationReport VerifyTeam(const CollisionChecker& team_checker,
                                   const std::vector<TimedTrajectory>& trajectories,
                                   const std::vector<Eigen::VectorXd>& starts,
