@@ -2,11 +2,12 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|coordination|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
 //                 [--segments N] [--paths N] [--knots K] [--methods topp,collocation,spline]
+//                 [--runs N] [--scenarios crossing_arms,swap_bases,corridor] [--team-budget S]
 
 #include <algorithm>
 #include <chrono>
@@ -38,7 +39,9 @@
 #include "chasles/robot/kinematics.h"
 #include "chasles/robot/lie_group.h"
 #include "chasles/robot/mobile.h"
+#include "chasles/multi/coordinator.h"
 #include "chasles/server/convert.h"
+#include "chasles/server/convert_multi.h"
 #include "chasles/server/planning_server.h"
 #include "chasles/v1/chasles.grpc.pb.h"
 
@@ -64,6 +67,9 @@ struct Options {
   int paths = 200;      // trajectory: planner-produced paths of 5–10 waypoints
   int knots = 100;      // trajectory: collocation knots
   std::vector<std::string> methods = {"topp", "collocation", "spline"};
+  int runs = 5;         // coordination: seeds per scenario and method
+  std::vector<std::string> scenarios = {"crossing_arms", "swap_bases", "corridor"};
+  double team_budget = 30.0;  // coordination: time budget per request [s]
 };
 
 std::string ReadFile(const std::string& path) {
@@ -850,6 +856,59 @@ void BenchTrajectory(const Options& options) {
                   Quantile(path_rows["topp"].ms, 0.5));
 }
 
+// ---------------------------------------------------------------------------------------------
+// Coordination: every method on the example scenarios (examples/requests/coordinate_*.json), each
+// against one robot after another (SEQUENTIAL) with the same seed in the same run.
+
+void BenchCoordination(const Options& options) {
+  PlannerRegistry registry;
+  RegisterDefaultPlanners(&registry);
+  const std::vector<CoordinationMethod> methods = {CoordinationMethod::kSequential, CoordinationMethod::kPrioritized,
+                                                   CoordinationMethod::kVelocityTuning, CoordinationMethod::kComposite};
+  std::printf("\n== coordination: %d seeds per scenario and method, budget %.0f s ==\n", options.runs,
+              options.team_budget);
+  std::printf("%-14s %-16s %8s %12s %12s %12s %14s %12s\n", "scenario", "method", "success", "median s",
+              "p95 s", "makespan s", "vs sequential", "sum dur s");
+  for (const std::string& scenario : options.scenarios) {
+    v1::CoordinateRequest request;
+    const std::string path = examples_dir + "/requests/coordinate_" + scenario + ".json";
+    const auto status = google::protobuf::util::JsonStringToMessage(ReadFile(path), &request);
+    if (!status.ok()) throw std::runtime_error(path + ": " + status.ToString());
+    const std::shared_ptr<const Scene> scene = SceneFromProto(request.scene());
+    CoordinationQuery base = CoordinationQueryFromProto(
+        request, scene, [](const v1::TeamRobot& robot, const std::string& field) { return RobotFromProto(robot.robot(), field); },
+        registry);
+    base.time_budget = options.team_budget;
+    std::map<std::uint64_t, double> sequential_makespan;  // by seed
+    for (CoordinationMethod method : methods) {
+      std::vector<double> seconds, makespans, ratios, sums;
+      int solved = 0;
+      for (int run = 0; run < options.runs; ++run) {
+        CoordinationQuery query = base;
+        query.method = method;
+        query.seed = options.seed + static_cast<std::uint64_t>(run);
+        const auto t0 = Clock::now();
+        const CoordinationOutcome outcome = Coordinate(query, registry, Termination());
+        seconds.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+        if (outcome.code != CoordinationCode::kSuccess) continue;
+        ++solved;
+        makespans.push_back(outcome.makespan);
+        sums.push_back(outcome.sum_of_durations);
+        if (method == CoordinationMethod::kSequential) sequential_makespan[query.seed] = outcome.makespan;
+        const auto it = sequential_makespan.find(query.seed);
+        if (it != sequential_makespan.end()) ratios.push_back(outcome.makespan / it->second);
+      }
+      std::printf("%-14s %-16s %5d/%-2d %12.3f %12.3f %12.3f %14.3f %12.3f\n", scenario.c_str(), ToString(method),
+                  solved, options.runs, Quantile(seconds, 0.5), Quantile(seconds, 0.95), Quantile(makespans, 0.5),
+                  Quantile(ratios, 0.5), Quantile(sums, 0.5));
+      std::fflush(stdout);
+    }
+  }
+  std::printf("\nTimes are wall time per Coordinate call (planning, timing and the joint verification at 1 ms and "
+              "0.005 rad); makespan and its ratio to one robot after another (same seed) are medians over the "
+              "solved runs.\n");
+}
+
 int Main(int argc, char** argv) {
   Options options;
   examples_dir = CHASLES_EXAMPLES_DIR;
@@ -876,14 +935,19 @@ int Main(int argc, char** argv) {
     else if (arg == "--paths") options.paths = std::stoi(value());
     else if (arg == "--knots") options.knots = std::stoi(value());
     else if (arg == "--methods") options.methods = Split(value());
+    else if (arg == "--runs") options.runs = std::stoi(value());
+    else if (arg == "--scenarios") options.scenarios = Split(value());
+    else if (arg == "--team-budget") options.team_budget = std::stod(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|all] [--queries N]\n"
+                   "usage: chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|coordination|all]\n"
+                   "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
                    "                     [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]\n"
                    "                     [--problems maze,office,drone_course,panda_shelf]\n"
-                   "                     [--segments N] [--paths N] [--knots K] [--methods topp,collocation,spline]\n");
+                   "                     [--segments N] [--paths N] [--knots K] [--methods topp,collocation,spline]\n"
+                   "                     [--runs N] [--scenarios crossing_arms,swap_bases,corridor] [--team-budget S]\n");
       return arg == "--help" ? 0 : 2;
     }
   }
@@ -893,6 +957,7 @@ int Main(int argc, char** argv) {
   if (options.section == "grpc" || options.section == "all") BenchGrpc(options);
   if (options.section == "kinematics" || options.section == "all") BenchKinematics(options);
   if (options.section == "trajectory" || options.section == "all") BenchTrajectory(options);
+  if (options.section == "coordination" || options.section == "all") BenchCoordination(options);
   return 0;
 }
 

@@ -26,6 +26,15 @@ Termination Termination::After(std::chrono::duration<double> budget) {
                      Clock::time_point::max());
 }
 
+Termination Termination::WithBudget(std::chrono::duration<double> budget) const {
+  Termination t = *this;
+  const double seconds = std::min(budget.count(), 1e7);  // far enough; avoids time_point overflow
+  const Clock::time_point end =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.0, seconds)));
+  t.budget_end_ = std::min(budget_end_, end);
+  return t;
+}
+
 StopReason Termination::Reason() const {
   if (cancelled_->load(std::memory_order_relaxed)) return StopReason::kCancelled;
   if (budget_end_ == Clock::time_point::max() && deadline_ == Clock::time_point::max()) {

@@ -492,64 +492,37 @@ std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::s
   return scene;
 }
 
-PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<const CollisionChecker> checker,
-                             const PlannerRegistry& registry, RequestSettings* settings) {
-  const RobotModel& robot = checker->robot();
-  PlanQuery query;
-  query.checker = std::move(checker);
-
-  // Budget: 0 = 5 s, else (0, 600].
-  double budget = request.time_budget();
-  if (budget == 0.0) budget = 5.0;
-  if (!(budget > 0.0 && budget <= 600.0)) {
-    ThrowInvalid("time_budget = " + FormatNumber(request.time_budget()) + " must be within (0, 600] s (0 = 5 s)");
+PoseGoalSpec PoseGoalFromProto(const v1::PoseGoal& goal, const RobotModel& robot, const std::string& field) {
+  PoseGoalSpec spec;
+  spec.link = LinkFromProto(robot, goal.link(), field + ".link");
+  spec.pose = PoseFromProto(goal.pose(), field + ".pose");
+  spec.position_tolerance =
+      DefaultedInRange(goal.position_tolerance(), 1e-4, 0.0, 0.1, field + ".position_tolerance");
+  spec.orientation_tolerance =
+      DefaultedInRange(goal.orientation_tolerance(), 1e-3, 0.0, 0.5, field + ".orientation_tolerance");
+  if (goal.max_goal_states() > 64) {
+    ThrowInvalid(field + ".max_goal_states = " + std::to_string(goal.max_goal_states()) +
+                 " must be at most 64 (0 = 4)");
   }
-  settings->time_budget = budget;
-
-  RequireJointCount(request.start().positions_size(), robot, "start.positions");
-  query.start = PositionsFromProto(request.start().positions(), "start.positions");
-  robot.ValidateConfiguration(query.start, "start.positions");
-  if (request.target_case() == v1::PlanRequest::kPoseGoal) {
-    const v1::PoseGoal& goal = request.pose_goal();
-    PoseGoalSpec spec;
-    spec.link = LinkFromProto(robot, goal.link(), "pose_goal.link");
-    spec.pose = PoseFromProto(goal.pose(), "pose_goal.pose");
-    spec.position_tolerance =
-        DefaultedInRange(goal.position_tolerance(), 1e-4, 0.0, 0.1, "pose_goal.position_tolerance");
-    spec.orientation_tolerance =
-        DefaultedInRange(goal.orientation_tolerance(), 1e-3, 0.0, 0.5, "pose_goal.orientation_tolerance");
-    if (goal.max_goal_states() > 64) {
-      ThrowInvalid("pose_goal.max_goal_states = " + std::to_string(goal.max_goal_states()) +
-                   " must be at most 64 (0 = 4)");
-    }
-    spec.max_goal_states = goal.max_goal_states() == 0 ? 4 : static_cast<int>(goal.max_goal_states());
-    const double ik_budget = goal.ik_time_budget() == 0.0 ? 0.2 : goal.ik_time_budget();
-    if (!(std::isfinite(ik_budget) && ik_budget > 0.0)) {
-      ThrowInvalid("pose_goal.ik_time_budget = " + FormatNumber(goal.ik_time_budget()) +
-                   " must be finite and > 0 s (0 = 0.2 s)");
-    }
-    spec.ik_time_budget = ik_budget;
-    query.pose_goal = spec;
-  } else {
-    RequireJointCount(request.goal().positions_size(), robot, "goal.positions");
-    query.goal = PositionsFromProto(request.goal().positions(), "goal.positions");
-    robot.ValidateConfiguration(query.goal, "goal.positions");
-
-    const double tolerance = request.goal().tolerance();
-    RequireInRange(tolerance, 0.0, 0.1, "goal.tolerance");
-    query.goal_tolerance = tolerance == 0.0 ? 1e-3 : tolerance;
+  spec.max_goal_states = goal.max_goal_states() == 0 ? 4 : static_cast<int>(goal.max_goal_states());
+  const double ik_budget = goal.ik_time_budget() == 0.0 ? 0.2 : goal.ik_time_budget();
+  if (!(std::isfinite(ik_budget) && ik_budget > 0.0)) {
+    ThrowInvalid(field + ".ik_time_budget = " + FormatNumber(goal.ik_time_budget()) +
+                 " must be finite and > 0 s (0 = 0.2 s)");
   }
-  if (request.has_gravity()) query.gravity = VectorFromProto(request.gravity(), "gravity");
+  spec.ik_time_budget = ik_budget;
+  return spec;
+}
 
-  // Planner and its parameters (types checked here, ranges by ResolveParameters).
-  query.planner_id = request.planner().planner_id().empty() ? "rrt_connect" : request.planner().planner_id();
-  const PlannerSpec& spec = registry.Spec(query.planner_id);
+ParameterValues PlannerParametersFromProto(const v1::PlannerConfig& config, const PlannerSpec& spec,
+                                           const std::string& field) {
+  ParameterValues values;
   // Sorted, so the first error reported does not depend on hash-map order.
   std::map<std::string, const v1::ParameterValue*> parameters;
-  for (const auto& entry : request.planner().parameters()) parameters[entry.first] = &entry.second;
+  for (const auto& entry : config.parameters()) parameters[entry.first] = &entry.second;
   for (const auto& [name, value_ptr] : parameters) {
     const v1::ParameterValue& value = *value_ptr;
-    const std::string f = "planner.parameters['" + name + "']";
+    const std::string f = field + ".parameters['" + name + "']";
     const ParameterSpec* param = spec.Find(name);
     double number = 0.0;
     switch (value.value_case()) {
@@ -575,9 +548,53 @@ PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<con
       default:
         ThrowInvalid(f + " has no value: set double_value, int_value or bool_value");
     }
-    query.parameters[name] = number;
+    values[name] = number;
   }
-  ResolveParameters(spec, query.parameters);  // throws naming the parameter
+  ResolveParameters(spec, values);  // throws naming the parameter
+  return values;
+}
+
+Eigen::VectorXd ConfigurationFromProto(const google::protobuf::RepeatedField<double>& values, const RobotModel& robot,
+                                       const std::string& field) {
+  RequireJointCount(values.size(), robot, field);
+  Eigen::VectorXd q = PositionsFromProto(values, field);
+  robot.ValidateConfiguration(q, field);
+  return q;
+}
+
+PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<const CollisionChecker> checker,
+                             const PlannerRegistry& registry, RequestSettings* settings) {
+  const RobotModel& robot = checker->robot();
+  PlanQuery query;
+  query.checker = std::move(checker);
+
+  // Budget: 0 = 5 s, else (0, 600].
+  double budget = request.time_budget();
+  if (budget == 0.0) budget = 5.0;
+  if (!(budget > 0.0 && budget <= 600.0)) {
+    ThrowInvalid("time_budget = " + FormatNumber(request.time_budget()) + " must be within (0, 600] s (0 = 5 s)");
+  }
+  settings->time_budget = budget;
+
+  RequireJointCount(request.start().positions_size(), robot, "start.positions");
+  query.start = PositionsFromProto(request.start().positions(), "start.positions");
+  robot.ValidateConfiguration(query.start, "start.positions");
+  if (request.target_case() == v1::PlanRequest::kPoseGoal) {
+    query.pose_goal = PoseGoalFromProto(request.pose_goal(), robot, "pose_goal");
+  } else {
+    RequireJointCount(request.goal().positions_size(), robot, "goal.positions");
+    query.goal = PositionsFromProto(request.goal().positions(), "goal.positions");
+    robot.ValidateConfiguration(query.goal, "goal.positions");
+
+    const double tolerance = request.goal().tolerance();
+    RequireInRange(tolerance, 0.0, 0.1, "goal.tolerance");
+    query.goal_tolerance = tolerance == 0.0 ? 1e-3 : tolerance;
+  }
+  if (request.has_gravity()) query.gravity = VectorFromProto(request.gravity(), "gravity");
+
+  // Planner and its parameters (types checked here, ranges by ResolveParameters).
+  query.planner_id = request.planner().planner_id().empty() ? "rrt_connect" : request.planner().planner_id();
+  query.parameters = PlannerParametersFromProto(request.planner(), registry.Spec(query.planner_id), "planner");
 
   query.seed = request.seed() == 0 ? 1 : request.seed();
 

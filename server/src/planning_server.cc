@@ -20,10 +20,12 @@
 #include "chasles/robot/error.h"
 #include "chasles/robot/inverse_kinematics.h"
 #include "chasles/server/convert.h"
+#include "chasles/server/convert_multi.h"
 #include "chasles/server/default_assets.h"
 #include "chasles/server/model_store.h"
 #include "chasles/server/status.h"
 #include "chasles/server/thread_pool.h"
+#include "chasles/server/workcells.h"
 #include "chasles/v1/chasles.grpc.pb.h"
 
 namespace chasles {
@@ -94,8 +96,9 @@ class PoolReactor final : public grpc::ServerUnaryReactor {
 
 class PlanningService final : public v1::Planning::CallbackService {
  public:
-  PlanningService(const PlannerRegistry& registry, ModelStore* store, ThreadPool* pool, bool log)
-      : registry_(registry), pipeline_(registry), store_(store), pool_(pool), log_(log) {}
+  PlanningService(const PlannerRegistry& registry, ModelStore* store, ThreadPool* pool, WorkcellStore* workcells,
+                  bool log)
+      : registry_(registry), pipeline_(registry), store_(store), pool_(pool), workcells_(workcells), log_(log) {}
 
   grpc::ServerUnaryReactor* Plan(grpc::CallbackServerContext* context, const v1::PlanRequest* request,
                                  v1::PlanResponse* response) override {
@@ -137,12 +140,7 @@ class PlanningService final : public v1::Planning::CallbackService {
       double input_duration = 0.0;
       const OptimizeQuery query =
           OptimizeQueryFromProto(*request, store_->Checker(robot, scene), &settings, &input_duration);
-      const Clock::time_point now = Clock::now();
-      Clock::time_point budget_end = now + std::chrono::duration_cast<Clock::duration>(
-                                               std::chrono::duration<double>(settings.time_budget));
-      const auto margin = std::min<Clock::duration>(std::chrono::milliseconds(200), (deadline - now) / 10);
-      budget_end = std::min(budget_end, deadline - margin);
-      const Termination termination = reactor.Start(budget_end, deadline);
+      const Termination termination = reactor.Start(BudgetEnd(settings.time_budget, deadline), deadline);
       const OptimizeOutcome outcome = OptimizePath(query, termination);
       OptimizeOutcomeToProto(outcome, query, response);
       response->set_input_duration(input_duration);
@@ -261,7 +259,140 @@ class PlanningService final : public v1::Planning::CallbackService {
     });
   }
 
+  grpc::ServerUnaryReactor* Coordinate(grpc::CallbackServerContext* context, const v1::CoordinateRequest* request,
+                                       v1::CoordinateResponse* response) override {
+    const Clock::time_point arrival = Clock::now();
+    const Clock::time_point deadline = SteadyDeadline(*context);
+    std::string request_id = request->request_id();
+    if (request_id.empty()) {
+      char buffer[32];
+      std::snprintf(buffer, sizeof(buffer), "team-%06" PRIu64, ++next_request_);
+      request_id = buffer;
+    }
+    response->set_request_id(request_id);
+    return RunOnPool("coordinate", [this, request, response, request_id, arrival, deadline](PoolReactor& reactor) {
+      const StoredScene scene = SceneOf(*request);
+      response->set_scene_id(scene.id);
+      CoordinationQuery query = CoordinationQueryFromProto(
+          *request, scene.scene,
+          [this](const v1::TeamRobot& robot, const std::string& field) { return TeamRobotOf(robot, field).model; },
+          registry_);
+      if (request->has_workcell()) {
+        const double origin = request->workcell().start_time() == 0.0 ? workcells_->Now() : request->workcell().start_time();
+        response->set_start_time(origin);
+        for (const Reservation& r : workcells_->Active(request->workcell().name())) {
+          const bool own = std::any_of(query.robots.begin(), query.robots.end(),
+                                       [&r](const TeamRobotSpec& robot) { return robot.placement.name == r.robot_name; });
+          if (!own) query.committed.push_back(MotionOf(r, origin));
+        }
+      }
+      const Termination termination = reactor.Start(BudgetEnd(query.time_budget, deadline), deadline);
+      const CoordinationOutcome outcome = chasles::Coordinate(query, registry_, termination);
+      CoordinationOutcomeToProto(outcome, query, response);
+      if (outcome.code == CoordinationCode::kDeadlineExceeded) {
+        throw DeadlineError{"the gRPC deadline passed before coordination finished"};
+      }
+      Log("coordinate request=%s scene=%s robots=%d method=%s used=%s outcome=%s makespan=%.3f sum=%.3f "
+          "reorderings=%d states=%llu ms=%.1f",
+          request_id.c_str(), IdPrefix(scene.id).c_str(), request->robots_size(), ToString(query.method),
+          outcome.code == CoordinationCode::kSuccess ? ToString(outcome.method) : "-",
+          v1::PlanOutcome_Name(response->outcome()).c_str(), outcome.makespan, outcome.sum_of_durations,
+          outcome.reorderings, static_cast<unsigned long long>(outcome.verification.states_checked),
+          1e3 * SecondsSince(arrival));
+    });
+  }
+
+  grpc::ServerUnaryReactor* CreateWorkcell(grpc::CallbackServerContext* context,
+                                           const v1::CreateWorkcellRequest* request,
+                                           v1::CreateWorkcellResponse* response) override {
+    grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+    grpc::Status status;
+    try {
+      response->set_created(workcells_->Create(request->name()));
+      response->set_active_reservations(static_cast<std::uint32_t>(workcells_->ActiveCount(request->name())));
+      response->set_now(workcells_->Now());
+      Log("create-workcell name=%s created=%d", request->name().c_str(), response->created() ? 1 : 0);
+    } catch (...) {
+      status = StatusFromException(std::current_exception());
+    }
+    reactor->Finish(status);
+    return reactor;
+  }
+
+  grpc::ServerUnaryReactor* CommitTrajectory(grpc::CallbackServerContext* context,
+                                             const v1::CommitTrajectoryRequest* request,
+                                             v1::CommitTrajectoryResponse* response) override {
+    return RunOnPool("commit", [this, request, response](const PoolReactor&) {
+      const Clock::time_point start = Clock::now();
+      if (request->robot_name().empty()) ThrowInvalid("robot_name is empty: name the robot that moves");
+      const StoredRobot robot = RobotOf(*request);
+      Reservation reservation;
+      reservation.robot_name = request->robot_name();
+      reservation.placement.name = request->robot_name();
+      reservation.placement.model = robot.model;
+      if (request->has_base_pose()) reservation.placement.base_pose = PoseFromProto(request->base_pose(), "base_pose");
+      reservation.trajectory = TrajectoryFromPoints(request->trajectory(), *robot.model, "trajectory");
+      const double start_time = request->start_time();
+      if (!std::isfinite(start_time) || start_time < 0.0) {
+        ThrowInvalid("start_time = " + FormatNumber(start_time) + " must be finite and >= 0 s since the Unix epoch (0 = now)");
+      }
+      reservation.start_time = start_time == 0.0 ? workcells_->Now() : start_time;
+      const Reservation committed =
+          workcells_->Commit(request->workcell(), reservation, request->hold(), request->robot_padding());
+      response->set_reservation_id(committed.id);
+      response->set_start_time(committed.start_time);
+      response->set_end_time(committed.end_time);
+      response->set_expires_at(committed.expires_at);
+      response->set_active_reservations(static_cast<std::uint32_t>(workcells_->ActiveCount(request->workcell())));
+      Log("commit workcell=%s robot=%s reservation=%s duration=%.3f hold=%.3f status=OK ms=%.1f",
+          request->workcell().c_str(), request->robot_name().c_str(), committed.id.c_str(),
+          committed.end_time - committed.start_time, committed.expires_at - committed.end_time, 1e3 * SecondsSince(start));
+    });
+  }
+
+  grpc::ServerUnaryReactor* Release(grpc::CallbackServerContext* context, const v1::ReleaseRequest* request,
+                                    v1::ReleaseResponse* response) override {
+    grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+    grpc::Status status;
+    try {
+      const int released = workcells_->Release(request->workcell(), request->reservation_id(), request->robot_name());
+      response->set_released(static_cast<std::uint32_t>(released));
+      response->set_active_reservations(static_cast<std::uint32_t>(workcells_->ActiveCount(request->workcell())));
+      Log("release workcell=%s reservation=%s robot=%s released=%d", request->workcell().c_str(),
+          request->reservation_id().c_str(), request->robot_name().c_str(), released);
+    } catch (...) {
+      status = StatusFromException(std::current_exception());
+      Log("release status=%d message=%s", static_cast<int>(status.error_code()), status.error_message().c_str());
+    }
+    reactor->Finish(status);
+    return reactor;
+  }
+
  private:
+  /// Thrown from pool work to finish the call with DEADLINE_EXCEEDED.
+  struct DeadlineError {
+    std::string message;
+  };
+
+  /// The end of a request's budget, cut short so a result can still travel back before the
+  /// gRPC deadline.
+  static Clock::time_point BudgetEnd(double budget_seconds, Clock::time_point deadline) {
+    const Clock::time_point now = Clock::now();
+    Clock::time_point budget_end =
+        now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(budget_seconds));
+    const auto margin = std::min<Clock::duration>(std::chrono::milliseconds(200), (deadline - now) / 10);
+    return std::min(budget_end, deadline - margin);
+  }
+
+  /// A team robot: inline (parsed and cached) or by id; errors name `field`.
+  StoredRobot TeamRobotOf(const v1::TeamRobot& robot, const std::string& field) {
+    switch (robot.robot_source_case()) {
+      case v1::TeamRobot::kRobot: return store_->AddRobot(robot.robot(), field + ".robot");
+      case v1::TeamRobot::kRobotId: return store_->FindRobot(robot.robot_id());
+      default: ThrowInvalid(field + " has no robot: set robot or robot_id");
+    }
+  }
+
   /// The request's robot: inline (parsed and cached), by id, or the server's default.
   template <typename Request>
   StoredRobot RobotOf(const Request& request) {
@@ -292,6 +423,8 @@ class PlanningService final : public v1::Planning::CallbackService {
         try {
           work(*reactor);
           if (reactor->cancelled()) status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
+        } catch (const DeadlineError& e) {
+          status = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, e.message);
         } catch (...) {
           status = StatusFromException(std::current_exception());
           Log("%s status=%d message=%s", what, static_cast<int>(status.error_code()),
@@ -322,34 +455,49 @@ class PlanningService final : public v1::Planning::CallbackService {
       robot_id = robot.id;
       const StoredScene scene = SceneOf(*request);
       scene_id = scene.id;
-      std::shared_ptr<const CollisionChecker> checker = store_->Checker(robot, scene);
+      if (request->has_workcell()) {
+        // A team of one among the workcell's committed trajectories.
+        planner = "workcell:" + planner;
+        CoordinationQuery query = WorkcellPlanQuery(*request, robot.model, scene.scene, registry_);
+        const double origin =
+            request->workcell().start_time() == 0.0 ? workcells_->Now() : request->workcell().start_time();
+        for (const Reservation& r : workcells_->Active(request->workcell().name())) {
+          if (r.robot_name != query.robots.front().placement.name) query.committed.push_back(MotionOf(r, origin));
+        }
+        Termination termination = reactor->Start(BudgetEnd(query.time_budget, deadline), deadline);
+        const CoordinationOutcome outcome = chasles::Coordinate(query, registry_, termination);
+        outcome_name = ToString(outcome.code);
+        WorkcellPlanToProto(outcome, query, response);
+        seconds.total = SecondsSince(arrival);
+        if (outcome.code == CoordinationCode::kCancelled) {
+          status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
+        } else if (outcome.code == CoordinationCode::kDeadlineExceeded) {
+          status = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "the gRPC deadline passed before planning finished");
+        }
+      } else {
+        std::shared_ptr<const CollisionChecker> checker = store_->Checker(robot, scene);
 
-      // 2. The query, with the proto's defaults.
-      RequestSettings settings;
-      PlanQuery query = PlanQueryFromProto(*request, checker, registry_, &settings);
-      const double prepare = SecondsSince(arrival);
+        // 2. The query, with the proto's defaults.
+        RequestSettings settings;
+        PlanQuery query = PlanQueryFromProto(*request, checker, registry_, &settings);
+        const double prepare = SecondsSince(arrival);
 
-      // 3. Budget: the request's, cut short so a result can still travel back before the
-      //    gRPC deadline (which itself stops everything).
-      const Clock::time_point now = Clock::now();
-      Clock::time_point budget_end = now + std::chrono::duration_cast<Clock::duration>(
-                                               std::chrono::duration<double>(settings.time_budget));
-      const auto left = deadline - now;
-      const auto margin = std::min<Clock::duration>(std::chrono::milliseconds(200), left / 10);
-      budget_end = std::min(budget_end, deadline - margin);
-      Termination termination = reactor->Start(budget_end, deadline);
+        // 3. Budget: the request's, cut short so a result can still travel back before the
+        //    gRPC deadline (which itself stops everything).
+        Termination termination = reactor->Start(BudgetEnd(settings.time_budget, deadline), deadline);
 
-      // 4. Plan.
-      PlanOutcome outcome = pipeline_.Plan(query, termination);
-      outcome.seconds.validate += prepare;
-      outcome.seconds.total = SecondsSince(arrival);
-      seconds = outcome.seconds;
-      outcome_name = ToString(outcome.code);
-      PlanOutcomeToProto(outcome, query, response);
-      status = StatusFromOutcome(outcome.code, outcome.message);
-      if (status.ok() && (reactor->cancelled() || termination.Reason() == StopReason::kCancelled) &&
-          outcome.code != PlanOutcomeCode::kSuccess) {
-        status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
+        // 4. Plan.
+        PlanOutcome outcome = pipeline_.Plan(query, termination);
+        outcome.seconds.validate += prepare;
+        outcome.seconds.total = SecondsSince(arrival);
+        seconds = outcome.seconds;
+        outcome_name = ToString(outcome.code);
+        PlanOutcomeToProto(outcome, query, response);
+        status = StatusFromOutcome(outcome.code, outcome.message);
+        if (status.ok() && (reactor->cancelled() || termination.Reason() == StopReason::kCancelled) &&
+            outcome.code != PlanOutcomeCode::kSuccess) {
+          status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
+        }
       }
     } catch (...) {
       status = StatusFromException(std::current_exception());
@@ -394,6 +542,7 @@ class PlanningService final : public v1::Planning::CallbackService {
   const PlanningPipeline pipeline_;
   ModelStore* store_;
   ThreadPool* pool_;
+  WorkcellStore* workcells_;
   const bool log_;
   std::atomic<std::uint64_t> next_request_{0};
 };
@@ -413,6 +562,7 @@ struct PlanningServer::Impl {
   PlannerRegistry registry;
   std::unique_ptr<ModelStore> store;
   std::unique_ptr<ThreadPool> pool;
+  WorkcellStore workcells;
   std::unique_ptr<PlanningService> service;
   std::unique_ptr<grpc::Server> server;
   int port = 0;
@@ -425,7 +575,7 @@ PlanningServer::PlanningServer(const ServerOptions& options) : impl_(std::make_u
   impl_->store = std::make_unique<ModelStore>(DefaultRobotProto(), DefaultSceneProto(), options.cache_capacity);
   impl_->pool = std::make_unique<ThreadPool>(options.threads);
   impl_->service = std::make_unique<PlanningService>(impl_->registry, impl_->store.get(), impl_->pool.get(),
-                                                     options.log_requests);
+                                                     &impl_->workcells, options.log_requests);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::ServerBuilder builder;

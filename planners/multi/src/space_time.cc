@@ -1,1 +1,265 @@
-// placeholder
+#include "chasles/multi/space_time.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <queue>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include "chasles/robot/error.h"
+
+namespace chasles {
+namespace {
+
+/// Exact rest-to-rest moves along roadmap edges, computed once per directed edge.
+class Moves {
+ public:
+  Moves(const Roadmap& roadmap, const KinematicLimits& limits) : roadmap_(roadmap), limits_(limits) {}
+  const TimedTrajectory& Get(int a, int b) {
+    const std::uint64_t key = (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
+    auto it = cache_.find(key);
+    if (it == cache_.end()) {
+      it = cache_.emplace(key, ParameterizeRestToRest({roadmap_.vertices[a], roadmap_.vertices[b]}, limits_)).first;
+    }
+    return it->second;
+  }
+
+ private:
+  const Roadmap& roadmap_;
+  const KinematicLimits& limits_;
+  std::unordered_map<std::uint64_t, TimedTrajectory> cache_;
+};
+
+/// Checks a motion (or a stand) against the moving obstacles at the search's density.
+class Checker {
+ public:
+  Checker(const ConflictFree& conflict_free, const SpaceTimeOptions& options, std::uint64_t* counter)
+      : conflict_free_(conflict_free), options_(options), counter_(counter) {}
+  /// `trajectory` started at time t0; its first state is taken as already checked.
+  bool Motion(const TimedTrajectory& trajectory, double t0) const {
+    const double duration = trajectory.duration();
+    double travel = 0.0;
+    for (const TimedTrajectory::Piece& piece : trajectory.pieces()) travel += piece.MaxJointTravel();
+    const double steps = std::max(std::ceil(duration / options_.time_step), std::ceil(travel / options_.max_joint_step));
+    const long m = std::max(1L, static_cast<long>(steps));
+    for (long i = 1; i <= m; ++i) {
+      const double tau = duration * static_cast<double>(i) / static_cast<double>(m);
+      ++*counter_;
+      if (!conflict_free_(trajectory.Evaluate(tau).q, t0 + tau)) return false;
+    }
+    return true;
+  }
+  /// Standing at q over [t0, t1] (t0 itself included).
+  bool Stand(const Eigen::VectorXd& q, double t0, double t1) const {
+    const long m = std::max(1L, static_cast<long>(std::ceil((t1 - t0) / options_.time_step)));
+    for (long i = 0; i <= m; ++i) {
+      ++*counter_;
+      if (!conflict_free_(q, t0 + (t1 - t0) * static_cast<double>(i) / static_cast<double>(m))) return false;
+    }
+    return true;
+  }
+
+ private:
+  const ConflictFree& conflict_free_;
+  const SpaceTimeOptions& options_;
+  std::uint64_t* counter_;
+};
+
+struct Node {
+  int vertex = 0;
+  double t = 0.0;
+  int parent = -1;  ///< index into the node list; -1 for the start
+  bool wait = false;  ///< reached from the parent by waiting (else by moving along an edge)
+};
+
+/// One step of the plan: a move along an edge or a wait at a vertex.
+struct Step {
+  int from = 0, to = 0;  ///< equal for a wait
+  double t0 = 0.0, duration = 0.0;
+};
+
+void ValidateOptions(const Roadmap& roadmap, int start_vertex, int goal_vertex, const KinematicLimits& limits,
+                     const SpaceTimeOptions& options) {
+  const int n = static_cast<int>(roadmap.vertices.size());
+  if (n == 0 || roadmap.neighbors.size() != roadmap.vertices.size()) ThrowInvalid("roadmap is empty or malformed");
+  if (start_vertex < 0 || start_vertex >= n) ThrowInvalid("start_vertex = " + std::to_string(start_vertex) + " is not a roadmap vertex");
+  if (goal_vertex < 0 || goal_vertex >= n) ThrowInvalid("goal_vertex = " + std::to_string(goal_vertex) + " is not a roadmap vertex");
+  limits.Validate(static_cast<int>(roadmap.vertices.front().size()));
+  const auto positive = [](double v, const char* name) {
+    if (!std::isfinite(v) || !(v > 0.0)) ThrowInvalid(std::string("space-time ") + name + " = " + FormatNumber(v) + " must be finite and > 0");
+  };
+  positive(options.wait_step, "wait_step");
+  positive(options.horizon, "horizon");
+  positive(options.time_step, "time_step");
+  positive(options.max_joint_step, "max_joint_step");
+  positive(options.time_resolution, "time_resolution");
+  if (!std::isfinite(options.hold_until) || options.hold_until < 0.0) {
+    ThrowInvalid("space-time hold_until = " + FormatNumber(options.hold_until) + " must be finite and >= 0");
+  }
+  if (options.max_expansions < 1) ThrowInvalid("space-time max_expansions must be >= 1");
+}
+
+}  // namespace
+
+SpaceTimeResult SearchSpaceTime(const Roadmap& roadmap, int start_vertex, int goal_vertex, const KinematicLimits& limits,
+                                const ConflictFree& conflict_free, const SpaceTimeOptions& options,
+                                const Termination& termination) {
+  ValidateOptions(roadmap, start_vertex, goal_vertex, limits, options);
+  SpaceTimeResult result;
+  Moves moves(roadmap, limits);
+  const Checker check(conflict_free, options, &result.conflict_checks);
+  const int n = static_cast<int>(roadmap.vertices.size());
+
+  // Heuristic: the fastest time to the goal along the roadmap, ignoring moving obstacles.
+  std::vector<double> h(n, std::numeric_limits<double>::infinity());
+  {
+    using Entry = std::pair<double, int>;
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
+    h[goal_vertex] = 0.0;
+    open.emplace(0.0, goal_vertex);
+    while (!open.empty()) {
+      const auto [d, v] = open.top();
+      open.pop();
+      if (d > h[v]) continue;
+      for (int w : roadmap.neighbors[v]) {
+        const double nd = d + moves.Get(w, v).duration();
+        if (nd < h[w]) {
+          h[w] = nd;
+          open.emplace(nd, w);
+        }
+      }
+    }
+  }
+  if (!std::isfinite(h[start_vertex])) {
+    result.message = "the roadmap does not connect the start to the goal";
+    return result;
+  }
+
+  // A* over (vertex, time), earliest arrival first.
+  std::vector<Node> nodes;
+  using Entry = std::pair<double, int>;  // (f = t + h, node)
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
+  std::unordered_set<std::uint64_t> closed;
+  const auto bucket_key = [&options](int v, double t) {
+    return (static_cast<std::uint64_t>(v) << 32) |
+           static_cast<std::uint32_t>(std::llround(t / options.time_resolution));
+  };
+  if (!check.Stand(roadmap.vertices[start_vertex], 0.0, 0.0)) {
+    result.message = "the start is occupied by a moving obstacle at t = 0";
+    return result;
+  }
+  nodes.push_back(Node{start_vertex, 0.0, -1, false});
+  open.emplace(h[start_vertex], 0);
+  int found = -1;
+  bool goal_blocked_forever = false;
+  while (!open.empty()) {
+    if (termination.ShouldStop()) {
+      result.message = "stopped after " + std::to_string(result.expansions) + " expansions: time budget, deadline or cancellation";
+      return result;
+    }
+    if (result.expansions >= options.max_expansions) {
+      result.message = "no route within " + std::to_string(options.max_expansions) + " expansions";
+      return result;
+    }
+    const int index = open.top().second;
+    open.pop();
+    const Node node = nodes[index];
+    if (!closed.insert(bucket_key(node.vertex, node.t)).second) continue;
+    ++result.expansions;
+    if (node.vertex == goal_vertex) {
+      const double until = std::max(node.t, options.hold_until);
+      if (check.Stand(roadmap.vertices[goal_vertex], node.t, until)) {
+        found = index;
+        break;
+      }
+      goal_blocked_forever = goal_blocked_forever || node.t >= options.hold_until;
+    }
+    // Wait here.
+    const double t_wait = node.t + options.wait_step;
+    if (t_wait <= options.horizon && check.Stand(roadmap.vertices[node.vertex], node.t, t_wait) &&
+        !closed.count(bucket_key(node.vertex, t_wait))) {
+      nodes.push_back(Node{node.vertex, t_wait, index, true});
+      open.emplace(t_wait + h[node.vertex], static_cast<int>(nodes.size()) - 1);
+    }
+    // Move to a neighbour.
+    for (int w : roadmap.neighbors[node.vertex]) {
+      const TimedTrajectory& move = moves.Get(node.vertex, w);
+      const double t_arrive = node.t + move.duration();
+      if (t_arrive > options.horizon || !std::isfinite(h[w]) || closed.count(bucket_key(w, t_arrive))) continue;
+      if (!check.Motion(move, node.t)) continue;
+      nodes.push_back(Node{w, t_arrive, index, false});
+      open.emplace(t_arrive + h[w], static_cast<int>(nodes.size()) - 1);
+    }
+  }
+  if (found < 0) {
+    if (goal_blocked_forever) {
+      result.message = "the goal is occupied by a moving obstacle after the others' last motion (hold until " +
+                       FormatNumber(options.hold_until) + " s)";
+    } else {
+      result.message = "no route reaches the goal before the horizon " + FormatNumber(options.horizon) + " s";
+    }
+    return result;
+  }
+
+  // The plan as steps, start to goal.
+  std::vector<Step> steps;
+  for (int i = found; nodes[i].parent >= 0; i = nodes[i].parent) {
+    const Node& to = nodes[i];
+    const Node& from = nodes[to.parent];
+    steps.push_back(Step{from.vertex, to.vertex, from.t, to.t - from.t});
+  }
+  std::reverse(steps.begin(), steps.end());
+
+  // Trajectory parts; runs of moves without a wait between them are retimed through their
+  // stations when that stays clear, the time saved spent waiting at the run's end.
+  std::vector<TimedTrajectory> parts;
+  result.path.push_back(roadmap.vertices[start_vertex]);
+  for (std::size_t i = 0; i < steps.size();) {
+    const Step& step = steps[i];
+    if (step.from == step.to) {
+      parts.push_back(HoldTrajectory(roadmap.vertices[step.from], step.duration));
+      result.wait_time += step.duration;
+      if (result.path.size() == 1) result.start_delay += step.duration;
+      ++i;
+      continue;
+    }
+    std::size_t end = i;
+    while (end < steps.size() && steps[end].from != steps[end].to) ++end;
+    JointPath run{roadmap.vertices[steps[i].from]};
+    for (std::size_t k = i; k < end; ++k) run.push_back(roadmap.vertices[steps[k].to]);
+    const double run_start = steps[i].t0;
+    const double run_duration = steps[end - 1].t0 + steps[end - 1].duration - run_start;
+    bool merged = false;
+    if (options.merge_moves && end - i > 1) {
+      TimeOptimalOptions topp;
+      topp.max_deviation = 0.0;  // stays on the roadmap's edges: through straight stations, stops at corners
+      const TimedTrajectory fast = ParameterizeTimeOptimal(run, limits, topp);
+      const double saved = run_duration - fast.duration();
+      if (saved > 1e-9 && check.Motion(fast, run_start) &&
+          check.Stand(run.back(), run_start + fast.duration(), run_start + run_duration)) {
+        parts.push_back(fast);
+        if (end < steps.size()) {  // at the goal the robot simply arrives earlier (its hold was checked)
+          parts.push_back(HoldTrajectory(run.back(), saved));
+          result.wait_time += saved;
+        }
+        merged = true;
+      }
+    }
+    if (!merged) {
+      for (std::size_t k = i; k < end; ++k) parts.push_back(moves.Get(steps[k].from, steps[k].to));
+    }
+    for (std::size_t k = 1; k < run.size(); ++k) result.path.push_back(run[k]);
+    i = end;
+  }
+  if (parts.empty()) parts.push_back(HoldTrajectory(roadmap.vertices[start_vertex], 0.0));
+  result.trajectory = ConcatenateTrajectories(parts);
+  result.arrival = result.trajectory.duration();
+  result.found = true;
+  result.message = "arrives at " + FormatNumber(result.arrival) + " s after waiting " + FormatNumber(result.wait_time) +
+                   " s; " + std::to_string(result.expansions) + " expansions";
+  return result;
+}
+
+}  // namespace chasles

@@ -26,6 +26,9 @@ class Termination {
   /// Stops after `budget` from now.
   static Termination After(std::chrono::duration<double> budget);
 
+  /// A copy that also stops after `budget` from now (kBudget), sharing this one's cancellation
+  /// and deadline: a stage's share of a request's budget.
+  Termination WithBudget(std::chrono::duration<double> budget) const;
   /// Triggers cancellation for every copy, from any thread.
   void Cancel() const { cancelled_->store(true, std::memory_order_relaxed); }
   bool ShouldStop() const { return Reason() != StopReason::kNone; }

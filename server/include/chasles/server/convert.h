@@ -53,6 +53,22 @@ void IkResultToProto(const IkResult& result, const IkRequest& ik, const RobotMod
 /// Builds a scene from primitives, meshes and OctoMaps. Unnamed objects are called e.g. `box[2]`.
 std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& scene, const std::string& field = "scene");
 
+/// A PoseGoal with the proto's defaults and ranges; `field` names it, e.g. "robots[1].pose_goal".
+PoseGoalSpec PoseGoalFromProto(const v1::PoseGoal& goal, const RobotModel& robot, const std::string& field);
+
+/// Planner parameters typed against `spec` (bool vs number) and resolved (ranges, defaults);
+/// `field` names the PlannerConfig, e.g. "planner".
+ParameterValues PlannerParametersFromProto(const v1::PlannerConfig& config, const PlannerSpec& spec,
+                                           const std::string& field);
+
+/// Joint positions: count, finiteness and joint limits checked, errors naming `field`.
+Eigen::VectorXd ConfigurationFromProto(const google::protobuf::RepeatedField<double>& values, const RobotModel& robot,
+                                       const std::string& field);
+
+/// Samples → JointTrajectory points (joint names from `robot`).
+void SamplesToProto(const std::vector<TrajectorySample>& samples, const RobotModel& robot,
+                    v1::JointTrajectory* trajectory);
+
 /// Request settings that are not part of PlanQuery.
 struct RequestSettings {
   double time_budget = 5.0;  ///< [s], in (0, 600]

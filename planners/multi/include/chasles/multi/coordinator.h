@@ -116,6 +116,13 @@ struct CoordinationOutcome {
   double seconds = 0.0;
 };
 
+/// The first time two motions collide (robot against robot, `padding` [m] around both robots),
+/// or "" when they never do: states at times no more than time_step [s] and max_joint_step [rad]
+/// (of either robot) apart over the overlap of [begin, until] of the two. The message names the
+/// motions' ids, their links and the time. Names of the two placements must differ.
+std::string FindMotionConflict(const CommittedMotion& a, const CommittedMotion& b, double padding,
+                               double time_step = 1e-3, double max_joint_step = 0.005);
+
 /// Runs the query: validation, starts/goals (scene, self, pairwise: the named conflict
 /// outcomes), the method(s), then VerifyTeam of the result (nothing unverified is returned).
 /// \throws Error for invalid input (Validate).

@@ -1,0 +1,47 @@
+#pragma once
+/// \file
+/// Conversion of the coordination and workcell messages (chasles.v1 Coordinate, CommitTrajectory,
+/// Plan with a WorkcellContext). Internal to server/; errors name the proto field like convert.h.
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "chasles/multi/coordinator.h"
+#include "chasles/planners/registry.h"
+#include "chasles/v1/chasles.pb.h"
+
+namespace chasles {
+
+/// The robot of a TeamRobot / CommitTrajectoryRequest (inline or by id), `field` naming it.
+using TeamRobotResolver = std::function<std::shared_ptr<const RobotModel>(const v1::TeamRobot&, const std::string& field)>;
+
+/// A CoordinateRequest with the proto's defaults (scene and robots resolved by the caller; the
+/// workcell's committed motions are the caller's too). Also returns the request's time budget.
+/// \throws Error(kInvalidArgument / kNotFound / kFailedPrecondition) naming the field.
+CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& request, std::shared_ptr<const Scene> scene,
+                                             const TeamRobotResolver& resolve, const PlannerRegistry& registry);
+
+/// A Plan request with a WorkcellContext as a team of one (PRIORITIZED: its path, a roadmap and
+/// the space-time search around the committed motions). Trajectory options beyond the velocity
+/// and acceleration limits and the sample period are refused with INVALID_ARGUMENT.
+CoordinationQuery WorkcellPlanQuery(const v1::PlanRequest& request, std::shared_ptr<const RobotModel> robot,
+                                    std::shared_ptr<const Scene> scene, const PlannerRegistry& registry);
+
+v1::PlanOutcome CoordinationCodeToProto(CoordinationCode code);
+
+void CoordinationOutcomeToProto(const CoordinationOutcome& outcome, const CoordinationQuery& query,
+                                v1::CoordinateResponse* response);
+
+/// A team-of-one outcome as a PlanResponse (outcome, message, path, trajectory, duration).
+void WorkcellPlanToProto(const CoordinationOutcome& outcome, const CoordinationQuery& query, v1::PlanResponse* response);
+
+/// A JointTrajectory as sent back by Plan/Coordinate → the exact piecewise cubic Hermite
+/// interpolant of its points' positions and velocities (linear when velocities are absent).
+/// \throws Error(kInvalidArgument) naming `field.points[k]...`: no points, times not finite,
+///         negative or not increasing, joint counts, non-finite values.
+TimedTrajectory TrajectoryFromPoints(const v1::JointTrajectory& trajectory, const RobotModel& robot,
+                                     const std::string& field);
+
+}  // namespace chasles

@@ -1,0 +1,292 @@
+#include "chasles/server/convert_multi.h"
+
+#include <cmath>
+#include <utility>
+
+#include "chasles/robot/error.h"
+#include "chasles/server/convert.h"
+
+namespace chasles {
+namespace {
+
+std::string Indexed(const std::string& field, int index) { return field + "[" + std::to_string(index) + "]"; }
+
+Eigen::VectorXd OptionalLimits(const google::protobuf::RepeatedField<double>& values) {
+  Eigen::VectorXd out(values.size());
+  for (int i = 0; i < values.size(); ++i) out[i] = values[i];
+  return out;
+}
+
+/// 0 = fallback, else within [lo, hi].
+double Defaulted(double value, double fallback, double lo, double hi, const std::string& field) {
+  if (value == 0.0) return fallback;
+  if (!std::isfinite(value) || value < lo || value > hi) {
+    ThrowInvalid(field + " = " + FormatNumber(value) + " must be within [" + FormatNumber(lo) + ", " + FormatNumber(hi) +
+                 "] (0 = " + FormatNumber(fallback) + ")");
+  }
+  return value;
+}
+
+void ToProto(const Eigen::VectorXd& v, google::protobuf::RepeatedField<double>* out) {
+  for (Eigen::Index i = 0; i < v.size(); ++i) out->Add(v[i]);
+}
+
+}  // namespace
+
+CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& request, std::shared_ptr<const Scene> scene,
+                                             const TeamRobotResolver& resolve, const PlannerRegistry& registry) {
+  CoordinationQuery query;
+  query.scene = std::move(scene);
+  if (request.robots_size() == 0 || request.robots_size() > 16) {
+    ThrowInvalid("robots has " + std::to_string(request.robots_size()) + " entries; a team has 1 to 16 robots");
+  }
+  for (int k = 0; k < request.robots_size(); ++k) {
+    const v1::TeamRobot& r = request.robots(k);
+    const std::string field = Indexed("robots", k);
+    TeamRobotSpec spec;
+    spec.placement.name = r.name();
+    spec.placement.model = resolve(r, field);
+    const RobotModel& model = *spec.placement.model;
+    if (r.has_base_pose()) spec.placement.base_pose = PoseFromProto(r.base_pose(), field + ".base_pose");
+    spec.start = ConfigurationFromProto(r.start().positions(), model, field + ".start.positions");
+    if (r.target_case() == v1::TeamRobot::kPoseGoal) {
+      spec.pose_goal = PoseGoalFromProto(r.pose_goal(), model, field + ".pose_goal");
+    } else {
+      spec.goal = ConfigurationFromProto(r.goal().positions(), model, field + ".goal.positions");
+    }
+    spec.priority = r.priority();
+    spec.max_velocity = OptionalLimits(r.max_velocity());
+    spec.max_acceleration = OptionalLimits(r.max_acceleration());
+    if (spec.max_velocity.size() > 0) {
+      if (spec.max_velocity.size() != model.num_dofs()) {
+        ThrowInvalid(field + ".max_velocity has " + std::to_string(spec.max_velocity.size()) + " values, robot '" +
+                     r.name() + "' has " + std::to_string(model.num_dofs()) + " joints");
+      }
+      // Capped at the model's limits as documented (ResolveLimits checks > 0 first).
+      for (Eigen::Index i = 0; i < spec.max_velocity.size(); ++i) {
+        if (spec.max_velocity[i] > model.velocity_limits()[i]) spec.max_velocity[i] = model.velocity_limits()[i];
+      }
+    }
+    query.robots.push_back(std::move(spec));
+  }
+  switch (request.method()) {
+    case v1::CoordinateRequest::METHOD_UNSPECIFIED:
+    case v1::CoordinateRequest::AUTO: query.method = CoordinationMethod::kAuto; break;
+    case v1::CoordinateRequest::PRIORITIZED: query.method = CoordinationMethod::kPrioritized; break;
+    case v1::CoordinateRequest::COMPOSITE: query.method = CoordinationMethod::kComposite; break;
+    case v1::CoordinateRequest::VELOCITY_TUNING: query.method = CoordinationMethod::kVelocityTuning; break;
+    case v1::CoordinateRequest::SEQUENTIAL: query.method = CoordinationMethod::kSequential; break;
+    default:
+      ThrowInvalid("method = " + std::to_string(static_cast<int>(request.method())) +
+                   " is not a method (AUTO, PRIORITIZED, COMPOSITE, VELOCITY_TUNING, SEQUENTIAL)");
+  }
+  query.planner_id = request.planner().planner_id().empty() ? "rrt_connect" : request.planner().planner_id();
+  query.parameters = PlannerParametersFromProto(request.planner(), registry.Spec(query.planner_id), "planner");
+  const double budget = request.time_budget() == 0.0 ? 30.0 : request.time_budget();
+  if (!(std::isfinite(budget) && budget > 0.0 && budget <= 600.0)) {
+    ThrowInvalid("time_budget = " + FormatNumber(request.time_budget()) + " must be within (0, 600] s (0 = 30 s)");
+  }
+  query.time_budget = budget;
+  query.seed = request.seed() == 0 ? 1 : request.seed();
+  query.collision_resolution = Defaulted(request.collision_resolution(), 0.005, 1e-4, 0.1, "collision_resolution");
+  query.time_step = Defaulted(request.time_step(), 1e-3, 1e-4, 0.01, "time_step");
+  query.sample_period = Defaulted(request.sample_period(), 0.01, 1e-4, 1.0, "sample_period");
+  if (!std::isfinite(request.robot_padding()) || request.robot_padding() < 0.0 || request.robot_padding() > 0.5) {
+    ThrowInvalid("robot_padding = " + FormatNumber(request.robot_padding()) + " must be within [0, 0.5] m");
+  }
+  query.robot_padding = request.robot_padding();
+  query.max_reorderings = static_cast<int>(std::min<std::uint32_t>(request.max_reorderings(), 1000));
+  return query;
+}
+
+CoordinationQuery WorkcellPlanQuery(const v1::PlanRequest& request, std::shared_ptr<const RobotModel> robot,
+                                    std::shared_ptr<const Scene> scene, const PlannerRegistry& registry) {
+  const RobotModel& model = *robot;
+  const v1::TrajectoryOptions& options = request.trajectory();
+  const auto refuse = [](const std::string& what) {
+    ThrowInvalid(what + " is not supported with workcell: a workcell plan is a sequence of exact moves and waits "
+                        "checked against the committed trajectories");
+  };
+  if (options.post_processing() != v1::TrajectoryOptions::POST_PROCESSING_UNSPECIFIED &&
+      options.post_processing() != v1::TrajectoryOptions::TOPP) {
+    refuse("trajectory.post_processing = " + v1::TrajectoryOptions::PostProcessing_Name(options.post_processing()));
+  }
+  if (options.max_jerk_size() > 0) refuse("trajectory.max_jerk");
+  if (options.max_effort_size() > 0) refuse("trajectory.max_effort");
+  const std::string name = request.workcell().robot_name().empty() ? "robot" : request.workcell().robot_name();
+
+  CoordinationQuery query;
+  query.scene = std::move(scene);
+  TeamRobotSpec spec;
+  spec.placement.name = name;
+  spec.placement.model = std::move(robot);
+  if (request.workcell().has_base_pose()) {
+    spec.placement.base_pose = PoseFromProto(request.workcell().base_pose(), "workcell.base_pose");
+  }
+  spec.start = ConfigurationFromProto(request.start().positions(), model, "start.positions");
+  if (request.target_case() == v1::PlanRequest::kPoseGoal) {
+    spec.pose_goal = PoseGoalFromProto(request.pose_goal(), model, "pose_goal");
+  } else {
+    spec.goal = ConfigurationFromProto(request.goal().positions(), model, "goal.positions");
+  }
+  spec.max_velocity = OptionalLimits(options.max_velocity());
+  if (spec.max_velocity.size() == model.num_dofs()) spec.max_velocity = spec.max_velocity.cwiseMin(model.velocity_limits());
+  spec.max_acceleration = OptionalLimits(options.max_acceleration());
+  query.robots.push_back(std::move(spec));
+  query.method = CoordinationMethod::kPrioritized;
+  query.planner_id = request.planner().planner_id().empty() ? "rrt_connect" : request.planner().planner_id();
+  query.parameters = PlannerParametersFromProto(request.planner(), registry.Spec(query.planner_id), "planner");
+  const double budget = request.time_budget() == 0.0 ? 5.0 : request.time_budget();
+  if (!(std::isfinite(budget) && budget > 0.0 && budget <= 600.0)) {
+    ThrowInvalid("time_budget = " + FormatNumber(request.time_budget()) + " must be within (0, 600] s (0 = 5 s)");
+  }
+  query.time_budget = budget;
+  query.seed = request.seed() == 0 ? 1 : request.seed();
+  query.collision_resolution = Defaulted(request.collision_resolution(), 0.005, 1e-4, 0.1, "collision_resolution");
+  query.sample_period = Defaulted(options.sample_period(), 0.01, 1e-4, 1.0, "trajectory.sample_period");
+  return query;
+}
+
+v1::PlanOutcome CoordinationCodeToProto(CoordinationCode code) {
+  switch (code) {
+    case CoordinationCode::kSuccess: return v1::SUCCESS;
+    case CoordinationCode::kNoSolution: return v1::NO_PATH_WITHIN_BUDGET;
+    case CoordinationCode::kStartInCollision: return v1::START_IN_COLLISION;
+    case CoordinationCode::kGoalInCollision: return v1::GOAL_IN_COLLISION;
+    case CoordinationCode::kGoalUnreachable: return v1::GOAL_UNREACHABLE;
+    case CoordinationCode::kStartsInConflict: return v1::STARTS_IN_CONFLICT;
+    case CoordinationCode::kGoalsInConflict: return v1::GOALS_IN_CONFLICT;
+    case CoordinationCode::kVerificationFailed: return v1::VERIFICATION_FAILED;
+    case CoordinationCode::kCancelled:
+    case CoordinationCode::kDeadlineExceeded: return v1::PLAN_OUTCOME_UNSPECIFIED;
+  }
+  return v1::PLAN_OUTCOME_UNSPECIFIED;
+}
+
+void CoordinationOutcomeToProto(const CoordinationOutcome& outcome, const CoordinationQuery& query,
+                                v1::CoordinateResponse* response) {
+  response->set_outcome(CoordinationCodeToProto(outcome.code));
+  response->set_message(outcome.message);
+  response->set_seconds(outcome.seconds);
+  for (const MethodAttemptReport& a : outcome.attempts) {
+    v1::MethodAttempt* attempt = response->add_attempts();
+    attempt->set_method(ToString(a.method));
+    attempt->set_succeeded(a.succeeded);
+    attempt->set_message(a.message);
+    attempt->set_seconds(a.seconds);
+    attempt->set_makespan(a.makespan);
+  }
+  if (outcome.code != CoordinationCode::kSuccess) return;  // nothing unverified leaves the server
+  response->set_method(ToString(outcome.method));
+  response->set_makespan(outcome.makespan);
+  response->set_sum_of_durations(outcome.sum_of_durations);
+  for (const std::string& name : outcome.order) response->add_order(name);
+  response->set_reorderings(static_cast<std::uint32_t>(outcome.reorderings));
+  v1::TeamVerification* verification = response->mutable_verification();
+  verification->set_states_checked(outcome.verification.states_checked);
+  verification->set_time_step(query.time_step);
+  verification->set_max_joint_step(query.collision_resolution);
+  verification->set_max_velocity_ratio(outcome.verification.max_velocity_ratio);
+  verification->set_max_acceleration_ratio(outcome.verification.max_acceleration_ratio);
+  for (std::size_t k = 0; k < outcome.robots.size(); ++k) {
+    const RobotPlan& plan = outcome.robots[k];
+    v1::RobotTrajectory* robot = response->add_robots();
+    robot->set_name(plan.name);
+    SamplesToProto(plan.samples, *query.robots[k].placement.model, robot->mutable_trajectory());
+    robot->set_duration(plan.duration);
+    robot->set_start_delay(plan.start_delay);
+    robot->set_wait_time(plan.wait_time);
+    for (const Eigen::VectorXd& q : plan.path) ToProto(q, robot->add_path()->mutable_positions());
+    ToProto(plan.goal, robot->mutable_goal()->mutable_positions());
+  }
+}
+
+void WorkcellPlanToProto(const CoordinationOutcome& outcome, const CoordinationQuery& query, v1::PlanResponse* response) {
+  response->set_outcome(CoordinationCodeToProto(outcome.code));
+  // Outcomes that only a team has map to the single robot's: a conflict with a committed motion.
+  if (outcome.code == CoordinationCode::kStartsInConflict) response->set_outcome(v1::STARTS_IN_CONFLICT);
+  response->set_message(outcome.message);
+  response->mutable_timings()->set_total(outcome.seconds);
+  if (outcome.code != CoordinationCode::kSuccess || outcome.robots.empty()) return;
+  const RobotPlan& plan = outcome.robots.front();
+  for (const Eigen::VectorXd& q : plan.path) ToProto(q, response->add_path()->mutable_positions());
+  SamplesToProto(plan.samples, *query.robots.front().placement.model, response->mutable_trajectory());
+  response->set_duration(plan.duration);
+  if (query.robots.front().pose_goal) ToProto(plan.goal, response->mutable_reached_goal()->mutable_positions());
+  v1::Verification* verification = response->mutable_verification();
+  verification->set_states_checked(static_cast<std::uint32_t>(outcome.verification.states_checked));
+  verification->set_max_joint_step(query.collision_resolution);
+  verification->set_max_velocity_ratio(outcome.verification.max_velocity_ratio);
+  verification->set_max_acceleration_ratio(outcome.verification.max_acceleration_ratio);
+  response->mutable_quality()->set_duration(plan.duration);
+}
+
+TimedTrajectory TrajectoryFromPoints(const v1::JointTrajectory& trajectory, const RobotModel& robot,
+                                     const std::string& field) {
+  const int n = robot.num_dofs();
+  if (trajectory.points_size() == 0) ThrowInvalid(field + ".points is empty: a trajectory needs at least one point");
+  std::vector<double> times;
+  std::vector<Eigen::VectorXd> q, v;
+  bool velocities = true;
+  for (int k = 0; k < trajectory.points_size(); ++k) {
+    const v1::TrajectoryPoint& p = trajectory.points(k);
+    const std::string f = Indexed(field + ".points", k);
+    const double t = p.time_from_start();
+    if (!std::isfinite(t) || t < 0.0) ThrowInvalid(f + ".time_from_start = " + FormatNumber(t) + " must be finite and >= 0");
+    if (k > 0 && !(t > times.back())) {
+      ThrowInvalid(f + ".time_from_start = " + FormatNumber(t) + " must be greater than the previous point's " +
+                   FormatNumber(times.back()));
+    }
+    if (p.positions_size() != n) {
+      ThrowInvalid(f + ".positions has " + std::to_string(p.positions_size()) + " values, robot '" + robot.name() +
+                   "' has " + std::to_string(n) + " joints");
+    }
+    if (p.velocities_size() != 0 && p.velocities_size() != n) {
+      ThrowInvalid(f + ".velocities has " + std::to_string(p.velocities_size()) + " values, robot '" + robot.name() +
+                   "' has " + std::to_string(n) + " joints (or give none)");
+    }
+    velocities = velocities && p.velocities_size() == n;
+    Eigen::VectorXd qk(n), vk = Eigen::VectorXd::Zero(n);
+    for (int i = 0; i < n; ++i) {
+      qk[i] = p.positions(i);
+      if (!std::isfinite(qk[i])) ThrowInvalid(Indexed(f + ".positions", i) + " = " + FormatNumber(qk[i]) + " must be finite");
+      if (p.velocities_size() == n) {
+        vk[i] = p.velocities(i);
+        if (!std::isfinite(vk[i])) ThrowInvalid(Indexed(f + ".velocities", i) + " = " + FormatNumber(vk[i]) + " must be finite");
+      }
+    }
+    times.push_back(t);
+    q.push_back(qk);
+    v.push_back(vk);
+  }
+  std::vector<TimedTrajectory::Piece> pieces;
+  if (times.front() > 0.0) {
+    TimedTrajectory::Piece hold;
+    hold.duration = times.front();
+    hold.coefficients = q.front();
+    pieces.push_back(std::move(hold));
+  }
+  for (std::size_t k = 0; k + 1 < times.size(); ++k) {
+    const double h = times[k + 1] - times[k];
+    TimedTrajectory::Piece piece;
+    piece.t0 = times[k];
+    piece.duration = h;
+    const Eigen::VectorXd dq = q[k + 1] - q[k];
+    if (velocities) {
+      piece.coefficients.resize(n, 4);
+      piece.coefficients.col(0) = q[k];
+      piece.coefficients.col(1) = v[k];
+      piece.coefficients.col(2) = 3.0 * dq / (h * h) - (2.0 * v[k] + v[k + 1]) / h;
+      piece.coefficients.col(3) = -2.0 * dq / (h * h * h) + (v[k] + v[k + 1]) / (h * h);
+    } else {
+      piece.coefficients.resize(n, 2);
+      piece.coefficients.col(0) = q[k];
+      piece.coefficients.col(1) = dq / h;
+    }
+    pieces.push_back(std::move(piece));
+  }
+  if (pieces.empty()) return HoldTrajectory(q.front(), 0.0);
+  return TimedTrajectory(std::move(pieces), q.back());
+}
+
+}  // namespace chasles
