@@ -207,12 +207,16 @@ Roadmap BuildRoadmap(const CollisionChecker& checker, const std::vector<JointPat
       const Eigen::VectorXd delta = coarse.vertices[b] - coarse.vertices[a];
       const int parts = std::max(1, static_cast<int>(std::ceil(delta.cwiseAbs().maxCoeff() / options.station_spacing)));
       int previous = a;
+      std::vector<int> line{a};
       for (int p = 1; p < parts; ++p) {
         const int v = roadmap.AddVertex(coarse.vertices[a] + (static_cast<double>(p) / parts) * delta);
         roadmap.AddEdge(previous, v);
+        line.push_back(v);
         previous = v;
       }
       roadmap.AddEdge(previous, b);
+      line.push_back(b);
+      roadmap.lines.push_back(std::move(line));
     }
   }
   return roadmap;

@@ -67,6 +67,20 @@ class Checker {
   std::uint64_t* counter_;
 };
 
+/// The exact rest-to-rest duration of the straight move a → b (ParameterizeRestToRest's profile):
+/// 1/V + V/A when V² <= A, else 2/√A, with V = minᵢ vᵢ/|Δᵢ| and A = minᵢ aᵢ/|Δᵢ|.
+double RestToRestDuration(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const KinematicLimits& limits) {
+  double V = std::numeric_limits<double>::infinity(), A = V;
+  for (Eigen::Index i = 0; i < a.size(); ++i) {
+    const double d = std::abs(b[i] - a[i]);
+    if (d == 0.0) continue;
+    V = std::min(V, limits.max_velocity[i] / d);
+    A = std::min(A, limits.max_acceleration[i] / d);
+  }
+  if (!std::isfinite(V)) return 0.0;
+  return V * V <= A ? 1.0 / V + V / A : 2.0 / std::sqrt(A);
+}
+
 struct Node {
   int vertex = 0;
   double t = 0.0;
@@ -112,7 +126,24 @@ SpaceTimeResult SearchSpaceTime(const Roadmap& roadmap, int start_vertex, int go
   const Checker check(conflict_free, options, &result.conflict_checks);
   const int n = static_cast<int>(roadmap.vertices.size());
 
-  // Heuristic: the fastest time to the goal along the roadmap, ignoring moving obstacles.
+  // The moves from each vertex: to every other station of its lines, or along its edges.
+  std::vector<std::vector<int>> targets(n);
+  if (roadmap.lines.empty()) {
+    targets = roadmap.neighbors;
+  } else {
+    for (const std::vector<int>& line : roadmap.lines) {
+      for (int a : line) {
+        for (int b : line) {
+          if (a != b) targets[a].push_back(b);
+        }
+      }
+    }
+    for (std::vector<int>& list : targets) {
+      std::sort(list.begin(), list.end());
+      list.erase(std::unique(list.begin(), list.end()), list.end());
+    }
+  }
+  // Heuristic: the fastest time to the goal over these moves, ignoring moving obstacles.
   std::vector<double> h(n, std::numeric_limits<double>::infinity());
   {
     using Entry = std::pair<double, int>;
@@ -123,8 +154,8 @@ SpaceTimeResult SearchSpaceTime(const Roadmap& roadmap, int start_vertex, int go
       const auto [d, v] = open.top();
       open.pop();
       if (d > h[v]) continue;
-      for (int w : roadmap.neighbors[v]) {
-        const double nd = d + moves.Get(w, v).duration();
+      for (int w : targets[v]) {
+        const double nd = d + RestToRestDuration(roadmap.vertices[w], roadmap.vertices[v], limits);
         if (nd < h[w]) {
           h[w] = nd;
           open.emplace(nd, w);
@@ -184,7 +215,7 @@ SpaceTimeResult SearchSpaceTime(const Roadmap& roadmap, int start_vertex, int go
       open.emplace(t_wait + h[node.vertex], static_cast<int>(nodes.size()) - 1);
     }
     // Move to a neighbour.
-    for (int w : roadmap.neighbors[node.vertex]) {
+    for (int w : targets[node.vertex]) {
       const TimedTrajectory& move = moves.Get(node.vertex, w);
       const double t_arrive = node.t + move.duration();
       if (t_arrive > options.horizon || !std::isfinite(h[w]) || closed.count(bucket_key(w, t_arrive))) continue;
@@ -229,26 +260,33 @@ SpaceTimeResult SearchSpaceTime(const Roadmap& roadmap, int start_vertex, int go
     while (end < steps.size() && steps[end].from != steps[end].to) ++end;
     JointPath run{roadmap.vertices[steps[i].from]};
     for (std::size_t k = i; k < end; ++k) run.push_back(roadmap.vertices[steps[k].to]);
-    const double run_start = steps[i].t0;
-    const double run_duration = steps[end - 1].t0 + steps[end - 1].duration - run_start;
-    bool merged = false;
-    if (options.merge_moves && end - i > 1) {
-      TimeOptimalOptions topp;
-      topp.max_deviation = 0.0;  // stays on the roadmap's edges: through straight stations, stops at corners
-      const TimedTrajectory fast = ParameterizeTimeOptimal(run, limits, topp);
-      const double saved = run_duration - fast.duration();
-      if (saved > 1e-9 && check.Motion(fast, run_start) &&
-          check.Stand(run.back(), run_start + fast.duration(), run_start + run_duration)) {
-        parts.push_back(fast);
-        if (end < steps.size()) {  // at the goal the robot simply arrives earlier (its hold was checked)
-          parts.push_back(HoldTrajectory(run.back(), saved));
-          result.wait_time += saved;
+    // Greedy: from each station, the longest stretch (the whole run, then halves) whose
+    // time-optimal retiming stays clear, followed by a wait until the original schedule.
+    for (std::size_t a = i; a < end;) {
+      std::size_t next = a + 1;
+      if (options.merge_moves) {
+        for (std::size_t b = end; b > a + 1; b = a + (b - a) / 2) {
+          const JointPath stretch(run.begin() + static_cast<std::ptrdiff_t>(a - i),
+                                  run.begin() + static_cast<std::ptrdiff_t>(b - i) + 1);
+          const double t_start = steps[a].t0;
+          const double t_end = steps[b - 1].t0 + steps[b - 1].duration;
+          TimeOptimalOptions topp;
+          topp.max_deviation = 0.0;  // stays on the roadmap's edges: through straight stations, stops at corners
+          const TimedTrajectory fast = ParameterizeTimeOptimal(stretch, limits, topp);
+          const double saved = (t_end - t_start) - fast.duration();
+          if (saved > 1e-9 && check.Motion(fast, t_start) && check.Stand(stretch.back(), t_start + fast.duration(), t_end)) {
+            parts.push_back(fast);
+            if (b < steps.size()) {  // at the goal the robot simply arrives earlier (its hold was checked)
+              parts.push_back(HoldTrajectory(stretch.back(), saved));
+              result.wait_time += saved;
+            }
+            next = b;
+            break;
+          }
         }
-        merged = true;
       }
-    }
-    if (!merged) {
-      for (std::size_t k = i; k < end; ++k) parts.push_back(moves.Get(steps[k].from, steps[k].to));
+      if (next == a + 1) parts.push_back(moves.Get(steps[a].from, steps[a].to));
+      a = next;
     }
     for (std::size_t k = 1; k < run.size(); ++k) result.path.push_back(run[k]);
     i = end;

@@ -28,6 +28,10 @@ using ConflictFree = std::function<bool(const Eigen::VectorXd& q, double t)>;
 struct Roadmap {
   std::vector<Eigen::VectorXd> vertices;
   std::vector<std::vector<int>> neighbors;  ///< adjacency, symmetric
+  /// Straight lines: the stations of one original edge in order (endpoints included). A robot
+  /// may move between any two stations of a line in one straight motion, without stopping at
+  /// the stations between (BuildRoadmap fills this; a roadmap without lines moves edge by edge).
+  std::vector<std::vector<int>> lines;
   /// Adds a vertex; returns its index.
   int AddVertex(const Eigen::VectorXd& q);
   void AddEdge(int a, int b);
@@ -77,11 +81,11 @@ struct SpaceTimeResult {
 };
 
 /// Earliest-arrival A* over (vertex, time): from `start_vertex` at t = 0 to `goal_vertex`, where
-/// the robot must then stay clear until hold_until. Moves along an edge are the exact
-/// rest-to-rest profile under `limits` (ParameterizeRestToRest); waits are multiples of
-/// wait_step. Every move and wait is checked with `conflict_free` at states at most time_step and
-/// max_joint_step apart. The heuristic is the edge-duration distance to the goal ignoring moving
-/// obstacles (admissible).
+/// the robot must then stay clear until hold_until. Moves go from a station to any other station
+/// of the same line (or along an edge when the roadmap has no lines) with the exact rest-to-rest
+/// profile under `limits` (ParameterizeRestToRest); waits are multiples of wait_step. Every move and wait is checked with `conflict_free` at states at most time_step and
+/// max_joint_step apart. The heuristic is the exact time to the goal over these moves ignoring
+/// moving obstacles (Dijkstra from the goal; admissible and consistent).
 SpaceTimeResult SearchSpaceTime(const Roadmap& roadmap, int start_vertex, int goal_vertex,
                                 const KinematicLimits& limits, const ConflictFree& conflict_free,
                                 const SpaceTimeOptions& options, const Termination& termination);
