@@ -292,7 +292,6 @@ class Coordinator {
   std::shared_ptr<const CollisionChecker> team_;  ///< all members, self + scene
   std::map<std::tuple<std::string, std::string, double>, std::shared_ptr<const CollisionChecker>> pairs_;
   std::map<int, SinglePlan> alone_;
-  CoordinationOutcome* out_ = nullptr;
 };
 
 Attempt Coordinator::RunPriorityLoop(bool prm, const Termination& termination) {
@@ -362,7 +361,8 @@ Attempt Coordinator::RunPriorityLoop(bool prm, const Termination& termination) {
       RoadmapOptions roadmap_options;
       roadmap_options.seed = query_.seed + 104729 * static_cast<std::uint64_t>(k + 1);
       roadmap_options.prm_vertices = 0;
-      if (prm && alone.path.size() > 1) {
+      // A car cannot follow a PRM's straight edges: its roadmap is its own path (chords of its curves).
+      if (prm && alone.path.size() > 1 && !IsCar(m.placement.model->kind())) {
         roadmap_options.prm_vertices = m.placement.model->num_dofs() <= 3 ? 300 : 200;
         if (position > 0) {
           std::vector<std::pair<int, Eigen::VectorXd>> frozen;
@@ -590,7 +590,6 @@ std::string Coordinator::Verify(const Attempt& attempt, TeamVerificationReport* 
 CoordinationOutcome Coordinator::Run() {
   const Clock::time_point t_start = Clock::now();
   CoordinationOutcome out;
-  out_ = &out;
   query_.Validate(registry_);
   const auto finish = [&](CoordinationCode code, std::string message) {
     out.code = code;
