@@ -73,7 +73,11 @@ TEST(RoadmapTest, EdgesAreValidSeedPathsIncludedAndDeterministic) {
   const Roadmap a = BuildRoadmap(*checker, {seed}, options, Termination());
   const Roadmap b = BuildRoadmap(*checker, {seed}, options, Termination());
   ASSERT_EQ(a.vertices.size(), b.vertices.size());
-  for (std::size_t v = 0; v < a.vertices.size(); ++v) EXPECT_EQ(a.vertices[v], b.vertices[v]);
+  for (std::size_t v = 0; v < a.vertices.size(); ++v) {
+    EXPECT_EQ(a.vertices[v], b.vertices[v]);
+    EXPECT_EQ(a.neighbors[v], b.neighbors[v]);
+  }
+  EXPECT_EQ(a.lines, b.lines);
   EXPECT_EQ(VertexOf(a, seed.front()), 0);
   EXPECT_GE(VertexOf(a, seed.back()), 0);
   // 2 seed vertices + 60 PRM milestones, plus stations.
@@ -122,7 +126,18 @@ TEST(SpaceTimeTest, WaitsForACrossingObstacleAlongAFixedPath) {
       SearchSpaceTime(roadmap, 0, VertexOf(roadmap, seed.back()), Limits(), crossing, SpaceTimeOptions(), Termination());
   ExpectClear(result, *checker, seed.front(), seed.back(), crossing, 0.0);
   EXPECT_GT(result.arrival, 6.5);
+  EXPECT_GT(result.wait_time, 0.0);
   EXPECT_GT(result.conflict_checks, 0u);
+  // Deterministic: the same search gives the same schedule.
+  const SpaceTimeResult again =
+      SearchSpaceTime(roadmap, 0, VertexOf(roadmap, seed.back()), Limits(), crossing, SpaceTimeOptions(), Termination());
+  ASSERT_TRUE(again.found);
+  EXPECT_EQ(again.arrival, result.arrival);
+  EXPECT_EQ(again.wait_time, result.wait_time);
+  EXPECT_EQ(again.expansions, result.expansions);
+  EXPECT_EQ(again.conflict_checks, result.conflict_checks);
+  ASSERT_EQ(again.path.size(), result.path.size());
+  for (std::size_t k = 0; k < result.path.size(); ++k) EXPECT_EQ(again.path[k], result.path[k]);
 }
 
 TEST(SpaceTimeTest, DetoursOnThePrmWhenThePathIsBlockedForLong) {
@@ -166,7 +181,23 @@ TEST(SpaceTimeTest, TheGoalMustStayClearUntilHoldUntil) {
   const SpaceTimeResult result =
       SearchSpaceTime(roadmap, 0, VertexOf(roadmap, seed.back()), Limits(), takes_goal, options, Termination());
   EXPECT_FALSE(result.found);
-  EXPECT_THAT(result.message, HasSubstr("goal"));
+  EXPECT_THAT(result.message, HasSubstr("goal is occupied by a moving obstacle at hold_until = 25 s"));
+  EXPECT_EQ(result.expansions, 0);  // known before searching
+  // Occupied between the horizon and hold_until: no arrival by the horizon can stay there.
+  options.hold_until = 50.0;
+  const SpaceTimeResult beyond =
+      SearchSpaceTime(roadmap, 0, VertexOf(roadmap, seed.back()), Limits(), takes_goal, options, Termination());
+  EXPECT_FALSE(beyond.found);
+  EXPECT_THAT(beyond.message, HasSubstr("after the horizon 40 s and before hold_until = 50 s"));
+  // Occupied at hold_until but free again later: the robot arrives after the obstacle leaves.
+  options.hold_until = 25.0;
+  const ConflictFree passes_goal = [](const Eigen::VectorXd& q, double t) {
+    return t < 20.0 || t > 27.0 || (q.head<2>() - Eigen::Vector2d(3, 0)).norm() > 0.6;
+  };
+  const SpaceTimeResult after =
+      SearchSpaceTime(roadmap, 0, VertexOf(roadmap, seed.back()), Limits(), passes_goal, options, Termination());
+  ExpectClear(after, *checker, seed.front(), seed.back(), passes_goal, 0.0);
+  EXPECT_GT(after.arrival, 27.0);
   // If the others are done by then, the goal is reachable (the obstacle has not come yet).
   options.hold_until = 10.0;
   const ConflictFree later = MovingDisc({3, -4}, {3, -1.0}, 16.0, 20.0);
@@ -191,6 +222,40 @@ TEST(SpaceTimeTest, MergingMovesNeverArrivesLater) {
   ExpectClear(stops, *checker, seed.front(), seed.back(), crossing, 0.0);
   EXPECT_LE(merged.arrival, stops.arrival + 1e-9);
   EXPECT_LE(merged.trajectory.pieces().size(), stops.trajectory.pieces().size());
+}
+
+TEST(SpaceTimeTest, HandBuiltRoadmapMovesEdgeByEdgeAndMergingRunsThrough) {
+  const auto checker = Floor();
+  Roadmap roadmap;
+  for (double x : {-3.0, -1.0, 1.0, 3.0}) roadmap.AddVertex(Eigen::Vector2d(x, 0.0));
+  for (int v = 0; v + 1 < 4; ++v) roadmap.AddEdge(v, v + 1);
+  roadmap.AddEdge(1, 0);  // a duplicate, either way round, is ignored
+  roadmap.AddEdge(2, 2);  // so is a loop
+  EXPECT_EQ(roadmap.neighbors[0], std::vector<int>({1}));
+  EXPECT_EQ(roadmap.neighbors[1], std::vector<int>({0, 2}));
+  EXPECT_EQ(roadmap.neighbors[2], std::vector<int>({1, 3}));
+  EXPECT_THROW(roadmap.AddEdge(0, 4), Error);
+  const ConflictFree free = [](const Eigen::VectorXd&, double) { return true; };
+  SpaceTimeOptions options;
+  options.merge_moves = false;
+  const SpaceTimeResult stops = SearchSpaceTime(roadmap, 0, 3, Limits(), free, options, Termination());
+  ExpectClear(stops, *checker, Eigen::Vector2d(-3, 0), Eigen::Vector2d(3, 0), free, 0.0);
+  EXPECT_NEAR(stops.arrival, 7.5, 1e-9);  // three 2 m rest-to-rest moves of 2.5 s
+  EXPECT_EQ(stops.path.size(), 4u);
+  options.merge_moves = true;
+  const SpaceTimeResult merged = SearchSpaceTime(roadmap, 0, 3, Limits(), free, options, Termination());
+  ExpectClear(merged, *checker, Eigen::Vector2d(-3, 0), Eigen::Vector2d(3, 0), free, 0.0);
+  EXPECT_NEAR(merged.arrival, 6.5, 1e-9);  // through the collinear stations without stopping
+  EXPECT_EQ(merged.path.size(), 4u);
+  // With an obstacle crossing at x = 0 the merged schedule still waits and stays clear.
+  const ConflictFree crossing = MovingDisc({0, -3}, {0, 3}, 0.25, 6.25);
+  options.merge_moves = false;
+  const SpaceTimeResult slow = SearchSpaceTime(roadmap, 0, 3, Limits(), crossing, options, Termination());
+  options.merge_moves = true;
+  const SpaceTimeResult fast = SearchSpaceTime(roadmap, 0, 3, Limits(), crossing, options, Termination());
+  ExpectClear(slow, *checker, Eigen::Vector2d(-3, 0), Eigen::Vector2d(3, 0), crossing, 0.0);
+  ExpectClear(fast, *checker, Eigen::Vector2d(-3, 0), Eigen::Vector2d(3, 0), crossing, 0.0);
+  EXPECT_LE(fast.arrival, slow.arrival + 1e-9);
 }
 
 TEST(SpaceTimeTest, StopsWithTheTerminationAndNamesBadInput) {
@@ -218,6 +283,22 @@ TEST(SpaceTimeTest, StopsWithTheTerminationAndNamesBadInput) {
   SpaceTimeOptions bad;
   bad.wait_step = 0.0;
   expect_invalid(0, 1, bad, "wait_step = 0 must be finite and > 0");
+  KinematicLimits three;
+  three.max_velocity = Eigen::Vector3d(1, 1, 1);
+  three.max_acceleration = Eigen::Vector3d(1, 1, 1);
+  EXPECT_THROW(SearchSpaceTime(roadmap, 0, 1, three, free, SpaceTimeOptions(), Termination()), Error);
+  bad = SpaceTimeOptions();
+  bad.time_step = -0.01;
+  expect_invalid(0, 1, bad, "time_step = -0.01 must be finite and > 0");
+  bad = SpaceTimeOptions();
+  bad.max_joint_step = 0.0;
+  expect_invalid(0, 1, bad, "max_joint_step = 0 must be finite and > 0");
+  bad = SpaceTimeOptions();
+  bad.hold_until = -1.0;
+  expect_invalid(0, 1, bad, "hold_until = -1 must be finite and >= 0");
+  roadmap_options.station_spacing = 0.0;
+  EXPECT_THROW(BuildRoadmap(*checker, {seed}, roadmap_options, Termination()), Error);
+  roadmap_options.station_spacing = 0.25;
   EXPECT_THROW(BuildRoadmap(*checker, {}, roadmap_options, Termination()), Error);
   EXPECT_THROW(BuildRoadmap(*checker, {{Eigen::Vector3d(0, 0, 0)}}, roadmap_options, Termination()), Error);
 }

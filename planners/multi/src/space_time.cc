@@ -37,17 +37,26 @@ class Checker {
  public:
   Checker(const ConflictFree& conflict_free, const SpaceTimeOptions& options, std::uint64_t* counter)
       : conflict_free_(conflict_free), options_(options), counter_(counter) {}
-  /// `trajectory` started at time t0; its first state is taken as already checked.
+  /// `trajectory` started at time t0; its first state is taken as already checked. The end
+  /// state is checked first, then the others coarse to fine (a conflict shows up early).
   bool Motion(const TimedTrajectory& trajectory, double t0) const {
     const double duration = trajectory.duration();
     double travel = 0.0;
     for (const TimedTrajectory::Piece& piece : trajectory.pieces()) travel += piece.MaxJointTravel();
     const double steps = std::max(std::ceil(duration / options_.time_step), std::ceil(travel / options_.max_joint_step));
     const long m = std::max(1L, static_cast<long>(steps));
-    for (long i = 1; i <= m; ++i) {
+    const auto clear = [&](long i) {
       const double tau = duration * static_cast<double>(i) / static_cast<double>(m);
       ++*counter_;
-      if (!conflict_free_(trajectory.Evaluate(tau).q, t0 + tau)) return false;
+      return conflict_free_(trajectory.Evaluate(tau).q, t0 + tau);
+    };
+    if (!clear(m)) return false;
+    long stride = 1;
+    while (stride * 2 < m) stride *= 2;
+    for (; stride >= 1; stride /= 2) {  // i = stride · odd: every index in [1, m) once
+      for (long i = stride; i < m; i += 2 * stride) {
+        if (!clear(i)) return false;
+      }
     }
     return true;
   }
@@ -168,26 +177,67 @@ SpaceTimeResult SearchSpaceTime(const Roadmap& roadmap, int start_vertex, int go
     return result;
   }
 
-  // A* over (vertex, time), earliest arrival first.
+  if (!check.Stand(roadmap.vertices[start_vertex], 0.0, 0.0)) {
+    result.message = "the start is occupied by a moving obstacle at t = 0";
+    return result;
+  }
+  // The goal first: occupied at a time no arrival within the horizon can avoid (the robot must
+  // stay there until hold_until) means there is nothing to search.
+  {
+    const Eigen::VectorXd& goal = roadmap.vertices[goal_vertex];
+    const double hold = options.hold_until;
+    // The first of the samples of [t0, t1] (at most time_step apart, both ends) where
+    // conflict_free gives `value`; -1 when none does.
+    const auto scan = [&](double t0, double t1, bool value) {
+      const long m = std::max(1L, static_cast<long>(std::ceil((t1 - t0) / options.time_step)));
+      for (long i = 0; i <= m; ++i) {
+        const double t = i == m ? t1 : t0 + (t1 - t0) * static_cast<double>(i) / static_cast<double>(m);
+        ++result.conflict_checks;
+        if (conflict_free(goal, t) == value) return t;
+      }
+      return -1.0;
+    };
+    if (hold > options.horizon) {
+      const double t = scan(options.horizon, hold, false);
+      if (t >= 0.0) {
+        result.message = "the goal is occupied by a moving obstacle at t = " + FormatNumber(t) +
+                         " s, after the horizon " + FormatNumber(options.horizon) + " s and before hold_until = " +
+                         FormatNumber(hold) + " s (the robot must stay there until then)";
+        return result;
+      }
+    } else if (scan(hold, options.horizon, true) < 0.0) {
+      result.message = "the goal is occupied by a moving obstacle at hold_until = " + FormatNumber(hold) +
+                       " s (when the others' motions end) and at every checked time up to the horizon " +
+                       FormatNumber(options.horizon) + " s";
+      return result;
+    }
+  }
+
+  // A* over (vertex, time), earliest arrival first. Successors are checked lazily, when they
+  // come out of the queue: a (vertex, time bucket) is closed by the first one whose motion or
+  // wait from its parent is clear. States that cannot reach the goal by the horizon even
+  // unhindered (t + h > horizon) are never generated.
   std::vector<Node> nodes;
-  using Entry = std::pair<double, int>;  // (f = t + h, node)
+  using Entry = std::pair<double, int>;  // (f = t + h, node); ties by node index: deterministic
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
   std::unordered_set<std::uint64_t> closed;
   const auto bucket_key = [&options](int v, double t) {
     return (static_cast<std::uint64_t>(v) << 32) |
            static_cast<std::uint32_t>(std::llround(t / options.time_resolution));
   };
-  if (!check.Stand(roadmap.vertices[start_vertex], 0.0, 0.0)) {
-    result.message = "the start is occupied by a moving obstacle at t = 0";
-    return result;
-  }
+  const double latest = options.horizon * (1.0 + 1e-12) + 1e-9;  // rounding slack for t + h only
   nodes.push_back(Node{start_vertex, 0.0, -1, false});
   open.emplace(h[start_vertex], 0);
   int found = -1;
-  bool goal_blocked_forever = false;
+  bool reached_goal = false;
   while (!open.empty()) {
     if (termination.ShouldStop()) {
-      result.message = "stopped after " + std::to_string(result.expansions) + " expansions: time budget, deadline or cancellation";
+      const StopReason reason = termination.Reason();
+      result.message = std::string("stopped: ") +
+                       (reason == StopReason::kCancelled  ? "cancelled"
+                        : reason == StopReason::kDeadline ? "deadline"
+                                                          : "time budget") +
+                       ", after " + std::to_string(result.expansions) + " expansions";
       return result;
     }
     if (result.expansions >= options.max_expansions) {
@@ -197,40 +247,42 @@ SpaceTimeResult SearchSpaceTime(const Roadmap& roadmap, int start_vertex, int go
     const int index = open.top().second;
     open.pop();
     const Node node = nodes[index];
-    if (!closed.insert(bucket_key(node.vertex, node.t)).second) continue;
+    const std::uint64_t key = bucket_key(node.vertex, node.t);
+    if (closed.count(key)) continue;
+    if (node.parent >= 0) {
+      const Node& from = nodes[node.parent];
+      const bool clear = node.wait ? check.Stand(roadmap.vertices[node.vertex], from.t, node.t)
+                                   : check.Motion(moves.Get(from.vertex, node.vertex), from.t);
+      if (!clear) continue;
+    }
+    closed.insert(key);
     ++result.expansions;
     if (node.vertex == goal_vertex) {
-      const double until = std::max(node.t, options.hold_until);
-      if (check.Stand(roadmap.vertices[goal_vertex], node.t, until)) {
+      reached_goal = true;
+      if (check.Stand(roadmap.vertices[goal_vertex], node.t, std::max(node.t, options.hold_until))) {
         found = index;
         break;
       }
-      goal_blocked_forever = goal_blocked_forever || node.t >= options.hold_until;
     }
     // Wait here.
     const double t_wait = node.t + options.wait_step;
-    if (t_wait <= options.horizon && check.Stand(roadmap.vertices[node.vertex], node.t, t_wait) &&
-        !closed.count(bucket_key(node.vertex, t_wait))) {
+    if (t_wait <= options.horizon && t_wait + h[node.vertex] <= latest && !closed.count(bucket_key(node.vertex, t_wait))) {
       nodes.push_back(Node{node.vertex, t_wait, index, true});
       open.emplace(t_wait + h[node.vertex], static_cast<int>(nodes.size()) - 1);
     }
-    // Move to a neighbour.
+    // Move to another station.
     for (int w : targets[node.vertex]) {
-      const TimedTrajectory& move = moves.Get(node.vertex, w);
-      const double t_arrive = node.t + move.duration();
-      if (t_arrive > options.horizon || !std::isfinite(h[w]) || closed.count(bucket_key(w, t_arrive))) continue;
-      if (!check.Motion(move, node.t)) continue;
+      const double t_arrive = node.t + moves.Get(node.vertex, w).duration();
+      if (t_arrive > options.horizon || !(t_arrive + h[w] <= latest) || closed.count(bucket_key(w, t_arrive))) continue;
       nodes.push_back(Node{w, t_arrive, index, false});
       open.emplace(t_arrive + h[w], static_cast<int>(nodes.size()) - 1);
     }
   }
   if (found < 0) {
-    if (goal_blocked_forever) {
-      result.message = "the goal is occupied by a moving obstacle after the others' last motion (hold until " +
-                       FormatNumber(options.hold_until) + " s)";
-    } else {
-      result.message = "no route reaches the goal before the horizon " + FormatNumber(options.horizon) + " s";
-    }
+    result.message = reached_goal ? "the goal is reached but does not stay clear until hold_until = " +
+                                        FormatNumber(options.hold_until) + " s at any arrival before the horizon " +
+                                        FormatNumber(options.horizon) + " s"
+                                  : "no route reaches the goal before the horizon " + FormatNumber(options.horizon) + " s";
     return result;
   }
 

@@ -40,7 +40,7 @@ struct Roadmap {
 struct RoadmapOptions {
   int prm_vertices = 200;        ///< vertices grown by OMPL's PRM besides the seed paths; 0 = none
   int neighbors = 8;             ///< PRM / seed-path connections per vertex (k nearest)
-  double station_spacing = 0.25; ///< [rad] edges longer than this get intermediate vertices (places to wait)
+  double station_spacing = 0.25; ///< [rad] edges longer than this (largest joint difference) get equally spaced intermediate vertices (places to wait)
   std::uint64_t seed = 1;
 };
 
@@ -85,7 +85,13 @@ struct SpaceTimeResult {
 /// of the same line (or along an edge when the roadmap has no lines) with the exact rest-to-rest
 /// profile under `limits` (ParameterizeRestToRest); waits are multiples of wait_step. Every move and wait is checked with `conflict_free` at states at most time_step and
 /// max_joint_step apart. The heuristic is the exact time to the goal over these moves ignoring
-/// moving obstacles (Dijkstra from the goal; admissible and consistent).
+/// moving obstacles (Dijkstra from the goal; admissible and consistent); states that could not
+/// reach the goal by the horizon even unhindered are not searched, and moves and waits are
+/// checked when they leave the queue (lazily). The goal is looked at first: when it is occupied
+/// at hold_until and at every time_step sample from there to the horizon (or at a sample between
+/// the horizon and a later hold_until), nothing is searched and `message` says so. Expected
+/// failures (no route, expansions or termination exhausted) are results with `message` set;
+/// bad input (vertex indices, limits sizes, non-positive steps) throws kInvalidArgument.
 SpaceTimeResult SearchSpaceTime(const Roadmap& roadmap, int start_vertex, int goal_vertex,
                                 const KinematicLimits& limits, const ConflictFree& conflict_free,
                                 const SpaceTimeOptions& options, const Termination& termination);
