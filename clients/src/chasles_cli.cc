@@ -21,6 +21,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "chasles/v1/chasles.grpc.pb.h"
+#include "commands.h"
 #include "trajectory_csv.h"
 
 namespace {
@@ -83,6 +84,16 @@ const char kUsage[] =
     "                                  prints the reservation id\n"
     "  release --workcell W (--reservation ID | --robot-name N)\n"
     "                                  release one reservation, or all of robot N's\n"
+    "  bench CONFIG.yaml [--out DIR] [--runs N] [--parallelism N] [--quiet]\n"
+    "                                  benchmark planner configurations on problems (request JSON files or\n"
+    "                                  MoveIt scene/request YAML) on the server; shows a progress bar,\n"
+    "                                  writes an OMPL log per problem (for ompl_benchmark_statistics),\n"
+    "                                  runs.csv and results.json into DIR and prints a summary table;\n"
+    "                                  Ctrl-C stops it and keeps the finished runs (see docs/benchmarks.md)\n"
+    "  import-moveit SCENE.yaml REQUEST.yaml [--robot F.urdf [--srdf F.srdf]] [--out F.json]\n"
+    "                                  convert a MoveIt PlanningScene and MotionPlanRequest (YAML) into a\n"
+    "                                  chasles.v1.PlanRequest and print it as JSON (robot joint order from\n"
+    "                                  the URDF; default: the server's default robot, a Panda)\n"
     "\n"
     "Options:\n"
     "  --server ADDR   server address (default 127.0.0.1:50051)\n"
@@ -797,6 +808,29 @@ int Release(const Options& options) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // bench and import-moveit parse their own options (after the global --server / --timeout).
+  {
+    std::string server = "127.0.0.1:50051";
+    double timeout = 0.0;
+    int i = 1;
+    while (i + 1 < argc && (std::strcmp(argv[i], "--server") == 0 || std::strcmp(argv[i], "--timeout") == 0)) {
+      if (std::strcmp(argv[i], "--server") == 0) {
+        server = argv[i + 1];
+      } else {
+        char* end = nullptr;
+        timeout = std::strtod(argv[i + 1], &end);
+        if (end == argv[i + 1] || *end != '\0' || !(timeout > 0)) {
+          UsageError(std::string("--timeout '") + argv[i + 1] + "' must be a number of seconds > 0");
+        }
+      }
+      i += 2;
+    }
+    if (i < argc && (std::strcmp(argv[i], "bench") == 0 || std::strcmp(argv[i], "import-moveit") == 0)) {
+      const std::vector<std::string> args(argv + i + 1, argv + argc);
+      return std::strcmp(argv[i], "bench") == 0 ? chasles::cli::BenchCommand(server, timeout, args)
+                                                : chasles::cli::ImportMoveItCommand(args);
+    }
+  }
   Options options;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];

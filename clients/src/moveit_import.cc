@@ -1,0 +1,1 @@
+#include "moveit_import.h"

@@ -1,0 +1,3 @@
+#pragma once
+/// \file
+/// MoveIt PlanningScene / MotionPlanRequest YAML -> chasles.v1 messages (owned by the importer).
