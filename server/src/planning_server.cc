@@ -19,6 +19,7 @@
 #include "chasles/planners/registry.h"
 #include "chasles/robot/error.h"
 #include "chasles/robot/inverse_kinematics.h"
+#include "chasles/server/benchmark.h"
 #include "chasles/server/convert.h"
 #include "chasles/server/convert_multi.h"
 #include "chasles/server/default_assets.h"
@@ -368,6 +369,40 @@ class PlanningService final : public v1::Planning::CallbackService {
     return reactor;
   }
 
+  grpc::ServerWriteReactor<v1::BenchmarkResponse>* Benchmark(grpc::CallbackServerContext* context,
+                                                             const v1::BenchmarkRequest* request) override {
+    std::string request_id = request->request_id();
+    if (request_id.empty()) {
+      char buffer[32];
+      std::snprintf(buffer, sizeof(buffer), "bench-%06" PRIu64, ++next_request_);
+      request_id = buffer;
+    }
+    BenchmarkServices services;
+    services.registry = &registry_;
+    services.pipeline = &pipeline_;
+    services.store = store_;
+    services.pool = pool_;
+    if (log_) services.log = [](const std::string& line) { std::fprintf(stderr, "chasles-server: %s\n", line.c_str()); };
+    return StartBenchmark(services, &benchmarks_, request, request_id, SteadyDeadline(*context));
+  }
+
+  grpc::ServerUnaryReactor* StopBenchmark(grpc::CallbackServerContext* context, const v1::StopBenchmarkRequest* request,
+                                          v1::StopBenchmarkResponse* response) override {
+    grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+    grpc::Status status;
+    if (request->request_id().empty()) {
+      status = grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "request_id is empty: name the running benchmark");
+    } else if (!benchmarks_.Stop(request->request_id())) {
+      status = grpc::Status(grpc::StatusCode::NOT_FOUND,
+                            "request_id = '" + request->request_id() + "' names no running benchmark (finished, or never started)");
+    } else {
+      response->set_stopped(true);
+      Log("stop-benchmark request=%s stopping", request->request_id().c_str());
+    }
+    reactor->Finish(status);
+    return reactor;
+  }
+
  private:
   /// Thrown from pool work to finish the call with DEADLINE_EXCEEDED.
   struct DeadlineError {
@@ -393,23 +428,13 @@ class PlanningService final : public v1::Planning::CallbackService {
     }
   }
 
-  /// The request's robot: inline (parsed and cached), by id, or the server's default.
   template <typename Request>
   StoredRobot RobotOf(const Request& request) {
-    switch (request.robot_source_case()) {
-      case Request::kRobot: return store_->AddRobot(request.robot(), "robot");
-      case Request::kRobotId: return store_->FindRobot(request.robot_id());
-      default: return store_->default_robot();
-    }
+    return RobotOfRequest(*store_, request);
   }
-  /// The request's scene: inline (parsed and cached), by id, or the server's default.
   template <typename Request>
   StoredScene SceneOf(const Request& request) {
-    switch (request.scene_source_case()) {
-      case Request::kScene: return store_->AddScene(request.scene(), "scene");
-      case Request::kSceneId: return store_->FindScene(request.scene_id());
-      default: return store_->default_scene();
-    }
+    return SceneOfRequest(*store_, request);
   }
 
   /// Runs `work` on the pool and finishes the call with OK or the mapped exception.
@@ -543,6 +568,7 @@ class PlanningService final : public v1::Planning::CallbackService {
   ModelStore* store_;
   ThreadPool* pool_;
   WorkcellStore* workcells_;
+  BenchmarkRegistry benchmarks_;
   const bool log_;
   std::atomic<std::uint64_t> next_request_{0};
 };

@@ -52,4 +52,25 @@ class ModelStore {
   LruCache<CollisionChecker> checkers_;
 };
 
+/// The request's robot: inline (parsed and cached; errors name `field`), by id, or the store's
+/// default. Works for every request with a `robot_source` oneof of `robot` / `robot_id`.
+template <typename Request>
+StoredRobot RobotOfRequest(ModelStore& store, const Request& request, const std::string& field = "robot") {
+  switch (request.robot_source_case()) {
+    case Request::kRobot: return store.AddRobot(request.robot(), field);
+    case Request::kRobotId: return store.FindRobot(request.robot_id());
+    default: return store.default_robot();
+  }
+}
+
+/// The request's scene: inline (parsed and cached; errors name `field`), by id, or the default.
+template <typename Request>
+StoredScene SceneOfRequest(ModelStore& store, const Request& request, const std::string& field = "scene") {
+  switch (request.scene_source_case()) {
+    case Request::kScene: return store.AddScene(request.scene(), field);
+    case Request::kSceneId: return store.FindScene(request.scene_id());
+    default: return store.default_scene();
+  }
+}
+
 }  // namespace chasles
