@@ -1,0 +1,365 @@
+"""The Chasles client: typed calls of chasles.v1.Planning over one gRPC channel."""
+
+from __future__ import annotations
+
+import os
+import time
+import uuid
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
+
+import grpc
+import numpy as np
+from google.protobuf.message import Message
+
+from . import _health
+from ._stubs import pb, pb_grpc
+from .benchmark import BenchmarkProgress, BenchmarkResult, BenchmarkRun
+from .convert import (JointValues, joint_states, joint_values, plan_request,
+                      plan_request_from, set_fields, to_message, trajectory_options)
+from .convert import benchmark_request as build_benchmark_request
+from .errors import ChaslesError
+from .results import OptimizeResult, PlannerInfo, PlanResult, RobotInfo, limits_used
+from .trajectory import Trajectory
+
+#: Default deadline of unary calls [s] (planning budgets are at most 600 s; pass more if needed).
+DEFAULT_TIMEOUT = 60.0
+
+
+class Client:
+    """A connection to a chasles-server.
+
+    Args:
+        address: ``host:port`` of the server.
+        timeout: default deadline of each unary call [s]; ``None`` = no deadline. Every method
+            also takes its own ``timeout``. A plan's ``time_budget`` must fit in it.
+        max_message_mb: largest message sent or received [MiB] (the server's default is 64).
+        channel: an existing channel to use instead of opening one (``address`` is then ignored).
+
+    Every call raises ``ChaslesError`` (status code and the server's message) when the RPC fails;
+    an expected planning failure (no path within the budget) is a result, not an exception.
+    The client is usable from several threads at once (gRPC channels are thread-safe).
+    """
+
+    def __init__(self, address: str = "127.0.0.1:50051", timeout: Optional[float] = DEFAULT_TIMEOUT, *,
+                 max_message_mb: int = 64, channel: Optional[grpc.Channel] = None) -> None:
+        self.address = address
+        self.timeout = timeout
+        if channel is None:
+            size = int(max_message_mb) * 1024 * 1024
+            channel = grpc.insecure_channel(address, options=[("grpc.max_send_message_length", size),
+                                                              ("grpc.max_receive_message_length", size)])
+            self._owns_channel = True
+        else:
+            self._owns_channel = False
+        self._channel = channel
+        self._stub = pb_grpc.PlanningStub(channel)
+        self._health_check = channel.unary_unary(
+            _health.CHECK_METHOD, request_serializer=_health.HealthCheckRequest.SerializeToString,
+            response_deserializer=_health.HealthCheckResponse.FromString)
+        self._robots: Dict[str, RobotInfo] = {}
+
+    # -- connection -----------------------------------------------------------------------------
+
+    @property
+    def stub(self) -> pb_grpc.PlanningStub:
+        """The generated stub, for calls this class does not wrap (InverseKinematics, Coordinate…)."""
+        return self._stub
+
+    def close(self) -> None:
+        """Closes the channel (when this client opened it)."""
+        if self._owns_channel:
+            self._channel.close()
+
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def _call(self, method: str, request: Message, timeout: Optional[float]) -> Any:
+        try:
+            return getattr(self._stub, method)(request, timeout=self._timeout(timeout))
+        except grpc.RpcError as error:
+            raise ChaslesError.from_rpc_error(error, method) from None
+
+    def _timeout(self, timeout: Optional[float]) -> Optional[float]:
+        return self.timeout if timeout is None else timeout
+
+    def health(self, service: str = "", timeout: Optional[float] = None) -> str:
+        """The standard gRPC health check: ``"SERVING"``, ``"NOT_SERVING"`` or ``"SERVICE_UNKNOWN"``.
+
+        ``service`` = ``""`` (the whole server) or ``"chasles.v1.Planning"``.
+        """
+        try:
+            response = self._health_check(_health.HealthCheckRequest(service=service), timeout=self._timeout(timeout))
+        except grpc.RpcError as error:
+            raise ChaslesError.from_rpc_error(error, "Health.Check") from None
+        return _health.status_name(response)
+
+    def wait_until_serving(self, timeout: float = 10.0) -> None:
+        """Waits until the server answers the health check with SERVING.
+
+        Raises:
+            ChaslesError: DEADLINE_EXCEEDED when it did not within ``timeout`` [s] (the last
+                status or error is in the message).
+        """
+        deadline = time.monotonic() + timeout
+        last = "no answer"
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise ChaslesError(grpc.StatusCode.DEADLINE_EXCEEDED,
+                                   f"server at {self.address} not serving after {timeout:g} s ({last})", "Health.Check")
+            try:
+                grpc.channel_ready_future(self._channel).result(timeout=left)
+                last = self.health(timeout=max(min(left, 2.0), 0.05))
+                if last == "SERVING":
+                    return
+            except grpc.FutureTimeoutError:
+                last = "channel not ready"
+            except ChaslesError as error:
+                last = str(error)
+            time.sleep(0.05)
+
+    # -- catalogue and uploads ------------------------------------------------------------------
+
+    def planners(self, timeout: Optional[float] = None) -> List[PlannerInfo]:
+        """The server's planners with their typed parameters, defaults and ranges."""
+        response = self._call("ListPlanners", pb.ListPlannersRequest(), timeout)
+        return [PlannerInfo.from_message(p) for p in response.planners]
+
+    def upload_robot(self, urdf: Union[str, os.PathLike, Message, Mapping[str, Any]], srdf: Union[str, os.PathLike] = "",
+                     meshes: Optional[Mapping[str, Union[bytes, str, os.PathLike]]] = None, *,
+                     name: str = "", timeout: Optional[float] = None) -> str:
+        """Stores a robot on the server and returns its id (a content hash) for ``robot_id``.
+
+        Args:
+            urdf: URDF XML text or a path to a .urdf file; or a whole RobotModel (message or dict,
+                e.g. a DH or mobile robot from ``examples/robots/*.json``), then srdf/meshes unused.
+            srdf: SRDF XML text or a path to a .srdf file; its disabled collision pairs are honoured.
+            meshes: mesh files the URDF references, keyed by the exact ``filename`` of its
+                ``<mesh>`` tags: bytes, or a path to read.
+            name: default robot name used in messages.
+
+        The joints and limits the server answered are kept: ``robot_info(robot_id)``, and plans
+        with this robot (also as the server's default robot, when it is the same model) carry
+        their velocity and acceleration limits.
+        """
+        if isinstance(urdf, (Message, Mapping)):
+            model = to_message(urdf, pb.RobotModel, "robot")
+        else:
+            model = pb.RobotModel(name=name)
+            model.urdf.urdf = _text(urdf)
+            model.urdf.srdf = _text(srdf) if srdf else ""
+            for filename, data in (meshes or {}).items():
+                model.urdf.mesh_files[filename] = data if isinstance(data, bytes) else Path(data).read_bytes()
+        if name:
+            model.name = name
+        response = self._call("UploadRobot", pb.UploadRobotRequest(robot=model), timeout)
+        self._robots[response.robot_id] = RobotInfo.from_response(response)
+        return response.robot_id
+
+    def robot_info(self, robot_id: str) -> Optional[RobotInfo]:
+        """Joints and limits of a robot this client uploaded (None for others)."""
+        return self._robots.get(robot_id)
+
+    def upload_scene(self, scene: Union[Message, Mapping[str, Any], str, os.PathLike],
+                     timeout: Optional[float] = None) -> str:
+        """Stores a scene (a Scene message, a dict in protobuf JSON form, or a path to a .json file)
+        and returns its id for ``scene_id``."""
+        if isinstance(scene, os.PathLike) or (isinstance(scene, str) and not scene.lstrip().startswith("{")):
+            scene = Path(scene).read_text()
+        message = to_message(scene, pb.Scene, "scene")
+        return self._call("UploadScene", pb.UploadSceneRequest(scene=message), timeout).scene_id
+
+    # -- planning -------------------------------------------------------------------------------
+
+    def plan(self, start: Any, goal: Any, planner: Any = "rrt_connect", parameters: Optional[Mapping[str, Any]] = None,
+             *, robot: Any = None, robot_id: Optional[str] = None, scene: Any = None, scene_id: Optional[str] = None,
+             time_budget: Optional[float] = None, seed: Optional[int] = None, post_processing: Union[str, int, None] = None,
+             max_velocity: Optional[JointValues] = None, max_acceleration: Optional[JointValues] = None,
+             sample_period: Optional[float] = None, trajectory: Any = None, request_id: Optional[str] = None,
+             timeout: Optional[float] = None, **more: Any) -> PlanResult:
+        """Plans from ``start`` to ``goal`` and returns the verified trajectory.
+
+        Args:
+            start: joint positions [rad] (a sequence, a numpy array or a JointState).
+            goal: joint positions, a JointGoal / ``{"positions": [...], "tolerance": ...}``, or a pose
+                goal (a PoseGoal or ``{"link": "tool", "pose": {...}}``).
+            planner: planner id (``planners()`` lists them), or a PlannerConfig / dict.
+            parameters: planner parameters by name, plain bool / int / float values.
+            robot, robot_id: an inline RobotModel or an uploaded robot's id; neither = the server's
+                default robot.
+            scene, scene_id: an inline Scene (message or dict) or an uploaded scene's id; neither =
+                the server's default scene.
+            time_budget: planning budget [s] (server default 5 s).
+            seed: random seed (server default 1).
+            post_processing: "topp", "collocation", "spline" or "none" (server default: TOPP).
+            max_velocity, max_acceleration: per-joint limits [rad/s], [rad/s²].
+            sample_period: period of the returned samples [s].
+            trajectory: a whole TrajectoryOptions (message or dict); the keywords above override it.
+            request_id: echoed in the server log and the result.
+            timeout: deadline of this call [s] (default: the client's).
+            more: any other PlanRequest field by name, e.g. ``collision_resolution=0.01``.
+
+        Returns:
+            PlanResult: check ``success`` / ``outcome``; planning failures are not exceptions.
+
+        Raises:
+            ChaslesError: the server rejected the request (INVALID_ARGUMENT naming the field,
+                NOT_FOUND for an unknown id or planner, …) or the call failed.
+        """
+        request = plan_request(start, goal, planner, parameters, robot=robot, robot_id=robot_id, scene=scene,
+                               scene_id=scene_id, time_budget=time_budget, seed=seed, trajectory=trajectory,
+                               post_processing=post_processing, max_velocity=max_velocity,
+                               max_acceleration=max_acceleration, sample_period=sample_period,
+                               request_id=request_id, **more)
+        return self.plan_request(request, timeout=timeout)
+
+    def plan_request(self, request: Union[Message, Mapping[str, Any], str], timeout: Optional[float] = None) -> PlanResult:
+        """Sends a whole PlanRequest (message, dict or JSON text, e.g. ``examples/requests/*.json``)."""
+        message = plan_request_from(request) if not isinstance(request, str) else to_message(request, pb.PlanRequest)
+        response = self._call("Plan", message, timeout)
+        velocity, acceleration = limits_used(message.trajectory if message.HasField("trajectory") else None,
+                                             self._model_velocity(response.robot_id))
+        return PlanResult.from_response(response, velocity, acceleration)
+
+    def optimize(self, path: Any, *, robot: Any = None, robot_id: Optional[str] = None, scene: Any = None,
+                 scene_id: Optional[str] = None, post_processing: Union[str, int, None] = None,
+                 max_velocity: Optional[JointValues] = None, max_acceleration: Optional[JointValues] = None,
+                 sample_period: Optional[float] = None, options: Any = None,
+                 start_velocity: Optional[JointValues] = None, end_velocity: Optional[JointValues] = None,
+                 time_budget: Optional[float] = None, request_id: Optional[str] = None,
+                 timeout: Optional[float] = None, **more: Any) -> OptimizeResult:
+        """Turns a path of your own into an optimised, verified trajectory.
+
+        Args:
+            path: waypoints as an (M, n) array / list of joint value lists / JointStates; or a
+                Trajectory or JointTrajectory (its positions are the path, its timing only gives
+                the boundary velocities).
+            post_processing: "topp" (default), "collocation", "spline" or "none".
+            options: a whole TrajectoryOptions (message or dict); the keywords override it.
+            start_velocity, end_velocity: boundary velocities [rad/s]; default at rest.
+            time_budget: [s] (server default 10 s).
+            Others as in ``plan``; ``more`` sets any other OptimizeRequest field by name.
+        """
+        request = pb.OptimizeRequest()
+        if robot is not None:
+            request.robot.CopyFrom(to_message(robot, pb.RobotModel, "robot"))
+        if robot_id is not None:
+            request.robot_id = robot_id
+        if scene is not None:
+            request.scene.CopyFrom(to_message(scene, pb.Scene, "scene"))
+        if scene_id is not None:
+            request.scene_id = scene_id
+        if isinstance(path, Trajectory):
+            request.trajectory.CopyFrom(path.to_message())
+        elif isinstance(path, pb.JointTrajectory):
+            request.trajectory.CopyFrom(path)
+        else:
+            request.path.extend(joint_states(path))
+        trajectory = trajectory_options(options, post_processing=post_processing, max_velocity=max_velocity,
+                                        max_acceleration=max_acceleration, sample_period=sample_period,
+                                        what="options")
+        if trajectory is not None:
+            request.options.CopyFrom(trajectory)
+        if start_velocity is not None:
+            request.start_velocity.extend(joint_values(start_velocity, "start_velocity"))
+        if end_velocity is not None:
+            request.end_velocity.extend(joint_values(end_velocity, "end_velocity"))
+        if time_budget is not None:
+            request.time_budget = float(time_budget)
+        if request_id is not None:
+            request.request_id = request_id
+        set_fields(request, more, "OptimizeRequest")
+        return self.optimize_request(request, timeout=timeout)
+
+    def optimize_request(self, request: Union[Message, Mapping[str, Any], str],
+                         timeout: Optional[float] = None) -> OptimizeResult:
+        """Sends a whole OptimizeRequest (message, dict or JSON text)."""
+        message = to_message(request, pb.OptimizeRequest, "OptimizeRequest")
+        response = self._call("Optimize", message, timeout)
+        velocity, acceleration = limits_used(message.options if message.HasField("options") else None,
+                                             self._model_velocity(response.robot_id))
+        return OptimizeResult.from_response(response, velocity, acceleration)
+
+    def _model_velocity(self, robot_id: str) -> Optional[np.ndarray]:
+        info = self._robots.get(robot_id)
+        return None if info is None else info.velocity_limits
+
+    # -- benchmarking ---------------------------------------------------------------------------
+
+    def benchmark(self, problems: Sequence[Any], configs: Sequence[Any], runs: Optional[int] = None,
+                  run_budget: Optional[float] = None, parallelism: Optional[int] = None, *,
+                  seed: Optional[int] = None, request_id: Optional[str] = None, experiment: Optional[str] = None,
+                  progress_interval: Optional[float] = None,
+                  on_progress: Optional[Callable[[BenchmarkProgress], Any]] = None,
+                  on_run: Optional[Callable[[BenchmarkRun], Any]] = None,
+                  timeout: Optional[float] = None) -> BenchmarkResult:
+        """Runs every problem × configuration × run on the server and collects the results.
+
+        Args:
+            problems: PlanRequests (messages or dicts, "start" and "goal" may be plain lists; an
+                optional "name"), or BenchmarkProblems / ``{"name": ..., "request": ...}``.
+            configs: planner ids (``"rrt_connect"``), BenchmarkConfigs, or dicts
+                ``{"name", "planner", "parameters", "trajectory", "post_processing"}``.
+            runs: runs per problem and configuration (server default 10).
+            run_budget: planning budget of each run [s] (server default 5).
+            parallelism: runs at once (server default: its worker threads).
+            seed: run r is seeded seed + r in every problem and configuration (server default 1).
+            request_id: the benchmark's id for ``stop_benchmark``; default a fresh
+                ``"py-<uuid>"`` (known before the call, so another thread can stop it).
+            experiment: experiment name in the OMPL logs.
+            progress_interval: least time between progress-only messages [s].
+            on_progress: called with a BenchmarkProgress for every message of the stream.
+            on_run: called with each BenchmarkRun as it finishes.
+            timeout: deadline of the whole benchmark [s]; default none (not the client's timeout).
+
+        Returns:
+            BenchmarkResult (``stopped`` when StopBenchmark ended it early).
+
+        Raises:
+            ChaslesError: the server rejected the request or the stream failed; KeyboardInterrupt
+                cancels the call on the server before it propagates.
+        """
+        request = build_benchmark_request(problems, configs, runs, run_budget, parallelism, seed=seed,
+                                          request_id=request_id, experiment=experiment,
+                                          progress_interval=progress_interval)
+        return self.benchmark_request(request, on_progress=on_progress, on_run=on_run, timeout=timeout)
+
+    def benchmark_request(self, request: Union[Message, Mapping[str, Any], str],
+                              on_progress: Optional[Callable[[BenchmarkProgress], Any]] = None,
+                              on_run: Optional[Callable[[BenchmarkRun], Any]] = None,
+                              timeout: Optional[float] = None) -> BenchmarkResult:
+        """Sends a whole BenchmarkRequest (message, dict or JSON text) and consumes its stream."""
+        message = to_message(request, pb.BenchmarkRequest, "BenchmarkRequest")
+        if not message.request_id:  # known before the call, so another thread can stop it
+            message.request_id = f"py-{uuid.uuid4().hex[:12]}"
+        call = self._stub.Benchmark(message, timeout=timeout)
+        try:
+            return BenchmarkResult.from_stream(call, message, on_progress=on_progress, on_run=on_run)
+        except grpc.RpcError as error:
+            raise ChaslesError.from_rpc_error(error, "Benchmark") from None
+        except BaseException:
+            call.cancel()
+            raise
+
+    def stop_benchmark(self, request_id: str, timeout: Optional[float] = None) -> bool:
+        """Stops a running benchmark; its ``benchmark`` call still returns the finished runs.
+
+        Returns True when it was running and is now stopping.
+        """
+        return self._call("StopBenchmark", pb.StopBenchmarkRequest(request_id=request_id), timeout).stopped
+
+
+def _text(value: Union[str, os.PathLike]) -> str:
+    """XML text as given, or the content of a file path."""
+    if isinstance(value, os.PathLike):
+        return Path(value).read_text()
+    if not value.lstrip().startswith("<") and len(value) < 4096 and Path(value).is_file():
+        return Path(value).read_text()
+    return value
+
+
+__all__ = ["Client", "DEFAULT_TIMEOUT"]

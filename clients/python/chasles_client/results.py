@@ -1,0 +1,199 @@
+"""Results of Plan, Optimize, ListPlanners and UploadRobot as dataclasses with numpy arrays."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Dict, List, Optional
+
+import numpy as np
+
+from ._stubs import pb
+from .convert import message_to_dict, outcome_name
+from .trajectory import Trajectory
+
+
+@dataclass
+class RobotInfo:
+    """What UploadRobot answered about a robot: its joints and limits.
+
+    Attributes:
+        robot_id: the content hash to use as ``robot_id``.
+        joint_names: the n joint names in the robot's joint order.
+        lower_limits, upper_limits: position limits, shape (n,) [rad] or [m].
+        velocity_limits: shape (n,) [rad/s] or [m/s].
+    """
+
+    robot_id: str
+    joint_names: List[str]
+    lower_limits: np.ndarray
+    upper_limits: np.ndarray
+    velocity_limits: np.ndarray
+
+    @classmethod
+    def from_response(cls, response: pb.UploadRobotResponse) -> "RobotInfo":
+        return cls(robot_id=response.robot_id, joint_names=list(response.joint_names),
+                   lower_limits=np.array(response.lower_limits, dtype=float),
+                   upper_limits=np.array(response.upper_limits, dtype=float),
+                   velocity_limits=np.array(response.velocity_limits, dtype=float))
+
+
+@dataclass
+class ParameterInfo:
+    """One typed planner parameter (ListPlanners)."""
+
+    name: str
+    description: str
+    type: str  # "double", "int" or "bool"
+    default: float
+    min: float
+    max: float
+    per_joint: bool
+
+
+@dataclass
+class PlannerInfo:
+    """One planner of the server's catalogue (ListPlanners)."""
+
+    id: str
+    description: str
+    optimizing: bool
+    robot_kinds: List[str]
+    parameters: List[ParameterInfo]
+
+    @classmethod
+    def from_message(cls, message: pb.PlannerDescription) -> "PlannerInfo":
+        return cls(
+            id=message.id, description=message.description, optimizing=message.optimizing,
+            robot_kinds=list(message.robot_kinds),
+            parameters=[ParameterInfo(name=p.name, description=p.description,
+                                      type=pb.ParameterDescription.Type.Name(p.type).lower(),
+                                      default=p.default_value, min=p.min, max=p.max, per_joint=p.per_joint)
+                        for p in message.parameters])
+
+
+def limits_used(options: Optional[pb.TrajectoryOptions],
+                model_velocity: Optional[np.ndarray]) -> "tuple[Optional[np.ndarray], Optional[np.ndarray]]":
+    """The (velocity, acceleration) limits the server applies, as far as the client knows them.
+
+    As on the server: the velocity limits are the request's ``max_velocity`` capped at the model's
+    (or the model's when none are given); the acceleration limits are the request's
+    ``max_acceleration``, else twice the velocity limits. ``model_velocity`` None = unknown (then a
+    requested ``max_velocity`` is returned uncapped).
+    """
+    velocity: Optional[np.ndarray] = None
+    acceleration: Optional[np.ndarray] = None
+    if options is not None and len(options.max_velocity) > 0:
+        velocity = np.array(options.max_velocity, dtype=float)
+        if model_velocity is not None and model_velocity.shape == velocity.shape:
+            velocity = np.minimum(velocity, model_velocity)
+    elif model_velocity is not None:
+        velocity = np.array(model_velocity, dtype=float)
+    if options is not None and len(options.max_acceleration) > 0:
+        acceleration = np.array(options.max_acceleration, dtype=float)
+    elif velocity is not None:
+        acceleration = 2.0 * velocity
+    return velocity, acceleration
+
+
+def _path_array(states: Any, dof: int) -> np.ndarray:
+    if len(states) == 0:
+        return np.zeros((0, dof))
+    return np.array([list(s.positions) for s in states], dtype=float)
+
+
+@dataclass
+class PlanResult:
+    """The answer to a Plan request.
+
+    Attributes:
+        outcome: the PlanOutcome name, e.g. ``"SUCCESS"``, ``"NO_PATH_WITHIN_BUDGET"``.
+        message: the server's reason or summary.
+        success: ``outcome == "SUCCESS"`` (a verified trajectory is present).
+        trajectory: the timed trajectory (None unless success).
+        path: the shortened geometric path, shape (M, n) [rad] (start … goal).
+        duration: trajectory duration [s].
+        timings, statistics, verification, quality, optimizer: the response's StageTimings,
+            PlannerStatistics, Verification, TrajectoryQuality and OptimizerStatistics as dicts
+            with snake_case keys (units as in the proto).
+        velocity_limits, acceleration_limits: the limits the trajectory was timed with, shape (n,),
+            when the client knows them (see ``limits_used``); else None.
+        reached_goal: for a pose goal, the IK solution reached (else None).
+        response: the raw chasles.v1.PlanResponse.
+    """
+
+    outcome: str
+    message: str
+    success: bool
+    request_id: str
+    trajectory: Optional[Trajectory]
+    path: np.ndarray
+    duration: float
+    timings: Dict[str, float]
+    statistics: Dict[str, Any]
+    verification: Dict[str, Any]
+    quality: Dict[str, Any]
+    optimizer: Dict[str, Any]
+    robot_id: str
+    scene_id: str
+    reached_goal: Optional[np.ndarray] = None
+    goal_manipulability: float = 0.0
+    velocity_limits: Optional[np.ndarray] = None
+    acceleration_limits: Optional[np.ndarray] = None
+    response: pb.PlanResponse = field(default_factory=pb.PlanResponse, repr=False)
+
+    @classmethod
+    def from_response(cls, response: pb.PlanResponse, velocity_limits: Optional[np.ndarray] = None,
+                      acceleration_limits: Optional[np.ndarray] = None) -> "PlanResult":
+        success = response.outcome == pb.SUCCESS
+        trajectory = Trajectory.from_response(response) if len(response.trajectory.points) > 0 else None
+        dof = trajectory.dof if trajectory is not None else (len(response.path[0].positions) if response.path else 0)
+        return cls(
+            outcome=outcome_name(response.outcome), message=response.message, success=success,
+            request_id=response.request_id, trajectory=trajectory, path=_path_array(response.path, dof),
+            duration=response.duration, timings=message_to_dict(response.timings),
+            statistics=message_to_dict(response.statistics), verification=message_to_dict(response.verification),
+            quality=message_to_dict(response.quality), optimizer=message_to_dict(response.optimizer),
+            robot_id=response.robot_id, scene_id=response.scene_id,
+            reached_goal=(np.array(response.reached_goal.positions, dtype=float)
+                          if len(response.reached_goal.positions) > 0 else None),
+            goal_manipulability=response.goal_manipulability,
+            velocity_limits=velocity_limits, acceleration_limits=acceleration_limits, response=response)
+
+
+@dataclass
+class OptimizeResult:
+    """The answer to an Optimize request (fields as in ``PlanResult``).
+
+    Attributes:
+        input_duration: duration of the input trajectory [s]; 0 for a path.
+    """
+
+    outcome: str
+    message: str
+    success: bool
+    request_id: str
+    trajectory: Optional[Trajectory]
+    duration: float
+    input_duration: float
+    timings: Dict[str, float]
+    verification: Dict[str, Any]
+    quality: Dict[str, Any]
+    optimizer: Dict[str, Any]
+    robot_id: str
+    scene_id: str
+    velocity_limits: Optional[np.ndarray] = None
+    acceleration_limits: Optional[np.ndarray] = None
+    response: pb.OptimizeResponse = field(default_factory=pb.OptimizeResponse, repr=False)
+
+    @classmethod
+    def from_response(cls, response: pb.OptimizeResponse, velocity_limits: Optional[np.ndarray] = None,
+                      acceleration_limits: Optional[np.ndarray] = None) -> "OptimizeResult":
+        trajectory = Trajectory.from_response(response) if len(response.trajectory.points) > 0 else None
+        return cls(
+            outcome=outcome_name(response.outcome), message=response.message,
+            success=response.outcome == pb.SUCCESS, request_id=response.request_id, trajectory=trajectory,
+            duration=response.duration, input_duration=response.input_duration,
+            timings=message_to_dict(response.timings), verification=message_to_dict(response.verification),
+            quality=message_to_dict(response.quality), optimizer=message_to_dict(response.optimizer),
+            robot_id=response.robot_id, scene_id=response.scene_id,
+            velocity_limits=velocity_limits, acceleration_limits=acceleration_limits, response=response)

@@ -1,0 +1,319 @@
+"""chasles_client end to end against a chasles-server this test starts (CHASLES_SERVER_BIN).
+
+The server listens on 127.0.0.1:0 and prints the port it got; it runs for the whole module and
+is stopped (SIGTERM, then SIGKILL after 10 s) at the end.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+from pathlib import Path
+from typing import Optional
+
+import grpc
+import numpy as np
+
+from chasles_client import BenchmarkRun, ChaslesError, Client
+from chasles_client.plots import plot_benchmark, plot_trajectory
+
+ROOT = Path(__file__).resolve().parents[2]
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+EXAMPLE = json.loads((ROOT / "examples/requests/panda_table.json").read_text())
+START = np.array(EXAMPLE["start"]["positions"])
+GOAL = np.array(EXAMPLE["goal"]["positions"])
+
+_server: Optional[subprocess.Popen] = None
+_server_log: Optional[Path] = None
+_address = ""
+_workdir: Optional[tempfile.TemporaryDirectory] = None
+
+
+def setUpModule() -> None:  # noqa: N802 - unittest's name
+    global _server, _server_log, _address, _workdir
+    binary = os.environ.get("CHASLES_SERVER_BIN")
+    if not binary:
+        raise unittest.SkipTest("CHASLES_SERVER_BIN is not set (ctest sets it to the built chasles-server)")
+    _workdir = tempfile.TemporaryDirectory(prefix="chasles_python_test_")
+    _server_log = Path(_workdir.name) / "server.log"
+    with _server_log.open("w") as log:
+        _server = subprocess.Popen([binary, "--listen", "127.0.0.1:0", "--threads", "2"], stdout=log, stderr=log)
+    deadline = time.monotonic() + 30.0
+    while time.monotonic() < deadline:
+        match = re.search(r"listening on \S+ \(port (\d+)\)", _server_log.read_text())
+        if match:
+            _address = f"127.0.0.1:{match.group(1)}"
+            break
+        if _server.poll() is not None:
+            raise RuntimeError(f"chasles-server exited with {_server.returncode}:\n{_server_log.read_text()}")
+        time.sleep(0.05)
+    else:
+        tearDownModule()
+        raise RuntimeError("chasles-server did not report its port within 30 s")
+
+
+def tearDownModule() -> None:  # noqa: N802
+    global _server
+    if _server is not None and _server.poll() is None:
+        _server.send_signal(signal.SIGTERM)
+        try:
+            _server.wait(timeout=10.0)
+        except subprocess.TimeoutExpired:
+            _server.kill()
+            _server.wait()
+    _server = None
+    if _workdir is not None:
+        _workdir.cleanup()
+
+
+class ServerTest(unittest.TestCase):
+    client: Client
+    robot_id: str
+
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.client = Client(_address, timeout=60.0)
+        cls.client.wait_until_serving(timeout=20.0)
+        # The server's default robot is this URDF and SRDF under the name "panda".
+        cls.robot_id = cls.client.upload_robot(ROOT / "examples/robots/panda.urdf",
+                                               ROOT / "examples/robots/panda.srdf", name="panda")
+        cls.out = Path(tempfile.mkdtemp(prefix="plots_", dir=_workdir.name))
+
+    @classmethod
+    def tearDownClass(cls) -> None:
+        cls.client.close()
+
+    def check_trajectory(self, traj, start: np.ndarray, goal: np.ndarray,
+                         velocity_limits: np.ndarray, acceleration_limits: np.ndarray) -> None:
+        n = len(start)
+        samples = len(traj)
+        self.assertGreater(samples, 2)
+        self.assertEqual(traj.t.shape, (samples,))
+        for array in (traj.q, traj.qd, traj.qdd):
+            self.assertEqual(array.shape, (samples, n))
+            self.assertTrue(np.isfinite(array).all())
+        self.assertEqual(len(traj.joint_names), n)
+        self.assertEqual(traj.t[0], 0.0)
+        self.assertTrue((np.diff(traj.t) > 0).all(), "sample times must increase")
+        self.assertAlmostEqual(traj.duration, traj.t[-1], delta=1e-9)
+        np.testing.assert_allclose(traj.q[0], start, atol=1e-6, rtol=0)
+        np.testing.assert_allclose(traj.q[-1], goal, atol=1e-6, rtol=0)
+        self.assertTrue((np.abs(traj.qd) <= velocity_limits * (1 + 1e-9) + 1e-9).all(),
+                        f"peak |qd| {np.abs(traj.qd).max(axis=0)} above {velocity_limits}")
+        self.assertTrue((np.abs(traj.qdd) <= acceleration_limits * (1 + 1e-9) + 1e-9).all(),
+                        f"peak |qdd| {np.abs(traj.qdd).max(axis=0)} above {acceleration_limits}")
+
+    def test_health(self) -> None:
+        self.assertEqual(self.client.health(), "SERVING")
+        self.assertEqual(self.client.health("chasles.v1.Planning"), "SERVING")
+        with self.assertRaises(ChaslesError) as caught:
+            self.client.health("no.such.Service")
+        self.assertEqual(caught.exception.code, grpc.StatusCode.NOT_FOUND)
+
+    def test_planners(self) -> None:
+        planners = {p.id: p for p in self.client.planners()}
+        self.assertIn("rrt_connect", planners)
+        rrt = planners["rrt_connect"]
+        self.assertIn("arm", rrt.robot_kinds)
+        for parameter in rrt.parameters:
+            self.assertIn(parameter.type, ("double", "int", "bool"))
+            self.assertLessEqual(parameter.min, parameter.default)
+            self.assertLessEqual(parameter.default, parameter.max)
+
+    def test_upload_robot_answers_its_limits(self) -> None:
+        info = self.client.robot_info(self.robot_id)
+        self.assertEqual(len(info.joint_names), 7)
+        self.assertEqual(info.velocity_limits.shape, (7,))
+        self.assertTrue((info.velocity_limits > 0).all())
+        self.assertTrue((info.lower_limits < info.upper_limits).all())
+
+    def test_plan_on_the_default_robot(self) -> None:
+        result = self.client.plan(START, GOAL, time_budget=3.0, seed=7, request_id="python-default")
+        self.assertTrue(result.success, f"{result.outcome}: {result.message}")
+        self.assertEqual(result.outcome, "SUCCESS")
+        self.assertEqual(result.request_id, "python-default")
+        # The default robot is examples/robots/panda.urdf: the same content hash as the upload, so
+        # the client knows the limits the trajectory was timed with.
+        self.assertEqual(result.robot_id, self.robot_id)
+        model = self.client.robot_info(self.robot_id).velocity_limits
+        np.testing.assert_array_equal(result.velocity_limits, model)
+        np.testing.assert_array_equal(result.acceleration_limits, 2 * model)
+        self.check_trajectory(result.trajectory, START, GOAL, result.velocity_limits, result.acceleration_limits)
+        self.assertEqual(result.path.shape[1], 7)
+        np.testing.assert_allclose(result.path[0], START, atol=1e-9)
+        np.testing.assert_allclose(result.path[-1], GOAL, atol=1e-9)
+        self.assertGreater(result.statistics["path_length"], 0.0)
+        self.assertIsInstance(result.statistics["collision_checks"], int)
+        self.assertLessEqual(result.quality["max_velocity_ratio"], 1.0 + 1e-9)
+        self.assertGreater(result.timings["total"], 0.0)
+
+        png = self.out / "default.png"
+        plot_trajectory(result, path=png)
+        data = png.read_bytes()
+        self.assertTrue(data.startswith(PNG_SIGNATURE))
+        self.assertGreater(len(data), 1024)
+        svg = self.out / "default.svg"
+        plot_trajectory(result.trajectory, result.velocity_limits, result.acceleration_limits, path=svg)
+        self.assertIn("<svg", svg.read_text())
+
+    def test_plan_with_lower_limits_and_an_uploaded_scene(self) -> None:
+        scene = json.loads((ROOT / "examples/scenes/table.json").read_text())
+        scene["boxes"].append({"name": "post", "size": {"x": 0.05, "y": 0.05, "z": 0.3},
+                               "pose": {"position": {"x": -0.6, "y": 0.6, "z": 0.15}}})
+        scene_id = self.client.upload_scene(scene)
+        self.assertTrue(scene_id)
+        velocity = np.array([1.0, 1.0, 1.0, 1.0, 1.5, 1.5, 1.5])
+        result = self.client.plan(START, GOAL, robot_id=self.robot_id, scene_id=scene_id, time_budget=3.0,
+                                  seed=3, max_velocity=velocity, sample_period=0.02)
+        self.assertTrue(result.success, f"{result.outcome}: {result.message}")
+        self.assertEqual(result.scene_id, scene_id)
+        np.testing.assert_array_equal(result.velocity_limits, velocity)
+        self.check_trajectory(result.trajectory, START, GOAL, velocity, 2 * velocity)
+        self.assertLessEqual(np.diff(result.trajectory.t).max(), 0.02 + 1e-9)
+
+    def test_nan_start_is_invalid_argument_naming_the_field(self) -> None:
+        start = START.copy()
+        start[2] = math.nan
+        with self.assertRaises(ChaslesError) as caught:
+            self.client.plan(start, GOAL)
+        self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertEqual(caught.exception.method, "Plan")
+        self.assertIn("start.positions[2]", caught.exception.message)
+
+    def test_unknown_planner_and_scene_are_not_found(self) -> None:
+        with self.assertRaises(ChaslesError) as caught:
+            self.client.plan(START, GOAL, planner="no_such_planner")
+        self.assertEqual(caught.exception.code, grpc.StatusCode.NOT_FOUND)
+        self.assertIn("rrt_connect", caught.exception.message)  # the known names are listed
+        with self.assertRaises(ChaslesError) as caught:
+            self.client.plan(START, GOAL, scene_id="0123456789abcdef")
+        self.assertEqual(caught.exception.code, grpc.StatusCode.NOT_FOUND)
+
+    def test_optimize_a_short_path(self) -> None:
+        path = np.array([START, START + [0.2, 0.1, 0.0, 0.1, 0.0, 0.0, 0.0], START + [0.3, 0.2, 0.0, 0.2, 0.0, 0.1, 0.0]])
+        result = self.client.optimize(path, robot_id=self.robot_id, post_processing="topp")
+        self.assertTrue(result.success, f"{result.outcome}: {result.message}")
+        self.assertEqual(result.optimizer["used"], "topp")
+        model = self.client.robot_info(self.robot_id).velocity_limits
+        self.check_trajectory(result.trajectory, path[0], path[-1], model, 2 * model)
+        # A timed trajectory goes back in as the input path.
+        again = self.client.optimize(result.trajectory, robot_id=self.robot_id, post_processing="none")
+        self.assertTrue(again.success, f"{again.outcome}: {again.message}")
+        self.assertGreater(again.input_duration, 0.0)
+
+    def test_cli_plan_writes_a_plot(self) -> None:
+        png = self.out / "cli.png"
+        done = subprocess.run([sys.executable, "-m", "chasles_client", "--server", _address, "plan",
+                               str(ROOT / "examples/requests/panda_table.json"), "--plot", str(png)],
+                              capture_output=True, text=True, timeout=60)
+        self.assertEqual(done.returncode, 0, done.stdout + done.stderr)
+        self.assertIn("SUCCESS", done.stdout)
+        self.assertTrue(png.read_bytes().startswith(PNG_SIGNATURE))
+
+    def test_example_script(self) -> None:
+        svg = self.out / "example.svg"
+        done = subprocess.run([sys.executable, str(ROOT / "examples/python/plan_and_plot.py"), "--server", _address,
+                               "--out", str(svg)], capture_output=True, text=True, timeout=60)
+        self.assertEqual(done.returncode, 0, done.stdout + done.stderr)
+        self.assertIn("<svg", svg.read_text())
+
+
+class BenchmarkTest(unittest.TestCase):
+    """Benchmark RPC: 2 configurations × 1 problem × 2 runs."""
+
+    client: Client
+
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.client = Client(_address, timeout=60.0)
+        cls.client.wait_until_serving(timeout=20.0)
+
+    @classmethod
+    def tearDownClass(cls) -> None:
+        cls.client.close()
+
+    def test_benchmark(self) -> None:
+        progress, runs = [], []
+        problem = {"name": "panda_table", "start": START.tolist(), "goal": GOAL.tolist()}
+        configs = ["rrt_connect", {"name": "rrt_connect_short", "planner": "rrt_connect",
+                                   "parameters": {"range": 0.5}}]
+        result = self.client.benchmark([problem], configs, runs=2, run_budget=2.0, parallelism=2, seed=5,
+                                       on_progress=progress.append, on_run=runs.append, timeout=60.0)
+        self.assertEqual(len(runs), 4)
+        self.assertTrue(all(isinstance(r, BenchmarkRun) for r in runs))
+        self.assertGreaterEqual(len(progress), 4)
+        self.assertEqual(progress[-1].done, 4)
+        self.assertEqual(progress[-1].total, 4)
+        self.assertEqual((result.runs_finished, result.runs_total, result.stopped), (4, 4, False))
+        self.assertEqual(result.problem_names, ["panda_table"])
+        self.assertEqual(result.config_names, ["rrt_connect", "rrt_connect_short"])
+        self.assertEqual(sorted((r.config, r.run) for r in result.runs), [(0, 0), (0, 1), (1, 0), (1, 1)])
+        self.assertEqual({r.seed for r in result.runs}, {5, 6})
+        self.assertEqual([s.runs for s in result.summaries], [2, 2])
+        for summary in result.summaries:
+            self.assertEqual(summary.success_rate, summary.solved / summary.runs)
+        array = result.to_array()
+        self.assertEqual(array.shape, (4,))
+        self.assertTrue(array["solved"].all(), result.runs)
+        self.assertTrue((array["path_length"] > 0).all())
+
+        out = Path(tempfile.mkdtemp(prefix="bench_", dir=_workdir.name))
+        logs = result.write_ompl_logs(out)
+        self.assertEqual([p.name for p in logs], ["panda_table.log"])
+        text = logs[0].read_text()
+        self.assertIn("rrt_connect_short", text)
+        with result.write_csv(out / "runs.csv").open() as stream:
+            self.assertEqual(len(list(csv.DictReader(stream))), 4)
+        self.assertEqual(len(json.loads(result.write_json(out / "runs.json").read_text())["runs"]), 4)
+        png = out / "bench.png"
+        plot_benchmark(result, path=png)
+        self.assertTrue(png.read_bytes().startswith(PNG_SIGNATURE))
+        self.assertGreater(png.stat().st_size, 1024)
+        svg = out / "bench.svg"
+        plot_benchmark(result, path=svg)
+        self.assertIn("<svg", svg.read_text())
+
+    def test_stop_benchmark_keeps_the_finished_runs(self) -> None:
+        stops = []
+
+        def stop_after_first_run(run: BenchmarkRun) -> None:
+            if not stops:  # the request id is known before the call: stop it from the callback
+                stops.append(self.client.stop_benchmark("python-stop-test"))
+
+        problem = {"start": START.tolist(), "goal": GOAL.tolist()}
+        result = self.client.benchmark([problem], ["rrt_connect"], runs=1000, run_budget=1.0, parallelism=1,
+                                       request_id="python-stop-test", on_run=stop_after_first_run, timeout=60.0)
+        self.assertEqual(stops, [True])
+        self.assertTrue(result.stopped)
+        self.assertEqual(result.request_id, "python-stop-test")
+        self.assertEqual(result.runs_total, 1000)
+        self.assertGreaterEqual(result.runs_finished, 1)
+        self.assertLess(result.runs_finished, 1000)
+        self.assertEqual(len(result.runs), result.runs_finished)
+        self.assertEqual(result.summaries[0].runs, result.runs_finished)
+
+    def test_stop_unknown_benchmark_is_not_found(self) -> None:
+        with self.assertRaises(ChaslesError) as caught:
+            self.client.stop_benchmark("no-such-benchmark")
+        self.assertEqual(caught.exception.code, grpc.StatusCode.NOT_FOUND)
+        self.assertIn("no-such-benchmark", caught.exception.message)
+
+    def test_bad_benchmark_request_is_invalid_argument(self) -> None:
+        with self.assertRaises(ChaslesError) as caught:
+            self.client.benchmark([{"start": START.tolist(), "goal": GOAL.tolist()}], ["rrt_connect"], runs=20000)
+        self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertEqual(caught.exception.method, "Benchmark")
+        self.assertIn("runs", caught.exception.message)
+
+
+if __name__ == "__main__":
+    unittest.main()
