@@ -54,11 +54,14 @@ def setUpModule() -> None:  # noqa: N802 - unittest's name
             _address = f"127.0.0.1:{match.group(1)}"
             break
         if _server.poll() is not None:
-            raise RuntimeError(f"chasles-server exited with {_server.returncode}:\n{_server_log.read_text()}")
+            code, log = _server.returncode, _server_log.read_text()
+            tearDownModule()
+            raise RuntimeError(f"chasles-server exited with {code}:\n{log}")
         time.sleep(0.05)
     else:
+        log = _server_log.read_text()
         tearDownModule()
-        raise RuntimeError("chasles-server did not report its port within 30 s")
+        raise RuntimeError(f"chasles-server did not report its port within 30 s:\n{log}")
 
 
 def tearDownModule() -> None:  # noqa: N802
