@@ -7,6 +7,7 @@ is stopped (SIGTERM, then SIGKILL after 10 s) at the end.
 from __future__ import annotations
 
 import csv
+import ctypes
 import json
 import math
 import os
@@ -38,6 +39,12 @@ _address = ""
 _workdir: Optional[tempfile.TemporaryDirectory] = None
 
 
+def _stop_with_this_process() -> None:
+    """In the server's child process: SIGTERM when the test process dies (even by SIGKILL)."""
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+
 def setUpModule() -> None:  # noqa: N802 - unittest's name
     global _server, _server_log, _address, _workdir
     binary = os.environ.get("CHASLES_SERVER_BIN")
@@ -46,7 +53,8 @@ def setUpModule() -> None:  # noqa: N802 - unittest's name
     _workdir = tempfile.TemporaryDirectory(prefix="chasles_python_test_")
     _server_log = Path(_workdir.name) / "server.log"
     with _server_log.open("w") as log:
-        _server = subprocess.Popen([binary, "--listen", "127.0.0.1:0", "--threads", "2"], stdout=log, stderr=log)
+        _server = subprocess.Popen([binary, "--listen", "127.0.0.1:0", "--threads", "2"], stdout=log, stderr=log,
+                                   preexec_fn=_stop_with_this_process)
     deadline = time.monotonic() + 30.0
     while time.monotonic() < deadline:
         match = re.search(r"listening on \S+ \(port (\d+)\)", _server_log.read_text())
