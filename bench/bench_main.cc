@@ -2,12 +2,12 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|coordination|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|coordination|benchmark|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
 //                 [--segments N] [--paths N] [--knots K] [--methods topp,collocation,spline]
-//                 [--runs N] [--scenarios crossing_arms,swap_bases,corridor] [--team-budget S]
+//                 [--runs N] [--scenarios crossing_arms,swap_bases,corridor] [--team-budget S] [--bench-repeats N]
 
 #include <algorithm>
 #include <chrono>
@@ -17,6 +17,7 @@
 #include <iostream>
 #include <limits>
 #include <map>
+#include <memory>
 #include <random>
 #include <sstream>
 #include <string>
@@ -70,6 +71,7 @@ struct Options {
   int runs = 5;         // coordination: seeds per scenario and method
   std::vector<std::string> scenarios = {"crossing_arms", "swap_bases", "corridor"};
   double team_budget = 30.0;  // coordination: time budget per request [s]
+  int bench_repeats = 5;      // benchmark: alternating repeats of each throughput measurement
 };
 
 std::string ReadFile(const std::string& path) {
@@ -923,6 +925,115 @@ void BenchCoordination(const Options& options) {
               "after another with the others out of the way).\n");
 }
 
+// ---------------------------------------------------------------------------------------------
+// Benchmark RPC throughput (issue 7): runs per second with 1 and 2 worker threads, next to the
+// same runs executed one after another in-process (no gRPC) in the same process run.
+
+void BenchBenchmarkRpc(const Options& options) {
+  const std::vector<std::string> examples = {"panda_table", "panda_shelf", "planar_2r_table", "planar_2r_shelf"};
+  v1::BenchmarkRequest request;
+  for (const std::string& name : examples) {
+    v1::BenchmarkProblem* problem = request.add_problems();
+    problem->set_name(name);
+    const auto status = google::protobuf::util::JsonStringToMessage(
+        ReadFile(examples_dir + "/requests/" + name + ".json"), problem->mutable_request());
+    if (!status.ok()) throw std::runtime_error(name + ".json: " + status.ToString());
+  }
+  for (const char* planner : {"rrt_connect", "rrt", "prm"}) request.add_configs()->mutable_planner()->set_planner_id(planner);
+  request.set_runs(static_cast<std::uint32_t>(options.runs));
+  request.set_run_budget(options.budget);
+  request.set_seed(options.seed);
+  const int total = request.problems_size() * request.configs_size() * options.runs;
+
+  // Baseline: the same runs, in-process, one after another.
+  PlannerRegistry registry;
+  RegisterDefaultPlanners(&registry);
+  const PlanningPipeline pipeline(registry);
+  std::vector<PlanQuery> queries;
+  for (const v1::BenchmarkProblem& problem : request.problems()) {
+    // No robot or scene in the request: the server's defaults (the Panda at the table).
+    const v1::PlanRequest& plan = problem.request();
+    auto checker = std::make_shared<const CollisionChecker>(
+        plan.has_robot() ? RobotFromProto(plan.robot()) : LoadRobot("panda"),
+        plan.has_scene() ? SceneFromProto(plan.scene()) : LoadScene("table"));
+    for (const v1::BenchmarkConfig& config : request.configs()) {
+      v1::PlanRequest merged = problem.request();
+      *merged.mutable_planner() = config.planner();
+      merged.set_time_budget(options.budget);
+      RequestSettings settings;
+      queries.push_back(PlanQueryFromProto(merged, checker, registry, &settings));
+    }
+  }
+  const auto direct = [&]() {
+    const auto t0 = Clock::now();
+    int solved = 0;
+    for (int r = 0; r < options.runs; ++r) {
+      for (PlanQuery query : queries) {
+        query.seed = options.seed + r;
+        solved += pipeline.Plan(query, Termination::After(std::chrono::duration<double>(options.budget))).code ==
+                          PlanOutcomeCode::kSuccess ? 1 : 0;
+      }
+    }
+    if (solved != total) std::fprintf(stderr, "benchmark bench: %d of %d direct runs solved\n", solved, total);
+    return total / std::chrono::duration<double>(Clock::now() - t0).count();
+  };
+
+  std::map<int, std::unique_ptr<PlanningServer>> servers;
+  std::map<int, std::unique_ptr<v1::Planning::Stub>> stubs;
+  for (int threads : {1, 2}) {
+    ServerOptions server_options;
+    server_options.listen = "127.0.0.1:0";
+    server_options.threads = threads;
+    server_options.log_requests = false;
+    servers[threads] = std::make_unique<PlanningServer>(server_options);
+    stubs[threads] = v1::Planning::NewStub(grpc::CreateChannel(
+        "127.0.0.1:" + std::to_string(servers[threads]->port()), grpc::InsecureChannelCredentials()));
+  }
+  const auto remote = [&](int threads) {
+    grpc::ClientContext context;
+    const auto t0 = Clock::now();
+    auto reader = stubs[threads]->Benchmark(&context, request);
+    v1::BenchmarkResponse message;
+    int runs = 0, solved = 0;
+    while (reader->Read(&message)) {
+      if (message.has_run()) {
+        ++runs;
+        solved += message.run().solved() ? 1 : 0;
+      }
+    }
+    const grpc::Status status = reader->Finish();
+    if (!status.ok() || runs != total) {
+      throw std::runtime_error("Benchmark RPC failed: " + status.error_message() + " (" + std::to_string(runs) + " runs)");
+    }
+    if (solved != total) std::fprintf(stderr, "benchmark bench: %d of %d runs solved\n", solved, total);
+    return total / std::chrono::duration<double>(Clock::now() - t0).count();
+  };
+
+  // Alternate the three measurements so a load change on the machine hits all of them.
+  std::vector<double> direct_rates, one_rates, two_rates, speedups;
+  (void)remote(1);  // warm-up: parses and caches the robots, scenes and checkers
+  (void)remote(2);
+  for (int repeat = 0; repeat < options.bench_repeats; ++repeat) {
+    direct_rates.push_back(direct());
+    one_rates.push_back(remote(1));
+    two_rates.push_back(remote(2));
+    speedups.push_back(two_rates.back() / one_rates.back());
+  }
+  std::printf("\n## Benchmark RPC throughput (%zu example problems x %d configurations x %d runs = %d runs per call, "
+              "budget %.2g s, %d repeats)\n\n",
+              examples.size(), request.configs_size(), options.runs, total, options.budget, options.bench_repeats);
+  std::printf("| how | median runs/s | min | max | ratio to in-process |\n|---|---|---|---|---|\n");
+  const double base = Quantile(direct_rates, 0.5);
+  const auto row = [&](const char* how, const std::vector<double>& rates) {
+    std::printf("| %s | %.1f | %.1f | %.1f | %.2f× |\n", how, Quantile(rates, 0.5), Quantile(rates, 0.0),
+                Quantile(rates, 1.0), Quantile(rates, 0.5) / base);
+  };
+  row("in-process pipeline, one run after another (baseline)", direct_rates);
+  row("Benchmark RPC, server with 1 worker thread", one_rates);
+  row("Benchmark RPC, server with 2 worker threads", two_rates);
+  std::printf("\n2 threads vs 1: median of the per-repeat ratios %.2f×\n", Quantile(speedups, 0.5));
+}
+
 int Main(int argc, char** argv) {
   Options options;
   examples_dir = CHASLES_EXAMPLES_DIR;
@@ -952,16 +1063,18 @@ int Main(int argc, char** argv) {
     else if (arg == "--runs") options.runs = std::stoi(value());
     else if (arg == "--scenarios") options.scenarios = Split(value());
     else if (arg == "--team-budget") options.team_budget = std::stod(value());
+    else if (arg == "--bench-repeats") options.bench_repeats = std::stoi(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|coordination|all]\n"
+                   "usage: chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|coordination|benchmark|all]\n"
                    "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
                    "                     [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]\n"
                    "                     [--problems maze,office,drone_course,panda_shelf]\n"
                    "                     [--segments N] [--paths N] [--knots K] [--methods topp,collocation,spline]\n"
-                   "                     [--runs N] [--scenarios crossing_arms,swap_bases,corridor] [--team-budget S]\n");
+                   "                     [--runs N] [--scenarios crossing_arms,swap_bases,corridor] [--team-budget S]\n"
+                   "                     [--bench-repeats N]\n");
       return arg == "--help" ? 0 : 2;
     }
   }
@@ -972,6 +1085,7 @@ int Main(int argc, char** argv) {
   if (options.section == "kinematics" || options.section == "all") BenchKinematics(options);
   if (options.section == "trajectory" || options.section == "all") BenchTrajectory(options);
   if (options.section == "coordination" || options.section == "all") BenchCoordination(options);
+  if (options.section == "benchmark" || options.section == "all") BenchBenchmarkRpc(options);
   return 0;
 }
 

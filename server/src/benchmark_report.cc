@@ -8,12 +8,12 @@
 namespace chasles {
 namespace {
 
-/// Shortest text that reads back as the same double; nan/inf as OMPL's converter expects them.
+/// Ten significant digits (sub-nanosecond for times of seconds); nan/inf as OMPL's converter expects them.
 std::string Number(double value) {
   if (std::isnan(value)) return "nan";
   if (std::isinf(value)) return "inf";
   char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.17g", value);
+  std::snprintf(buffer, sizeof(buffer), "%.10g", value);
   return buffer;
 }
 
