@@ -22,9 +22,10 @@ void PrintUsage(std::FILE* out) {
   std::fprintf(out,
                "Usage: chasles-server [--listen ADDR] [--threads N] [--max-message-mb MB]\n"
                "\n"
-               "Serves chasles.v1.Planning (Plan, ListPlanners, UploadRobot, UploadScene) and the\n"
-               "standard gRPC health service. Requests that name no robot/scene use the embedded\n"
-               "Franka Panda and table scene.\n"
+               "Serves chasles.v1.Planning (Plan, Optimize, InverseKinematics, ListPlanners, UploadRobot,\n"
+               "UploadScene, UpdateScene, Coordinate, workcells, Benchmark, StopBenchmark) and the standard\n"
+               "gRPC health service. Requests that name no robot/scene use the embedded Franka Panda and\n"
+               "table scene. Planning, benchmark runs and coordination share the N worker threads.\n"
                "\n"
                "  --listen ADDR         address:port to listen on (default 127.0.0.1:50051; port 0 = any)\n"
                "  --threads N           planning worker threads (default: hardware threads)\n"
