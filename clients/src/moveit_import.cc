@@ -1,1 +1,849 @@
 #include "moveit_import.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include "chasles/robot/error.h"
+#include "chasles/robot/robot_model.h"
+#include "chasles/server/convert.h"
+#include "chasles/server/default_assets.h"
+
+// Design notes
+// ------------
+// * One Value (a YAML node plus its key path and the file name) does every read, so every error
+//   names the file, the key path with indices, the value and the rule in one place. Nodes are
+//   only ever read through const references: yaml-cpp's non-const operator[] inserts keys.
+// * Missing optional fields take the moveit_msgs defaults (0, empty, identity for an object
+//   pose); a key that the conversion cannot do without (an object id, a primitive's type and
+//   dimensions, a joint constraint's joint and position) is a named error.
+// * Nothing that changes the problem is dropped silently: shapes, operations, constraints and
+//   attached objects that Chasles cannot represent are errors naming what is supported.
+
+namespace chasles::moveit {
+namespace {
+
+constexpr double kMaxGoalTolerance = 0.1;  // JointGoal.tolerance range [rad]
+constexpr double kMaxTimeBudget = 600.0;   // PlanRequest.time_budget range [s]
+
+/// A YAML node with the path that led to it, for messages.
+class Value {
+ public:
+  Value(YAML::Node node, std::string path, const std::string* source)
+      : node_(std::move(node)), path_(std::move(path)), source_(source) {}
+
+  const std::string& path() const { return path_; }
+  const std::string& source() const { return *source_; }
+  const YAML::Node& node() const { return node_; }
+  bool IsNull() const { return !node_.IsDefined() || node_.IsNull(); }
+
+  /// Throws Error(kInvalidArgument) "<source>: <path> <rule>".
+  [[noreturn]] void Fail(const std::string& rule) const { ThrowInvalid(source() + ": " + path_ + " " + rule); }
+
+  /// The key's value, or nullopt when the key is absent or null. The node must be a map (or null).
+  std::optional<Value> Find(const std::string& key) const {
+    if (IsNull()) return std::nullopt;
+    RequireMap();
+    const YAML::Node& self = node_;
+    const YAML::Node child = self[key];
+    if (!child.IsDefined() || child.IsNull()) return std::nullopt;
+    return Value(child, Join(key), source_);
+  }
+
+  /// The key's value; a missing key is an error.
+  Value Get(const std::string& key) const {
+    if (IsNull()) Fail("is empty: it needs the key '" + key + "'");
+    std::optional<Value> child = Find(key);
+    if (!child) ThrowInvalid(source() + ": " + Join(key) + " is missing");
+    return *child;
+  }
+
+  /// The elements of a sequence; null = none.
+  std::vector<Value> Items() const {
+    std::vector<Value> items;
+    if (IsNull()) return items;
+    if (!node_.IsSequence()) Fail("= " + Describe() + " must be a list");
+    items.reserve(node_.size());
+    for (std::size_t i = 0; i < node_.size(); ++i) {
+      const YAML::Node& self = node_;
+      items.emplace_back(self[i], path_ + "[" + std::to_string(i) + "]", source_);
+    }
+    return items;
+  }
+
+  /// Number of elements of a list (0 for null).
+  std::size_t Count() const { return Items().size(); }
+
+  /// A finite number.
+  double Number() const {
+    double value = 0.0;
+    if (!node_.IsScalar() || !YAML::convert<double>::decode(node_, value)) Fail("= " + Describe() + " is not a number");
+    if (!std::isfinite(value)) Fail("= " + node_.Scalar() + " must be finite");
+    return value;
+  }
+
+  /// A whole number within [lo, hi].
+  long long Integer(long long lo, long long hi) const {
+    const double value = Number();
+    if (value != std::floor(value) || value < static_cast<double>(lo) || value > static_cast<double>(hi)) {
+      Fail("= " + node_.Scalar() + " must be a whole number within [" + std::to_string(lo) + ", " + std::to_string(hi) +
+           "]");
+    }
+    return static_cast<long long>(value);
+  }
+
+  bool Bool() const {
+    bool value = false;
+    if (node_.IsScalar()) {
+      if (YAML::convert<bool>::decode(node_, value)) return value;
+      if (node_.Scalar() == "0") return false;
+      if (node_.Scalar() == "1") return true;
+    }
+    Fail("= " + Describe() + " is not a boolean (true or false)");
+  }
+
+  std::string Text() const {
+    if (IsNull()) return "";
+    if (!node_.IsScalar()) Fail("= " + Describe() + " must be a string");
+    return node_.Scalar();
+  }
+
+  /// How the value reads in a message: its text, quoted unless it is a number.
+  std::string Describe() const {
+    if (IsNull()) return "null";
+    if (node_.IsSequence()) return "a list of " + std::to_string(node_.size());
+    if (node_.IsMap()) return "a map";
+    double number = 0.0;
+    if (YAML::convert<double>::decode(node_, number)) return node_.Scalar();
+    return "'" + node_.Scalar() + "'";
+  }
+
+  void RequireMap() const {
+    if (!node_.IsMap()) Fail("= " + Describe() + " must be a map");
+  }
+
+ private:
+  std::string Join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  YAML::Node node_;
+  std::string path_;
+  const std::string* source_;
+};
+
+/// Parses a whole document; malformed YAML names the file, line and column.
+YAML::Node ParseDocument(const std::string& text, const std::string& source, const char* expected) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    ThrowInvalid(source + ": malformed YAML at line " + std::to_string(e.mark.line + 1) + ", column " +
+                 std::to_string(e.mark.column + 1) + ": " + e.msg);
+  } catch (const YAML::Exception& e) {
+    ThrowInvalid(source + ": malformed YAML: " + e.what());
+  }
+  if (!root.IsDefined() || root.IsNull()) ThrowInvalid(source + " is empty (expected a " + std::string(expected) + ")");
+  if (!root.IsMap()) {
+    ThrowInvalid(source + " is not a YAML map (expected a " + std::string(expected) + " with its field names as keys)");
+  }
+  return root;
+}
+
+/// The list at `holder.key`; absent or null = empty.
+std::vector<Value> ListAt(const Value& holder, const std::string& key) {
+  const std::optional<Value> list = holder.Find(key);
+  return list ? list->Items() : std::vector<Value>{};
+}
+
+/// A Vector3 / Point: [x, y, z] or {x, y, z}.
+Eigen::Vector3d ReadVector(const Value& value) {
+  Eigen::Vector3d v;
+  if (value.node().IsSequence()) {
+    const std::vector<Value> items = value.Items();
+    if (items.size() != 3) value.Fail("has " + std::to_string(items.size()) + " numbers, expected 3 (x, y, z)");
+    for (int i = 0; i < 3; ++i) v[i] = items[i].Number();
+    return v;
+  }
+  value.RequireMap();
+  v.x() = value.Get("x").Number();
+  v.y() = value.Get("y").Number();
+  v.z() = value.Get("z").Number();
+  return v;
+}
+
+/// A Quaternion, x y z w order: [x, y, z, w] or {x, y, z, w}; normalised; zero is an error.
+Eigen::Quaterniond ReadQuaternion(const Value& value) {
+  double x = 0.0, y = 0.0, z = 0.0, w = 0.0;
+  if (value.node().IsSequence()) {
+    const std::vector<Value> items = value.Items();
+    if (items.size() != 4) value.Fail("has " + std::to_string(items.size()) + " numbers, expected 4 (x, y, z, w)");
+    x = items[0].Number();
+    y = items[1].Number();
+    z = items[2].Number();
+    w = items[3].Number();
+  } else {
+    value.RequireMap();
+    x = value.Get("x").Number();
+    y = value.Get("y").Number();
+    z = value.Get("z").Number();
+    w = value.Get("w").Number();
+  }
+  Eigen::Quaterniond q(w, x, y, z);  // Eigen's constructor takes w first
+  const double norm = q.norm();
+  if (!(norm > 1e-9)) {
+    value.Fail("= (x " + FormatNumber(x) + ", y " + FormatNumber(y) + ", z " + FormatNumber(z) + ", w " +
+               FormatNumber(w) + ") has norm 0: a rotation needs a non-zero quaternion (x, y, z, w)");
+  }
+  q.coeffs() /= norm;
+  return q;
+}
+
+/// A Pose {position, orientation}; a missing position is the origin, a missing orientation identity.
+Eigen::Isometry3d ReadPose(const Value& value) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  if (value.IsNull()) return pose;
+  value.RequireMap();
+  if (auto position = value.Find("position")) pose.translation() = ReadVector(*position);
+  if (auto orientation = value.Find("orientation")) pose.linear() = ReadQuaternion(*orientation).toRotationMatrix();
+  return pose;
+}
+
+/// A Transform {translation, rotation}.
+Eigen::Isometry3d ReadTransform(const Value& value) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  value.RequireMap();
+  if (auto translation = value.Find("translation")) pose.translation() = ReadVector(*translation);
+  if (auto rotation = value.Find("rotation")) pose.linear() = ReadQuaternion(*rotation).toRotationMatrix();
+  return pose;
+}
+
+void PoseToProto(const Eigen::Isometry3d& pose, v1::Pose* out) {
+  out->mutable_position()->set_x(pose.translation().x());
+  out->mutable_position()->set_y(pose.translation().y());
+  out->mutable_position()->set_z(pose.translation().z());
+  Eigen::Quaterniond q(pose.rotation());
+  q.normalize();
+  if (q.w() < 0) q.coeffs() *= -1.0;  // one of the two equal quaternions, for stable output
+  out->mutable_orientation()->set_x(q.x());
+  out->mutable_orientation()->set_y(q.y());
+  out->mutable_orientation()->set_z(q.z());
+  out->mutable_orientation()->set_w(q.w());
+}
+
+/// A header's frame id ("world" when there is no header, as Robowflex writes it).
+std::string FrameOf(const Value& holder) {
+  auto header = holder.Find("header");
+  if (!header) return "world";
+  auto frame = header->Find("frame_id");
+  return frame ? frame->Text() : "";
+}
+
+/// The frames a scene's objects may be given in: the base, and what fixed_frame_transforms add.
+class Frames {
+ public:
+  Frames(const Value& scene, const RobotInfo& robot) : root_(robot.root_link) {
+    for (const Value& t : ListAt(scene, "fixed_frame_transforms")) {
+      const std::string child = t.Get("child_frame_id").Text();
+      const std::optional<Value> transform = t.Find("transform");
+      if (IsBase(child)) continue;  // the base is fixed by definition (e.g. base_link -> base_link)
+      edges_[child] = {FrameOf(t), transform ? ReadTransform(*transform) : Eigen::Isometry3d::Identity()};
+    }
+  }
+
+  bool IsBase(const std::string& frame) const {
+    return frame.empty() || frame == "world" || frame == "/world" || frame == root_;
+  }
+
+  /// The pose of `frame` in the base frame; `where` is the header the frame came from.
+  Eigen::Isometry3d Resolve(const std::string& frame, const Value& where) const {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    std::string current = frame;
+    for (std::size_t steps = 0; !IsBase(current); ++steps) {
+      const auto it = edges_.find(current);
+      if (it == edges_.end() || steps > edges_.size()) {
+        std::string others;
+        for (const auto& [name, edge] : edges_) others += (others.empty() ? "'" : ", '") + name + "'";
+        where.Fail("= '" + frame + "' is not a known frame" +
+                   std::string(it == edges_.end() ? "" : " (fixed_frame_transforms form a cycle)") +
+                   ": objects must be given in the robot's base frame ('" + root_ +
+                   "', 'world', '/world' or '') or in a frame that fixed_frame_transforms lead to from it" +
+                   (others.empty() ? std::string(" (there are none)") : " (" + others + ")"));
+      }
+      pose = it->second.transform * pose;
+      current = it->second.parent;
+    }
+    return pose;
+  }
+
+ private:
+  struct Edge {
+    std::string parent;
+    Eigen::Isometry3d transform;
+  };
+  std::string root_;
+  std::map<std::string, Edge> edges_;
+};
+
+/// A robot state's joint positions by name (every name in the file, robot joint or not).
+std::map<std::string, double> ReadJointState(const Value& state) {
+  std::map<std::string, double> positions;
+  if (auto attached = state.Find("attached_collision_objects"); attached && attached->Count() > 0) {
+    attached->Fail("has " + std::to_string(attached->Count()) +
+                   " objects: attached collision objects are not supported (add them to the world, or leave "
+                   "them out)");
+  }
+  auto joint_state = state.Find("joint_state");
+  if (!joint_state) return positions;
+  const std::vector<Value> name_items = ListAt(*joint_state, "name");
+  const std::vector<Value> value_items = ListAt(*joint_state, "position");
+  if (name_items.size() != value_items.size()) {
+    joint_state->Fail("has " + std::to_string(name_items.size()) + " names and " + std::to_string(value_items.size()) +
+                      " positions: they must match one to one");
+  }
+  for (std::size_t i = 0; i < name_items.size(); ++i) {
+    const std::string name = name_items[i].Text();
+    if (!positions.emplace(name, value_items[i].Number()).second) {
+      name_items[i].Fail("= '" + name + "' appears twice in " + joint_state->path() + ".name");
+    }
+  }
+  return positions;
+}
+
+/// The allowed collision matrix as MoveIt reads it.
+class AllowedCollisions {
+ public:
+  explicit AllowedCollisions(const std::optional<Value>& acm) {
+    if (!acm) return;
+    const std::vector<Value> names = ListAt(*acm, "entry_names");
+    const std::vector<Value> rows = ListAt(*acm, "entry_values");
+    if (rows.size() != names.size()) {
+      acm->Fail("has " + std::to_string(names.size()) + " entry_names and " + std::to_string(rows.size()) +
+                " entry_values: there must be one row per name");
+    }
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      const std::string name = names[i].Text();
+      if (!index_.emplace(name, static_cast<int>(i)).second) names[i].Fail("= '" + name + "' appears twice");
+    }
+    values_.assign(names.size(), std::vector<char>(names.size(), 0));
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      // A row is {enabled: [...]} (the message) or the list itself (Robowflex).
+      const Value row = rows[i].node().IsMap() ? rows[i].Get("enabled") : rows[i];
+      const std::vector<Value> cells = row.Items();
+      if (cells.size() != names.size()) {
+        row.Fail("has " + std::to_string(cells.size()) + " values, expected " + std::to_string(names.size()) +
+                 " (one per entry name)");
+      }
+      for (std::size_t j = 0; j < cells.size(); ++j) values_[i][j] = cells[j].Bool() ? 1 : 0;
+    }
+    const std::vector<Value> default_names = ListAt(*acm, "default_entry_names");
+    const std::vector<Value> default_values = ListAt(*acm, "default_entry_values");
+    if (default_names.size() != default_values.size()) {
+      acm->Fail("has " + std::to_string(default_names.size()) + " default_entry_names and " +
+                std::to_string(default_values.size()) + " default_entry_values: they must match one to one");
+    }
+    for (std::size_t i = 0; i < default_names.size(); ++i) {
+      defaults_[default_names[i].Text()] = default_values[i].Bool();
+    }
+  }
+
+  /// MoveIt's rule: the pair's entry; else the names' defaults (one decides; two must both allow).
+  bool Allowed(const std::string& a, const std::string& b) const {
+    const auto ia = index_.find(a);
+    const auto ib = index_.find(b);
+    if (ia != index_.end() && ib != index_.end()) {
+      // MoveIt reads the upper triangle of the matrix.
+      const int i = std::min(ia->second, ib->second);
+      const int j = std::max(ia->second, ib->second);
+      return values_[i][j] != 0;
+    }
+    const auto da = defaults_.find(a);
+    const auto db = defaults_.find(b);
+    if (da == defaults_.end() && db == defaults_.end()) return false;
+    if (da == defaults_.end()) return db->second;
+    if (db == defaults_.end()) return da->second;
+    return da->second && db->second;
+  }
+
+  bool empty() const { return index_.empty() && defaults_.empty(); }
+
+ private:
+  std::map<std::string, int> index_;
+  std::vector<std::vector<char>> values_;
+  std::map<std::string, bool> defaults_;
+};
+
+/// One MoveIt collision object after conversion: its id and the names of its Chasles shapes.
+struct ObjectShapes {
+  std::string id;
+  std::vector<std::string> shapes;
+};
+
+const char* PrimitiveName(long long type) {
+  switch (type) {
+    case 1:
+      return "BOX";
+    case 2:
+      return "SPHERE";
+    case 3:
+      return "CYLINDER";
+    case 4:
+      return "CONE";
+    case 5:
+      return "PRISM";
+    default:
+      return "unknown";
+  }
+}
+
+/// shape_msgs/SolidPrimitive type: a number or its name (case-insensitive).
+long long ReadPrimitiveType(const Value& type) {
+  std::string text = type.Text();
+  std::string lower = text;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (lower == "box") return 1;
+  if (lower == "sphere") return 2;
+  if (lower == "cylinder") return 3;
+  if (lower == "cone") return 4;
+  if (lower == "prism") return 5;
+  double number = 0.0;
+  if (!YAML::convert<double>::decode(type.node(), number)) {
+    type.Fail("= '" + text + "' is not a primitive type (BOX = 1, SPHERE = 2, CYLINDER = 3, or their names)");
+  }
+  return type.Integer(0, 255);
+}
+
+void AddPrimitive(const Value& primitive, const Eigen::Isometry3d& pose, const std::string& name, v1::Scene* scene) {
+  primitive.RequireMap();
+  const Value type_value = primitive.Get("type");
+  const long long type = ReadPrimitiveType(type_value);
+  if (type < 1 || type > 3) {
+    type_value.Fail("= " + std::to_string(type) + " (" + PrimitiveName(type) +
+                    ") is not supported (BOX, SPHERE, CYLINDER and meshes are)");
+  }
+  const Value dims_value = primitive.Get("dimensions");
+  const std::vector<Value> items = dims_value.Items();
+  const std::size_t expected = type == 1 ? 3 : type == 2 ? 1 : 2;
+  const char* layout = type == 1 ? "[x, y, z] full extents" : type == 2 ? "[radius]" : "[height, radius]";
+  if (items.size() != expected) {
+    dims_value.Fail("has " + std::to_string(items.size()) + " values: a " + PrimitiveName(type) + " has " +
+                    std::to_string(expected) + " (" + layout + ")");
+  }
+  std::vector<double> dims;
+  for (const Value& item : items) {
+    const double d = item.Number();
+    if (!(d > 0.0)) item.Fail("= " + FormatNumber(d) + " must be > 0 (" + PrimitiveName(type) + " " + layout + ")");
+    dims.push_back(d);
+  }
+  if (type == 1) {
+    v1::Box* box = scene->add_boxes();
+    box->set_name(name);
+    box->mutable_size()->set_x(dims[0]);
+    box->mutable_size()->set_y(dims[1]);
+    box->mutable_size()->set_z(dims[2]);
+    PoseToProto(pose, box->mutable_pose());
+  } else if (type == 2) {
+    v1::Sphere* sphere = scene->add_spheres();
+    sphere->set_name(name);
+    sphere->set_radius(dims[0]);
+    PoseToProto(pose, sphere->mutable_pose());
+  } else {
+    v1::Cylinder* cylinder = scene->add_cylinders();  // MoveIt's cylinder axis is z too
+    cylinder->set_name(name);
+    cylinder->set_length(dims[0]);
+    cylinder->set_radius(dims[1]);
+    PoseToProto(pose, cylinder->mutable_pose());
+  }
+}
+
+/// shape_msgs/Mesh -> OBJ text.
+void AddMesh(const Value& mesh, const Eigen::Isometry3d& pose, const std::string& name, v1::Scene* scene) {
+  mesh.RequireMap();
+  if (auto resource = mesh.Find("resource")) {
+    resource->Fail("= '" + resource->Text() +
+                   "': mesh resources are not supported (give the mesh inline as triangles and vertices)");
+  }
+  const Value vertices_value = mesh.Get("vertices");
+  const Value triangles_value = mesh.Get("triangles");
+  const std::vector<Value> vertices = vertices_value.Items();
+  const std::vector<Value> triangles = triangles_value.Items();
+  if (vertices.empty()) vertices_value.Fail("is empty: a mesh needs vertices");
+  if (triangles.empty()) triangles_value.Fail("is empty: a mesh needs triangles");
+  std::ostringstream obj;
+  obj << "# " << name << " (moveit shape_msgs/Mesh)\n";
+  for (const Value& vertex : vertices) {
+    const Eigen::Vector3d v = ReadVector(vertex);
+    obj << "v " << FormatNumber(v.x()) << ' ' << FormatNumber(v.y()) << ' ' << FormatNumber(v.z()) << '\n';
+  }
+  const long long last = static_cast<long long>(vertices.size()) - 1;
+  for (const Value& triangle : triangles) {
+    // {vertex_indices: [a, b, c]} (the message) or [a, b, c] (Robowflex).
+    const Value indices = triangle.node().IsMap() ? triangle.Get("vertex_indices") : triangle;
+    const std::vector<Value> corners = indices.Items();
+    if (corners.size() != 3) indices.Fail("has " + std::to_string(corners.size()) + " vertex indices, expected 3");
+    obj << 'f';
+    for (const Value& corner : corners) obj << ' ' << corner.Integer(0, last) + 1;  // OBJ counts from 1
+    obj << '\n';
+  }
+  v1::Mesh* out = scene->add_meshes();
+  out->set_name(name);
+  out->set_data(obj.str());
+  PoseToProto(pose, out->mutable_pose());
+}
+
+void RejectNonEmpty(const Value& holder, const std::string& key, const std::string& rule) {
+  if (auto list = holder.Find(key); list && list->Count() > 0) {
+    list->Fail("has " + std::to_string(list->Count()) + " entries: " + rule);
+  }
+}
+
+/// Operation ADD: 0, "add" or absent. Robowflex writes names, moveit_msgs numbers.
+void RequireAdd(const Value& object) {
+  auto op = object.Find("operation");
+  if (!op) return;
+  static const char* kNames[] = {"ADD", "REMOVE", "APPEND", "MOVE"};
+  std::string text = op->Text();
+  std::string upper = text;
+  std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char c) { return std::toupper(c); });
+  for (int i = 0; i < 4; ++i) {
+    if (upper == kNames[i]) {
+      if (i == 0) return;
+      op->Fail("= '" + text + "' (" + kNames[i] +
+               ") is not supported: a scene is read as a whole, so every object "
+               "must be ADD (0)");
+    }
+  }
+  const long long code = op->Integer(0, 255);
+  if (code == 0) return;
+  op->Fail("= " + std::to_string(code) + " (" + (code < 4 ? kNames[code] : "unknown") +
+           ") is not supported: a scene is read as a whole, so every object must be ADD (0)");
+}
+
+/// A scene's conversion and the robot state it carries.
+struct ParsedScene {
+  v1::Scene scene;
+  std::map<std::string, double> joint_positions;
+};
+
+ParsedScene ParseScene(const std::string& yaml, const RobotInfo& robot, const std::string& source) {
+  const YAML::Node root_node = ParseDocument(yaml, source, "moveit_msgs/PlanningScene");
+  const Value root(root_node, "", &source);
+  ParsedScene parsed;
+  v1::Scene& scene = parsed.scene;
+
+  if (auto state = root.Find("robot_state")) parsed.joint_positions = ReadJointState(*state);
+
+  const std::set<std::string> links(robot.link_names.begin(), robot.link_names.end());
+  const Frames frames(root, robot);
+  std::vector<ObjectShapes> objects;
+  std::map<std::string, std::string> object_paths;  // id -> path, for duplicates
+  std::set<std::string> shape_names;
+  if (auto world = root.Find("world")) {
+    if (auto octomap = world->Find("octomap")) {
+      const std::optional<Value> map = octomap->Find("octomap");
+      const std::optional<Value> data = map ? map->Find("data") : std::nullopt;
+      if (data && (data->node().IsSequence() ? data->Count() > 0 : !data->Text().empty())) {
+        data->Fail(
+            "holds an octomap: OctoMaps in a PlanningScene are not supported (save the map as a .bt file "
+            "and add it to the Chasles scene as an OctoMap)");
+      }
+    }
+    for (const Value& object : ListAt(*world, "collision_objects")) {
+      object.RequireMap();
+      const Value id_value = object.Get("id");
+      const std::string id = id_value.Text();
+      if (id.empty()) id_value.Fail("is empty: every object needs an id");
+      if (links.count(id) != 0) id_value.Fail("= '" + id + "' is a link of the robot: object ids must differ");
+      if (const auto [it, inserted] = object_paths.emplace(id, id_value.path()); !inserted) {
+        id_value.Fail("= '" + id + "' repeats " + it->second);
+      }
+      RequireAdd(object);
+      RejectNonEmpty(object, "planes", "planes are not supported (use a thin BOX)");
+      const std::optional<Value> header = object.Find("header");
+      const std::optional<Value> frame_id = header ? header->Find("frame_id") : std::nullopt;
+      const Eigen::Isometry3d frame = frames.Resolve(FrameOf(object), frame_id ? *frame_id : object);
+      const std::optional<Value> pose = object.Find("pose");
+      const Eigen::Isometry3d object_pose = pose ? frame * ReadPose(*pose) : frame;
+
+      const std::vector<Value> primitives = ListAt(object, "primitives");
+      const std::vector<Value> meshes = ListAt(object, "meshes");
+      const std::size_t total = primitives.size() + meshes.size();
+      if (total == 0) object.Fail("(id '" + id + "') has no primitives and no meshes: it needs a shape");
+      auto poses_for = [&object](const char* shapes_key, const char* poses_key, std::size_t count) {
+        std::vector<Value> poses = ListAt(object, poses_key);
+        if (count > 0 && poses.size() != count) {
+          ThrowInvalid(object.source() + ": " + object.path() + "." + poses_key + " has " +
+                       std::to_string(poses.size()) + " poses for " + std::to_string(count) + " " + shapes_key +
+                       ": there must be one per shape");
+        }
+        return poses;
+      };
+      const std::vector<Value> primitive_poses = poses_for("primitives", "primitive_poses", primitives.size());
+      const std::vector<Value> mesh_poses = poses_for("meshes", "mesh_poses", meshes.size());
+
+      ObjectShapes shapes{id, {}};
+      for (std::size_t k = 0; k < total; ++k) {
+        const std::string name = total == 1 ? id : id + "/" + std::to_string(k);
+        if (!shape_names.insert(name).second) {
+          object.Fail("(id '" + id + "') makes a shape named '" + name + "', which another object's shape has already");
+        }
+        if (k < primitives.size()) {
+          AddPrimitive(primitives[k], object_pose * ReadPose(primitive_poses[k]), name, &scene);
+        } else {
+          const std::size_t m = k - primitives.size();
+          AddMesh(meshes[m], object_pose * ReadPose(mesh_poses[m]), name, &scene);
+        }
+        shapes.shapes.push_back(name);
+      }
+      objects.push_back(std::move(shapes));
+    }
+  }
+  // An object id that equals another object's shape name ("a/0") would be ambiguous in the ACM.
+  for (const ObjectShapes& object : objects) {
+    if (object.shapes.size() > 1 && shape_names.count(object.id) != 0) {
+      ThrowInvalid(source + ": " + object_paths[object.id] + " = '" + object.id +
+                   "' is also the name of another object's shape");
+    }
+  }
+
+  const AllowedCollisions acm(root.Find("allowed_collision_matrix"));
+  if (!acm.empty()) {
+    for (const ObjectShapes& object : objects) {
+      for (const std::string& link : robot.link_names) {
+        if (!acm.Allowed(link, object.id)) continue;
+        for (const std::string& shape : object.shapes) {
+          v1::LinkPair* pair = scene.add_allowed_collisions();
+          pair->set_link1(link);
+          pair->set_link2(shape);
+        }
+      }
+    }
+    for (std::size_t i = 0; i < robot.link_names.size(); ++i) {
+      for (std::size_t j = i + 1; j < robot.link_names.size(); ++j) {
+        const std::string& a = robot.link_names[i];
+        const std::string& b = robot.link_names[j];
+        if (!acm.Allowed(a, b)) continue;
+        const auto key = a < b ? std::make_pair(a, b) : std::make_pair(b, a);
+        if (std::binary_search(robot.allowed_link_pairs.begin(), robot.allowed_link_pairs.end(), key)) continue;
+        v1::LinkPair* pair = scene.add_allowed_collisions();
+        pair->set_link1(a);
+        pair->set_link2(b);
+      }
+    }
+  }
+  return parsed;
+}
+
+RobotInfo InfoFromModel(v1::RobotModel model) {
+  const std::shared_ptr<const RobotModel> robot = RobotFromProto(model, "robot");
+  RobotInfo info;
+  info.model = std::move(model);
+  info.joint_names = robot->dof_names();
+  for (const Link& link : robot->links()) info.link_names.push_back(link.name);
+  info.root_link = robot->links()[robot->root_link()].name;
+  const AllowedCollisionMatrix& acm = robot->allowed_collisions();
+  for (int i = 0; i < robot->num_links(); ++i) {
+    for (int j = i + 1; j < robot->num_links(); ++j) {
+      if (!acm.IsAllowed(i, j)) continue;
+      const std::string& a = info.link_names[i];
+      const std::string& b = info.link_names[j];
+      info.allowed_link_pairs.push_back(a < b ? std::make_pair(a, b) : std::make_pair(b, a));
+    }
+  }
+  std::sort(info.allowed_link_pairs.begin(), info.allowed_link_pairs.end());
+  return info;
+}
+
+std::string ReadFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) ThrowInvalid("cannot read '" + path.string() + "'");
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+std::string JoinNames(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& name : names) text += (text.empty() ? "" : ", ") + name;
+  return text;
+}
+
+}  // namespace
+
+RobotInfo DefaultRobot() { return RobotFromUrdf(std::string(kDefaultRobotUrdf), std::string(kDefaultRobotSrdf)); }
+
+RobotInfo RobotFromUrdf(const std::string& urdf, const std::string& srdf) {
+  v1::RobotModel model;
+  model.mutable_urdf()->set_urdf(urdf);
+  model.mutable_urdf()->set_srdf(srdf);
+  return InfoFromModel(std::move(model));
+}
+
+v1::Scene ImportPlanningScene(const std::string& yaml, const RobotInfo& robot, const std::string& source) {
+  return ParseScene(yaml, robot, source).scene;
+}
+
+v1::PlanRequest ImportMotionPlanRequest(const std::string& scene_yaml, const std::string& request_yaml,
+                                        const RobotInfo& robot, const std::string& scene_source,
+                                        const std::string& request_source) {
+  ParsedScene scene = ParseScene(scene_yaml, robot, scene_source);
+  const YAML::Node root_node = ParseDocument(request_yaml, request_source, "moveit_msgs/MotionPlanRequest");
+  const Value root(root_node, "", &request_source);
+
+  // Start: the scene's robot state, overlaid by the request's start state.
+  std::map<std::string, double> start_positions;
+  if (auto start_state = root.Find("start_state")) start_positions = ReadJointState(*start_state);
+  v1::PlanRequest request;
+  for (const std::string& joint : robot.joint_names) {
+    auto it = start_positions.find(joint);
+    if (it == start_positions.end()) it = scene.joint_positions.find(joint);
+    if (it == scene.joint_positions.end()) {
+      ThrowInvalid(request_source + ": start_state.joint_state has no position for joint '" + joint + "' (nor has " +
+                   scene_source + ": robot_state.joint_state); the robot's joints are " + JoinNames(robot.joint_names));
+    }
+    request.mutable_start()->add_positions(it->second);
+  }
+
+  // Goal: one set of joint constraints.
+  const Value goals_value = root.Get("goal_constraints");
+  const std::vector<Value> goals = goals_value.Items();
+  if (goals.empty()) goals_value.Fail("is empty: a joint goal is required");
+  if (goals.size() > 1) {
+    goals_value.Fail("has " + std::to_string(goals.size()) +
+                     " entries: only one goal is supported (MoveIt accepts any of them; keep the one to plan to)");
+  }
+  const Value& goal = goals[0];
+  goal.RequireMap();
+  RejectNonEmpty(goal, "position_constraints", "position constraints are not supported (only joint constraints are)");
+  RejectNonEmpty(goal, "orientation_constraints",
+                 "orientation constraints are not supported (only joint constraints are)");
+  RejectNonEmpty(goal, "visibility_constraints",
+                 "visibility constraints are not supported (only joint constraints are)");
+  std::map<std::string, std::pair<double, double>> targets;  // joint -> (position, tolerance)
+  const std::vector<Value> constraints = ListAt(goal, "joint_constraints");
+  const std::set<std::string> robot_joints(robot.joint_names.begin(), robot.joint_names.end());
+  for (const Value& constraint : constraints) {
+    constraint.RequireMap();
+    const Value name_value = constraint.Get("joint_name");
+    const std::string name = name_value.Text();
+    const double position = constraint.Get("position").Number();
+    double tolerance = std::numeric_limits<double>::infinity();
+    for (const char* key : {"tolerance_above", "tolerance_below"}) {
+      double t = 0.0;  // moveit_msgs default
+      if (auto value = constraint.Find(key)) {
+        t = value->Number();
+        if (t < 0.0) value->Fail("= " + FormatNumber(t) + " must be >= 0");
+      }
+      tolerance = std::min(tolerance, t);
+    }
+    if (robot_joints.count(name) == 0) continue;  // e.g. finger joints of a MoveIt model
+    if (!targets.emplace(name, std::make_pair(position, tolerance)).second) {
+      name_value.Fail("= '" + name + "' is constrained twice");
+    }
+  }
+  if (targets.empty()) {
+    ThrowInvalid(request_source + ": " + goal.path() + ".joint_constraints constrain none of the robot's joints (" +
+                 JoinNames(robot.joint_names) + ")");
+  }
+  double tolerance = kMaxGoalTolerance;
+  v1::JointGoal* joint_goal = request.mutable_goal();
+  for (std::size_t i = 0; i < robot.joint_names.size(); ++i) {
+    const auto it = targets.find(robot.joint_names[i]);
+    if (it == targets.end()) {
+      joint_goal->add_positions(request.start().positions(static_cast<int>(i)));  // as outside the planning group
+    } else {
+      joint_goal->add_positions(it->second.first);
+      tolerance = std::min(tolerance, it->second.second);
+    }
+  }
+  joint_goal->set_tolerance(tolerance);
+
+  if (auto path = root.Find("path_constraints")) {
+    for (const char* key :
+         {"joint_constraints", "position_constraints", "orientation_constraints", "visibility_constraints"}) {
+      RejectNonEmpty(*path, key, "path constraints are not supported");
+    }
+  }
+  if (auto trajectory = root.Find("trajectory_constraints")) {
+    RejectNonEmpty(*trajectory, "constraints", "trajectory constraints are not supported");
+  }
+  if (auto time = root.Find("allowed_planning_time")) {
+    const double seconds = time->Number();
+    if (seconds < 0.0 || seconds > kMaxTimeBudget) {
+      time->Fail("= " + FormatNumber(seconds) + " must be within [0, 600] s (0 = Chasles' default budget)");
+    }
+    if (seconds > 0.0) request.set_time_budget(seconds);
+  }
+  *request.mutable_scene() = std::move(scene.scene);
+  return request;
+}
+
+std::vector<MoveItProblem> ImportProblemDirectory(const std::string& directory, const RobotInfo& robot) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (!fs::is_directory(directory, error)) ThrowInvalid("'" + directory + "' is not a readable directory");
+  // NNNN -> file names, from sceneNNNN.yaml and requestNNNN.yaml.
+  std::map<std::string, std::string> scenes, requests;
+  auto digits_of = [](const std::string& name, const std::string& prefix) -> std::optional<std::string> {
+    const std::string suffix = ".yaml";
+    if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) {
+      return std::nullopt;
+    }
+    std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+    if (!std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return std::isdigit(c); }))
+      return std::nullopt;
+    return digits;
+  };
+  fs::directory_iterator it(directory, error);
+  if (error) ThrowInvalid("cannot list '" + directory + "': " + error.message());
+  for (const fs::directory_entry& entry : it) {
+    const std::string name = entry.path().filename().string();
+    if (auto digits = digits_of(name, "scene")) scenes[*digits] = name;
+    if (auto digits = digits_of(name, "request")) requests[*digits] = name;
+  }
+  for (const auto& [digits, name] : scenes) {
+    if (requests.count(digits) == 0) {
+      ThrowInvalid(directory + ": " + name + " has no request" + digits + ".yaml beside it");
+    }
+  }
+  for (const auto& [digits, name] : requests) {
+    if (scenes.count(digits) == 0) ThrowInvalid(directory + ": " + name + " has no scene" + digits + ".yaml beside it");
+  }
+  if (scenes.empty()) ThrowInvalid(directory + ": no sceneNNNN.yaml / requestNNNN.yaml pairs found");
+
+  std::vector<std::string> order;
+  for (const auto& [digits, name] : scenes) order.push_back(digits);
+  // Numeric order (scene2 before scene10), then the text (scene01 before scene1).
+  auto numeric = [](const std::string& digits) {
+    const std::size_t first = digits.find_first_not_of('0');
+    return first == std::string::npos ? std::string() : digits.substr(first);
+  };
+  std::sort(order.begin(), order.end(), [&numeric](const std::string& a, const std::string& b) {
+    const std::string na = numeric(a), nb = numeric(b);
+    if (na.size() != nb.size()) return na.size() < nb.size();
+    if (na != nb) return na < nb;
+    return a < b;
+  });
+
+  std::vector<MoveItProblem> problems;
+  for (const std::string& digits : order) {
+    const fs::path scene_path = fs::path(directory) / scenes[digits];
+    const fs::path request_path = fs::path(directory) / requests[digits];
+    MoveItProblem problem;
+    problem.name = "scene" + digits;
+    problem.request = ImportMotionPlanRequest(ReadFile(scene_path), ReadFile(request_path), robot, scene_path.string(),
+                                              request_path.string());
+    problems.push_back(std::move(problem));
+  }
+  return problems;
+}
+
+}  // namespace chasles::moveit
