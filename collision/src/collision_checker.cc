@@ -33,6 +33,13 @@
 // * FCL path: shared, immutable fcl geometries; every query calls the geometry+transform
 //   overloads of fcl::collide / fcl::distance, which build their traversal state on the
 //   stack. Nothing is mutated in const methods, so one checker serves all threads.
+// * Scene allowed collisions (Scene::allowed_collisions, MoveIt's ACM entries that come with a
+//   scene) are resolved at construction: link–link pairs join the robot's ACM (they leave the
+//   self-pair lists); link–obstacle pairs give the obstacle (Prim / SceneGeom `allowed`) a bit
+//   set over the robot units the checks iterate — sphere links on the fast path, links on the FCL
+//   path — and every robot-vs-obstacle loop skips the set bits (the primitive cull clears them
+//   from its 64-link mask). Obstacles without allowances carry -1, so a scene without any costs
+//   one predictable branch per obstacle; an obstacle every link may touch is dropped.
 // * Contact semantics: shapes that touch (distance == 0 after padding) are in collision, as in
 //   FCL's sphere–box test. With padding > 0 the FCL path compares fcl::distance <= padding.
 
@@ -114,6 +121,7 @@ enum PrimKind { kPrimSphere = 0, kPrimBox = 1, kPrimCylinder = 2, kPrimCapsule =
 struct Prim {
   int kind;
   int object;      // index into scene.objects()
+  int allowed = -1;  // index into Impl::allowed_sets of the links that may touch it, or -1
   double rt[9];    // world->local rotation (Rᵀ), row-major
   double p[3];     // world position of the centre
   double a, b, c;  // box half extents; sphere/cylinder/capsule: a = radius, b = half length
@@ -220,6 +228,14 @@ struct SceneGeom {  // an FCL scene object (world pose fixed)
   double radius;
   bool octree = false;
   int grid = -1;  // fast path: index into Impl::grids when this map is gridded
+  int allowed = -1;  // index into Impl::allowed_sets of the links that may touch it, or -1
+};
+
+/// A set of robot units (sphere-link indices on the fast path, link indices on the FCL path) as
+/// 64-bit words: bit i of words[i / 64].
+struct UnitSet {
+  std::vector<std::uint64_t> words;
+  bool Has(std::size_t i) const { return ((words[i >> 6] >> (i & 63)) & 1u) != 0; }
 };
 
 inline bool SpheresOverlap(const Eigen::Vector3d& c1, double r1, const Eigen::Vector3d& c2, double r2) {
@@ -269,6 +285,11 @@ struct CollisionChecker::Impl {
   std::vector<std::pair<int, int>> shape_pairs;  // indices into shapes
   // Scene objects that FCL handles: meshes and maps in the fast path, everything otherwise.
   std::vector<SceneGeom> scene_geoms;
+
+  // Link–obstacle pairs the scene allows (see the design notes): Prim::allowed and
+  // SceneGeom::allowed index into this.
+  std::vector<UnitSet> allowed_sets;
+  const UnitSet* Allowed(int set) const { return set < 0 ? nullptr : &allowed_sets[set]; }
 
   void BuildFk();
   void ComputeFk(const Eigen::VectorXd& q, Frame* frames) const;
@@ -416,7 +437,9 @@ bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eig
     // Scene primitives: exact clearances; a link whose bounding sphere is clear by more than
     // step·(its fastest sphere's bound) cannot shorten the step.
     for (const Prim& o : prims) {
+      const UnitSet* allowed = Allowed(o.allowed);
       for (std::size_t li = 0; li < nl; ++li) {
+        if (allowed != nullptr && allowed->Has(li)) continue;
         const SphereLink& L = slinks[li];
         const double dl = SphereDistance(o, &lb[3 * li], L.br);
         if (dl > 0.0 && dl >= step * Dl[li]) continue;
@@ -461,7 +484,9 @@ bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eig
       const detail::OccupancyGrid& grid = grids[g.grid];  // certifiable: every geom is a grid
       if (grid.num_blocks() == 0) continue;
       const double* gc = grid.center().data();
+      const UnitSet* allowed = Allowed(g.allowed);
       for (std::size_t li = 0; li < nl; ++li) {
+        if (allowed != nullptr && allowed->Has(li)) continue;
         const SphereLink& L = slinks[li];
         const double* c = &lb[3 * li];
         const double dg = std::sqrt((c[0] - gc[0]) * (c[0] - gc[0]) + (c[1] - gc[1]) * (c[1] - gc[1]) +
@@ -613,6 +638,7 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
         const double rr = br[li] + o.bound;
         mask |= static_cast<std::uint64_t>(d0 * d0 + d1 * d1 + d2 * d2 <= rr * rr) << (li - base);
       }
+      if (o.allowed >= 0) mask &= ~allowed_sets[o.allowed].words[base >> 6];
       while (mask != 0) {
         const std::size_t li = base + static_cast<std::size_t>(__builtin_ctzll(mask));
         mask &= mask - 1;
@@ -628,7 +654,9 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
   // A mesh, or a map too large to grid, through FCL, robot spheres as fcl::Sphered.
   const auto fcl_geom_hit = [&](const SceneGeom& g) {
     fcl::CollisionRequestd request;
+    const UnitSet* allowed = Allowed(g.allowed);
     for (std::size_t li = 0; li < nl; ++li) {
+      if (allowed != nullptr && allowed->Has(li)) continue;
       const SphereLink& L = slinks[li];
       const Eigen::Vector3d c(lb[3 * li], lb[3 * li + 1], lb[3 * li + 2]);
       if (!SpheresOverlap(c, L.br, g.center, g.radius)) continue;
@@ -663,7 +691,9 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
     const detail::OccupancyGrid& grid = grids[g.grid];
     if (grid.num_blocks() == 0) continue;
     const double* gc = grid.center().data();
+    const UnitSet* allowed = Allowed(g.allowed);
     for (std::size_t li = 0; li < nl; ++li) {
+      if (allowed != nullptr && allowed->Has(li)) continue;
       const SphereLink& L = slinks[li];
       const double* c = &lb[3 * li];
       const double d0 = c[0] - gc[0], d1 = c[1] - gc[1], d2 = c[2] - gc[2];
@@ -721,12 +751,18 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
   }
   double best = kInf;
   for (const Prim& o : prims) {
-    for (std::size_t k = 0; k < ns; ++k) best = std::min(best, SphereDistance(o, &w[3 * k], sr[k]));
+    const UnitSet* allowed = Allowed(o.allowed);
+    for (std::size_t k = 0; k < ns; ++k) {
+      if (allowed != nullptr && allowed->Has(slink_of[k])) continue;
+      best = std::min(best, SphereDistance(o, &w[3 * k], sr[k]));
+    }
   }
   if (!scene_geoms.empty()) {
     fcl::DistanceRequestd request;
     for (const SceneGeom& g : scene_geoms) {
+      const UnitSet* allowed = Allowed(g.allowed);
       for (std::size_t k = 0; k < ns; ++k) {
+        if (allowed != nullptr && allowed->Has(slink_of[k])) continue;
         const Eigen::Vector3d x(w[3 * k], w[3 * k + 1], w[3 * k + 2]);
         // Lower bound from the bounding spheres: skip when it cannot improve on `best`.
         if ((x - g.center).norm() - sr[k] - g.radius >= best) continue;
@@ -771,7 +807,9 @@ bool CollisionChecker::Impl::FclCollide(const Frame* frames, CollisionResult* re
     return true;
   };
   for (const SceneGeom& g : scene_geoms) {
+    const UnitSet* allowed = Allowed(g.allowed);
     for (std::size_t i = 0; i < n; ++i) {
+      if (allowed != nullptr && allowed->Has(shapes[i].link)) continue;
       if (!SpheresOverlap(center[i], shapes[i].g.radius + pad, g.center, g.radius)) continue;
       if (pair_hits(shapes[i].g.geom.get(), tf[i], g.g.geom.get(), g.tf)) {
         return hit(shapes[i].link, g.name, false);
@@ -804,6 +842,7 @@ double CollisionChecker::Impl::FclClearance(const Frame* frames) const {
     const fcl::Transform3d tf = ToIsometry(frames[s.link]) * s.local;
     const Eigen::Vector3d c = tf * s.g.center;
     for (const SceneGeom& g : scene_geoms) {
+      if (g.allowed >= 0 && allowed_sets[g.allowed].Has(s.link)) continue;
       if ((c - g.center).norm() - s.g.radius - g.radius - options.padding >= best) continue;
       fcl::DistanceResultd result;
       const double d = fcl::distance(s.g.geom.get(), tf, g.g.geom.get(), g.tf, request, result);
@@ -819,6 +858,83 @@ bool CollisionChecker::Impl::Collide(const Eigen::VectorXd& q, CollisionResult* 
   return fast ? FastCollide(&frames[0], report) : FclCollide(&frames[0], report);
 }
 
+namespace {
+
+/// At most 20 names joined by ", ", then how many more; "none" when there are none.
+template <typename Range, typename Name>
+std::string NameList(const Range& items, Name name) {
+  constexpr std::size_t kMaxNames = 20;
+  std::string out;
+  std::size_t n = 0;
+  for (const auto& item : items) {
+    if (n++ < kMaxNames) out += (out.empty() ? "" : ", ") + name(item);
+  }
+  if (n > kMaxNames) out += ", … (" + std::to_string(n - kMaxNames) + " more)";
+  return n == 0 ? "none" : out;
+}
+
+/// The scene's allowed pairs resolved against a robot.
+struct SceneAllowances {
+  std::vector<char> self;                       // num_links² (1 = allowed); empty when no link–link pair
+  std::vector<std::vector<char>> objects, maps;  // per scene object / map: links (1/0); empty = none
+};
+
+SceneAllowances ResolveSceneAllowances(const RobotModel& robot, const Scene& scene) {
+  SceneAllowances out;
+  const std::vector<AllowedCollision>& pairs = scene.allowed_collisions();
+  if (pairs.empty()) return out;
+  const int nl = robot.num_links();
+  out.objects.resize(scene.objects().size());
+  out.maps.resize(scene.occupancy_maps().size());
+  const auto links = [&] { return NameList(robot.links(), [](const Link& l) { return l.name; }); };
+  const auto obstacles = [&] {
+    return "scene objects: " + NameList(scene.objects(), [](const SceneObject& o) { return o.name; }) +
+           "; OctoMaps: " + NameList(scene.occupancy_maps(), [](const OccupancyMap& m) { return m.name; });
+  };
+  const auto allow = [nl](std::vector<char>* obstacle_links, int link) {
+    if (obstacle_links->empty()) obstacle_links->assign(nl, 0);
+    (*obstacle_links)[link] = 1;
+  };
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const std::string field = "scene.allowed_collisions[" + std::to_string(i) + "]";
+    const AllowedCollision& pair = pairs[i];
+    const int a = robot.FindLink(pair.link);
+    if (a < 0) {
+      bool obstacle = false;
+      for (const SceneObject& o : scene.objects()) obstacle = obstacle || o.name == pair.link;
+      for (const OccupancyMap& m : scene.occupancy_maps()) obstacle = obstacle || m.name == pair.link;
+      ThrowInvalid(field + ".link1 = '" + pair.link + "' is not a link of robot '" + robot.name() + "' (links: " +
+                   links() + ")" +
+                   (obstacle ? "; it names an obstacle of the scene: link1 must be the robot link, link2 the obstacle"
+                             : ""));
+    }
+    bool found = false;
+    const int b = robot.FindLink(pair.other);
+    if (b >= 0) {
+      if (out.self.empty()) out.self.assign(static_cast<std::size_t>(nl) * nl, 0);
+      out.self[static_cast<std::size_t>(a) * nl + b] = out.self[static_cast<std::size_t>(b) * nl + a] = 1;
+      found = true;
+    }
+    for (std::size_t j = 0; j < scene.objects().size(); ++j) {
+      if (scene.objects()[j].name != pair.other) continue;
+      allow(&out.objects[j], a);
+      found = true;
+    }
+    for (std::size_t j = 0; j < scene.occupancy_maps().size(); ++j) {
+      if (scene.occupancy_maps()[j].name != pair.other) continue;
+      allow(&out.maps[j], a);
+      found = true;
+    }
+    if (!found) {
+      ThrowInvalid(field + ".link2 = '" + pair.other + "' is neither a link of robot '" + robot.name() +
+                   "' nor an object or OctoMap of the scene (links: " + links() + "; " + obstacles() + ")");
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std::shared_ptr<const Scene> scene,
                                    CollisionOptions options)
     : robot_(std::move(robot)), scene_(std::move(scene)), impl_(std::make_unique<Impl>()) {
@@ -832,9 +948,12 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
   m.BuildFk();
   const double pad = options.padding;
   const auto& links = robot_->links();
+  const int num_links = robot_->num_links();
   const AllowedCollisionMatrix& acm = robot_->allowed_collisions();
+  const SceneAllowances scene_allowed = ResolveSceneAllowances(*robot_, *scene_);
   const auto allowed = [&](int a, int b) {
-    return a == b || (acm.num_links() == robot_->num_links() && acm.IsAllowed(a, b));
+    return a == b || (acm.num_links() == num_links && acm.IsAllowed(a, b)) ||
+           (!scene_allowed.self.empty() && scene_allowed.self[static_cast<std::size_t>(a) * num_links + b]);
   };
 
   bool all_spheres = true;
@@ -843,12 +962,98 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
   }
   m.fast = all_spheres && !options.force_fcl;
 
-  // Scene objects FCL handles.
-  for (const SceneObject& o : scene_->objects()) {
+  // Robot geometry and self pairs.
+  if (m.fast) {
+    for (int l = 0; l < num_links; ++l) {
+      const auto& shapes = links[l].collision;
+      if (shapes.empty()) continue;
+      SphereLink L;
+      L.link = l;
+      L.begin = static_cast<int>(m.sx.size());
+      Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = Eigen::Vector3d::Constant(-kInf);
+      for (const Shape& s : shapes) {
+        const Eigen::Vector3d c = s.pose.translation();
+        m.sx.push_back(c.x());
+        m.sy.push_back(c.y());
+        m.sz.push_back(c.z());
+        m.sr.push_back(s.radius + pad);
+        m.slink_of.push_back(static_cast<int>(m.slinks.size()));
+        m.fcl_spheres.push_back(std::make_shared<fcl::Sphered>(s.radius + pad));
+        lo = lo.cwiseMin(c);
+        hi = hi.cwiseMax(c);
+      }
+      L.end = static_cast<int>(m.sx.size());
+      const Eigen::Vector3d bc = 0.5 * (lo + hi);
+      double br = 0.0;
+      for (int k = L.begin; k < L.end; ++k) {
+        br = std::max(br, (Eigen::Vector3d(m.sx[k], m.sy[k], m.sz[k]) - bc).norm() + m.sr[k]);
+      }
+      for (int i = 0; i < 3; ++i) L.bc[i] = bc[i];
+      L.br = br;
+      m.slinks.push_back(L);
+      m.link_bound_radius.push_back(br);
+      m.fcl_link_bounds.push_back(std::make_shared<fcl::Sphered>(br));
+    }
+    for (std::size_t a = 0; a < m.slinks.size(); ++a) {
+      for (std::size_t b = a + 1; b < m.slinks.size(); ++b) {
+        if (!allowed(m.slinks[a].link, m.slinks[b].link)) m.self_pairs.emplace_back(a, b);
+      }
+    }
+    m.BuildLevers();
+  } else {
+    for (int l = 0; l < num_links; ++l) {
+      for (const Shape& s : links[l].collision) {
+        RobotShape r;
+        r.link = l;
+        r.g = MakeGeom(s);
+        r.local = s.pose;
+        m.shapes.push_back(std::move(r));
+      }
+    }
+    for (std::size_t a = 0; a < m.shapes.size(); ++a) {
+      for (std::size_t b = a + 1; b < m.shapes.size(); ++b) {
+        if (!allowed(m.shapes[a].link, m.shapes[b].link)) m.shape_pairs.emplace_back(a, b);
+      }
+    }
+  }
+
+  // The links an obstacle may touch as a set over the units the checks iterate (sphere links
+  // or links with geometry): -1 when none of them, kAllUnits when all of them (the obstacle
+  // cannot collide and does not limit clearance, so it is left out).
+  constexpr int kAllUnits = -2;
+  const auto allowed_set = [&](const std::vector<std::vector<char>>& per_obstacle, std::size_t i) {
+    if (per_obstacle.empty() || per_obstacle[i].empty()) return -1;
+    const std::vector<char>& by_link = per_obstacle[i];
+    const std::size_t units = m.fast ? m.slinks.size() : static_cast<std::size_t>(num_links);
+    UnitSet set;
+    set.words.assign((units + 63) / 64, 0);
+    bool any = false, all = true;
+    for (std::size_t u = 0; u < units; ++u) {
+      const int link = m.fast ? m.slinks[u].link : static_cast<int>(u);
+      if (!m.fast && links[link].collision.empty()) continue;
+      if (by_link[link]) {
+        set.words[u >> 6] |= std::uint64_t{1} << (u & 63);
+        any = true;
+      } else {
+        all = false;
+      }
+    }
+    if (all) return kAllUnits;
+    if (!any) return -1;
+    m.allowed_sets.push_back(std::move(set));
+    return static_cast<int>(m.allowed_sets.size()) - 1;
+  };
+
+  // Scene objects: primitives on the fast path, FCL geometry otherwise (and for meshes).
+  for (std::size_t oi = 0; oi < scene_->objects().size(); ++oi) {
+    const SceneObject& o = scene_->objects()[oi];
+    const int allowed_links = allowed_set(scene_allowed.objects, oi);
+    if (allowed_links == kAllUnits) continue;
     if (m.fast && o.shape.type != ShapeType::kMesh) {
       const Shape& s = o.shape;
       Prim p{};
-      p.object = static_cast<int>(&o - scene_->objects().data());
+      p.object = static_cast<int>(oi);
+      p.allowed = allowed_links;
       ToRowMajor(s.pose.linear().transpose(), p.rt);
       for (int i = 0; i < 3; ++i) p.p[i] = s.pose.translation()[i];
       switch (s.type) {
@@ -887,12 +1092,17 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
     g.tf = o.shape.pose;
     g.center = g.pose * g.g.center;
     g.radius = g.g.radius;
+    g.allowed = allowed_links;
     m.scene_geoms.push_back(std::move(g));
   }
-  for (const OccupancyMap& map : scene_->occupancy_maps()) {
+  for (std::size_t mi = 0; mi < scene_->occupancy_maps().size(); ++mi) {
+    const OccupancyMap& map = scene_->occupancy_maps()[mi];
+    const int allowed_links = allowed_set(scene_allowed.maps, mi);
+    if (allowed_links == kAllUnits) continue;
     SceneGeom g;
     g.name = map.name;
     g.octree = true;
+    g.allowed = allowed_links;
     g.g.geom = std::make_shared<fcl::OcTreed>(map.tree);
     // Bound only the occupied leaves (the tree's root box is far larger).
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = Eigen::Vector3d::Constant(-kInf);
@@ -926,59 +1136,8 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
   }
 
   if (m.fast) {
-    for (int l = 0; l < robot_->num_links(); ++l) {
-      const auto& shapes = links[l].collision;
-      if (shapes.empty()) continue;
-      SphereLink L;
-      L.link = l;
-      L.begin = static_cast<int>(m.sx.size());
-      Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = Eigen::Vector3d::Constant(-kInf);
-      for (const Shape& s : shapes) {
-        const Eigen::Vector3d c = s.pose.translation();
-        m.sx.push_back(c.x());
-        m.sy.push_back(c.y());
-        m.sz.push_back(c.z());
-        m.sr.push_back(s.radius + pad);
-        m.slink_of.push_back(static_cast<int>(m.slinks.size()));
-        m.fcl_spheres.push_back(std::make_shared<fcl::Sphered>(s.radius + pad));
-        lo = lo.cwiseMin(c);
-        hi = hi.cwiseMax(c);
-      }
-      L.end = static_cast<int>(m.sx.size());
-      const Eigen::Vector3d bc = 0.5 * (lo + hi);
-      double br = 0.0;
-      for (int k = L.begin; k < L.end; ++k) {
-        br = std::max(br, (Eigen::Vector3d(m.sx[k], m.sy[k], m.sz[k]) - bc).norm() + m.sr[k]);
-      }
-      for (int i = 0; i < 3; ++i) L.bc[i] = bc[i];
-      L.br = br;
-      m.slinks.push_back(L);
-      m.link_bound_radius.push_back(br);
-      m.fcl_link_bounds.push_back(std::make_shared<fcl::Sphered>(br));
-    }
-    for (std::size_t a = 0; a < m.slinks.size(); ++a) {
-      for (std::size_t b = a + 1; b < m.slinks.size(); ++b) {
-        if (!allowed(m.slinks[a].link, m.slinks[b].link)) m.self_pairs.emplace_back(a, b);
-      }
-    }
-    m.BuildLevers();
     m.certifiable = true;
     for (const SceneGeom& g : m.scene_geoms) m.certifiable = m.certifiable && g.octree && g.grid >= 0;
-  } else {
-    for (int l = 0; l < robot_->num_links(); ++l) {
-      for (const Shape& s : links[l].collision) {
-        RobotShape r;
-        r.link = l;
-        r.g = MakeGeom(s);
-        r.local = s.pose;
-        m.shapes.push_back(std::move(r));
-      }
-    }
-    for (std::size_t a = 0; a < m.shapes.size(); ++a) {
-      for (std::size_t b = a + 1; b < m.shapes.size(); ++b) {
-        if (!allowed(m.shapes[a].link, m.shapes[b].link)) m.shape_pairs.emplace_back(a, b);
-      }
-    }
   }
 }
 

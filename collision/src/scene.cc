@@ -222,4 +222,14 @@ void Scene::AddOccupancyMap(OccupancyMap map) {
   maps_.push_back(std::move(map));
 }
 
+void Scene::AllowCollision(const std::string& link, const std::string& other, const std::string& field_name) {
+  const std::string field =
+      field_name.empty() ? "scene.allowed_collisions[" + std::to_string(allowed_.size()) + "]" : field_name;
+  if (link.empty()) ThrowInvalid(field + ".link1 is empty: it must name a robot link");
+  if (other.empty()) {
+    ThrowInvalid(field + ".link2 is empty: it must name a robot link or an object or OctoMap of the scene");
+  }
+  allowed_.push_back({link, other});
+}
+
 }  // namespace chasles

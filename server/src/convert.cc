@@ -489,6 +489,12 @@ std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::s
     scene->AddOctoMap(ObjectName(map.name(), "octomap", i), map.data(), PoseFromProto(map.pose(), f + ".pose"),
                       f + ".data");
   }
+  // Only empty names are rejected here: link1 and a link2 that names no object may be robot
+  // links, which the CollisionChecker resolves against the robot the scene is used with.
+  for (int i = 0; i < proto.allowed_collisions_size(); ++i) {
+    const v1::LinkPair& pair = proto.allowed_collisions(i);
+    scene->AllowCollision(pair.link1(), pair.link2(), Indexed(field + ".allowed_collisions", i));
+  }
   return scene;
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
-/// CollisionChecker: self-collision under the allowed-collision matrix, robot vs scene,
-/// motion validation and clearance. Const and thread-safe: one instance serves all threads.
+/// CollisionChecker: self-collision under the allowed-collision matrix, robot vs scene (minus
+/// the scene's allowed pairs), motion validation and clearance. Const and thread-safe: one instance serves all threads.
 
 #include <atomic>
 #include <cstdint>
@@ -41,6 +41,16 @@ struct CheckCounters {
 
 class CollisionChecker {
  public:
+  /// Builds the checker for `robot` in `scene` (null = an empty scene).
+  /// The scene's allowed pairs (Scene::allowed_collisions) are resolved here: a pair whose
+  /// `other` is a robot link is added to the robot's ACM (that self pair is never checked); a
+  /// pair whose `other` names scene objects or occupancy maps exempts link `link` from them in
+  /// every query — IsValid, Check, IsMotionValid, IsMotionCertified and Clearance. An obstacle
+  /// every link with geometry may touch is left out altogether.
+  /// \throws Error(kInvalidArgument) when options are invalid, robot is null, or an allowed
+  ///         pair does not resolve, e.g. `scene.allowed_collisions[0].link1 = 'hand' is not a
+  ///         link of robot 'panda' (links: …)`, `scene.allowed_collisions[2].link2 = 'nope' is
+  ///         neither a link of robot 'panda' nor an object or OctoMap of the scene (…)`.
   CollisionChecker(std::shared_ptr<const RobotModel> robot, std::shared_ptr<const Scene> scene,
                    CollisionOptions options = {});
   ~CollisionChecker();
@@ -66,7 +76,8 @@ class CollisionChecker {
 
   /// Certified motion check: true only when NO state on the straight joint-space segment
   /// q(s) = a + s·(b − a), s ∈ [0, 1], is invalid (outside the limits, self collision under the
-  /// ACM, or contact with the scene, padding included) — no sampling gap.
+  /// ACM, or contact with the scene other than an allowed pair, padding included) — no sampling
+  /// gap. Allowed link–obstacle pairs do not shorten the advancement steps.
   /// When certifies_motion() (fast sphere path, scene of primitives and gridded occupancy maps
   /// only): conservative advancement. Every robot sphere k has, per joint i of its chain, a lever
   /// arm R_ik [m per rad] bounding how far its centre moves per unit of q_i (prismatic: 1), so
@@ -98,7 +109,9 @@ class CollisionChecker {
   std::vector<double> SweepBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const;
 
   /// Smallest distance [m] between the robot and the scene at q (0 when in contact; +inf for
-  /// an empty scene). Self-distance is not included.
+  /// an empty scene). Self-distance is not included, nor is the distance of an allowed
+  /// link–obstacle pair (Scene::allowed_collisions): a link touching an object it may touch
+  /// leaves the clearance to the other pairs (+inf when no other pair remains).
   double Clearance(const Eigen::VectorXd& q) const;
 
   /// True when the fast sphere path is used: every robot shape is a sphere and force_fcl is
@@ -110,7 +123,8 @@ class CollisionChecker {
 
   /// Fast path: how many occupancy maps were expanded into a voxel bit grid at construction
   /// (the others — whose occupied voxels span a box of more than 2^28 finest voxels — are
-  /// checked through FCL's octree traversal). 0 on the FCL path.
+  /// checked through FCL's octree traversal, and maps every link may touch are left out).
+  /// 0 on the FCL path.
   int num_gridded_occupancy_maps() const;
 
  private:

@@ -31,6 +31,15 @@ struct OccupancyMap {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
 };
 
+/// A pair that may touch without it counting as a collision (MoveIt's allowed collision matrix).
+/// `link` names a robot link; `other` names another robot link, or a scene object or occupancy
+/// map of the scene (every object and map of that name). Names are resolved against a robot by
+/// CollisionChecker; a name that is both a link and an object allows both contacts.
+struct AllowedCollision {
+  std::string link;
+  std::string other;
+};
+
 /// A point cloud to insert into one of a scene's OctoMaps (Scene::InsertPointCloud).
 struct PointCloudInsertion {
   /// The map to update; empty = the scene's only map, or a new map "points" when it has none.
@@ -67,6 +76,14 @@ class Scene {
                   const std::string& field = "scene.octomaps");
   void AddOccupancyMap(OccupancyMap map);
 
+  /// Lets robot link `link` touch `other` (a robot link, or an object or occupancy map of this
+  /// scene): CollisionChecker then ignores that pair in every check and in Clearance. The names
+  /// are checked against the robot (and this scene's objects) when a CollisionChecker is built,
+  /// since a scene does not know its robot; here only empty names are rejected.
+  /// \throws Error(kInvalidArgument) naming `field` + ".link1" / ".link2" when a name is empty;
+  ///         an empty `field` means `scene.allowed_collisions[i]`, i the pair's index.
+  void AllowCollision(const std::string& link, const std::string& other, const std::string& field = "");
+
   /// Returns a copy of this scene whose map `insertion.octomap` holds the point cloud, inserted
   /// with OctoMap's ray casting (OcTree::insertPointCloud): the cells along each ray from the
   /// sensor become freer, the end cells more occupied. Points and origin are moved into the
@@ -80,11 +97,15 @@ class Scene {
 
   const std::vector<SceneObject>& objects() const { return objects_; }
   const std::vector<OccupancyMap>& occupancy_maps() const { return maps_; }
+  /// The allowed pairs, in the order they were added.
+  const std::vector<AllowedCollision>& allowed_collisions() const { return allowed_; }
+  /// True when the scene holds no object and no map (allowed pairs are not counted).
   bool empty() const { return objects_.empty() && maps_.empty(); }
 
  private:
   std::vector<SceneObject> objects_;
   std::vector<OccupancyMap> maps_;
+  std::vector<AllowedCollision> allowed_;
 };
 
 }  // namespace chasles
