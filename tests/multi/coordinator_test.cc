@@ -208,6 +208,39 @@ TEST(CoordinatorTest, OverlappingStartsAndAStartInAWallAreOutcomes) {
   EXPECT_THAT(wall.message, HasSubstr("pillar"));
 }
 
+/// A scene's allowed pairs name the robots' own links: "body" may touch the pad, so the robot
+/// that starts on it coordinates; each robot's checker gets the pair, the other robot still
+/// collides with the pad, and a pair naming no robot's link is a named error.
+TEST(CoordinatorTest, SceneAllowedCollisionsApplyToEveryRobotWithTheLink) {
+  auto scene = std::make_shared<Scene>();
+  test::AddWall(scene.get(), "pad", 3.0, 3.0, 0.5, 0.5);
+  const auto query = [&](std::shared_ptr<const Scene> s) {
+    return Query({Disc("a", {0, 0}, {2, 0}), Disc("b", {3, 3}, {-2, 0})}, CoordinationMethod::kPrioritized, s);
+  };
+  EXPECT_EQ(Coordinate(query(scene), Registry(), Termination()).code, CoordinationCode::kStartInCollision);
+  auto allowed = std::make_shared<Scene>(*scene);
+  allowed->AllowCollision("body", "pad");
+  const CoordinationOutcome outcome = Coordinate(query(allowed), Registry(), Termination());
+  ASSERT_EQ(outcome.code, CoordinationCode::kSuccess) << outcome.message;
+  ASSERT_EQ(outcome.robots.size(), 2u);
+  EXPECT_TRUE(outcome.robots[1].samples.front().q.isApprox(Eigen::Vector2d(3, 3)));
+  EXPECT_TRUE(outcome.robots[1].samples.back().q.isApprox(Eigen::Vector2d(-2, 0)));
+  // The pair is per link, not per robot: robot a (same link name) may also cross the pad; a
+  // goal inside it is accepted.
+  const CoordinationOutcome through = Coordinate(
+      Query({Disc("a", {0, 0}, {3, 3.2}), Disc("b", {-3, -3}, {-2, 0})}, CoordinationMethod::kPrioritized, allowed),
+      Registry(), Termination());
+  EXPECT_EQ(through.code, CoordinationCode::kSuccess) << through.message;
+  auto unknown = std::make_shared<Scene>(*scene);
+  unknown->AllowCollision("gripper", "pad");
+  try {
+    Coordinate(query(unknown), Registry(), Termination());
+    ADD_FAILURE() << "no error for a pair naming no robot's link";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("scene.allowed_collisions[0].link1 = 'gripper' is not a link of any robot"));
+  }
+}
+
 /// A committed motion crosses the robot's straight route; the plan waits or detours, and never
 /// meets it.
 TEST(CoordinatorTest, AvoidsCommittedMotions) {

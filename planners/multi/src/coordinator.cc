@@ -197,6 +197,25 @@ class Coordinator {
   double SearchPadding() const { return 0.5 * query_.robot_padding + kSearchMargin; }
   double ExactPadding() const { return 0.5 * query_.robot_padding; }
 
+  /// The query's scene for a composition of `robots`: its allowed pairs (named by the robots'
+  /// own links) renamed to the composite's links, "<robot>/<link>", once per robot that has the
+  /// link; pairs of links none of them has are left out.
+  std::shared_ptr<const Scene> SceneFor(const std::vector<PlacedRobot>& robots) const {
+    const Scene& scene = *query_.scene;
+    if (scene.allowed_collisions().empty()) return query_.scene;
+    auto renamed = std::make_shared<Scene>();
+    for (const SceneObject& object : scene.objects()) renamed->AddObject(object);
+    for (const OccupancyMap& map : scene.occupancy_maps()) renamed->AddOccupancyMap(map);
+    for (const AllowedCollision& pair : scene.allowed_collisions()) {
+      for (const PlacedRobot& robot : robots) {
+        if (robot.model->FindLink(pair.link) < 0) continue;
+        const bool link_pair = robot.model->FindLink(pair.other) >= 0;
+        renamed->AllowCollision(robot.name + "/" + pair.link, link_pair ? robot.name + "/" + pair.other : pair.other);
+      }
+    }
+    return renamed;
+  }
+
   /// Robot k alone, the listed other members standing at fixed configurations.
   std::shared_ptr<const CollisionChecker> WithFrozen(int k, const std::vector<std::pair<int, Eigen::VectorXd>>& frozen) {
     std::vector<PlacedRobot> robots{members_[k].placement};
@@ -204,7 +223,7 @@ class Coordinator {
       robots.push_back(members_[j].placement);
       robots.back().frozen_at = q;
     }
-    return std::make_shared<CollisionChecker>(ComposeRobots(robots), query_.scene);
+    return std::make_shared<CollisionChecker>(ComposeRobots(robots), SceneFor(robots));
   }
 
   // --- single-robot planning ------------------------------------------------------------------
@@ -598,8 +617,19 @@ CoordinationOutcome Coordinator::Run() {
     return out;
   };
 
-  // 1. Members: limits, checkers alone, pose goals.
+  // 1. Members: limits, checkers alone, pose goals. The scene's allowed pairs name links of the
+  //    team's robots (each robot's checker gets the pairs of its own links).
   const int n = static_cast<int>(query_.robots.size());
+  const std::vector<AllowedCollision>& allowed = query_.scene->allowed_collisions();
+  for (std::size_t i = 0; i < allowed.size(); ++i) {
+    const bool known = std::any_of(query_.robots.begin(), query_.robots.end(), [&](const TeamRobotSpec& robot) {
+      return robot.placement.model->FindLink(allowed[i].link) >= 0;
+    });
+    if (!known) {
+      ThrowInvalid("scene.allowed_collisions[" + std::to_string(i) + "].link1 = '" + allowed[i].link +
+                   "' is not a link of any robot of the team");
+    }
+  }
   for (int k = 0; k < n; ++k) {
     const TeamRobotSpec& spec = query_.robots[k];
     Member m;
@@ -608,7 +638,7 @@ CoordinationOutcome Coordinator::Run() {
     m.placement.frozen_at.resize(0);
     m.start = spec.start;
     m.limits = ResolveRobotLimits(spec, k);
-    m.own = std::make_shared<CollisionChecker>(ComposeRobots({m.placement}), query_.scene);
+    m.own = std::make_shared<CollisionChecker>(ComposeRobots({m.placement}), SceneFor({m.placement}));
     const std::string who = "robot '" + spec.placement.name + "'";
     const CollisionResult start_contact = m.own->Check(m.start);
     if (start_contact.in_collision) {
@@ -677,7 +707,7 @@ CoordinationOutcome Coordinator::Run() {
   {
     std::vector<PlacedRobot> placements;
     for (const Member& m : members_) placements.push_back(m.placement);
-    team_ = std::make_shared<CollisionChecker>(ComposeRobots(placements), query_.scene);
+    team_ = std::make_shared<CollisionChecker>(ComposeRobots(placements), SceneFor(placements));
   }
 
   // 3. The methods.
