@@ -707,5 +707,35 @@ TEST_F(MoveItExamples, StartsAndGoalsAreClearAndEveryProblemPlans) {
   }
 }
 
+TEST_F(MoveItExamples, AllowedCollisionsReachTheChecker) {
+  // A mounting plate around the Panda's base touches panda_link0: without an ACM entry the start
+  // collides; with the entry (imported as the pair panda_link0 / plate) the problem plans.
+  const std::string scene =
+      "robot_state:\n  joint_state:\n"
+      "    name: [panda_joint1, panda_joint2, panda_joint3, panda_joint4, panda_joint5, panda_joint6, panda_joint7]\n"
+      "    position: [0, -0.785, 0, -2.356, 0, 1.571, 0.785]\n"
+      "world:\n  collision_objects:\n    - id: plate\n"
+      "      primitives: [{type: box, dimensions: [0.4, 0.4, 0.05]}]\n"
+      "      primitive_poses: [{position: [0, 0, 0.025], orientation: [0, 0, 0, 1]}]\n";
+  const std::string acm =
+      "allowed_collision_matrix:\n  entry_names: [panda_link0, plate]\n  entry_values: [[false, true], [true, "
+      "false]]\n";
+  const std::string goal =
+      "goal_constraints:\n  - joint_constraints:\n      - {joint_name: panda_joint1, position: -1.0}\n"
+      "      - {joint_name: panda_joint2, position: -0.3}\n      - {joint_name: panda_joint4, position: -2.2}\n"
+      "      - {joint_name: panda_joint6, position: 1.9}\n";
+  for (const bool allowed : {false, true}) {
+    SCOPED_TRACE(allowed ? "with the entry" : "without the entry");
+    v1::PlanRequest request = ImportMotionPlanRequest(allowed ? scene + acm : scene, goal, Panda(), "s", "r");
+    ASSERT_EQ(request.scene().allowed_collisions_size(), allowed ? 1 : 0);
+    request.mutable_planner()->set_planner_id("rrt_connect");
+    request.set_seed(7);
+    v1::PlanResponse response;
+    const grpc::Status status = server_->Plan(request, &response);
+    ASSERT_TRUE(status.ok()) << status.error_message();
+    EXPECT_EQ(response.outcome(), allowed ? v1::SUCCESS : v1::START_IN_COLLISION) << response.message();
+  }
+}
+
 }  // namespace
 }  // namespace chasles
