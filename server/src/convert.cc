@@ -854,6 +854,13 @@ v1::PlanOutcome StageCodeToProto(TrajectoryStageCode code) {
   return v1::PLAN_OUTCOME_UNSPECIFIED;
 }
 
+static void LimitsToProto(const KinematicLimits& limits, v1::TrajectoryLimits* out) {
+  ToProto(limits.max_velocity, out->mutable_max_velocity());
+  ToProto(limits.max_acceleration, out->mutable_max_acceleration());
+  ToProto(limits.max_jerk, out->mutable_max_jerk());
+  ToProto(limits.max_effort, out->mutable_max_effort());
+}
+
 void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery& query, v1::OptimizeResponse* response) {
   response->set_outcome(StageCodeToProto(outcome.code));
   response->set_message(outcome.message);
@@ -867,6 +874,7 @@ void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery&
   OptimizerToProto(stage.optimizer, response->mutable_optimizer());
   if (outcome.code != TrajectoryStageCode::kSuccess) return;
   QualityToProto(stage.quality, response->mutable_quality());
+  LimitsToProto(stage.limits, response->mutable_limits());
   SamplesToProto(outcome.samples, query.checker->robot(), response->mutable_trajectory());
   response->set_duration(stage.trajectory.duration());
 }
@@ -917,6 +925,7 @@ void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::
   for (const Eigen::VectorXd& q : outcome.path) ToProto(q, response->add_path()->mutable_positions());
   SamplesToProto(outcome.samples, robot, response->mutable_trajectory());
   QualityToProto(outcome.quality, response->mutable_quality());
+  LimitsToProto(outcome.limits, response->mutable_limits());
   response->set_duration(outcome.trajectory.duration());
   if (query.pose_goal && outcome.goal.size() > 0) {
     ToProto(outcome.goal, response->mutable_reached_goal()->mutable_positions());

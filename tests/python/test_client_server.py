@@ -176,6 +176,15 @@ class ServerTest(unittest.TestCase):
         plot_trajectory(result.trajectory, result.velocity_limits, result.acceleration_limits, path=svg)
         self.assertIn("<svg", svg.read_text())
 
+    def test_limits_come_with_the_response(self) -> None:
+        # A fresh client knows no robot: the limits are the response's own (TrajectoryLimits).
+        fresh = Client(self.client.address)
+        result = fresh.plan(START, GOAL, time_budget=3.0, seed=7, max_velocity=[1.0] * 7)
+        self.assertTrue(result.success, f"{result.outcome}: {result.message}")
+        np.testing.assert_array_equal(result.velocity_limits, np.full(7, 1.0))
+        np.testing.assert_array_equal(result.acceleration_limits, np.full(7, 2.0))
+        self.check_trajectory(result.trajectory, START, GOAL, result.velocity_limits, result.acceleration_limits)
+
     def test_plan_with_lower_limits_and_an_uploaded_scene(self) -> None:
         scene = json.loads((ROOT / "examples/scenes/table.json").read_text())
         scene["boxes"].append({"name": "post", "size": {"x": 0.05, "y": 0.05, "z": 0.3},

@@ -66,13 +66,22 @@ void ExpectVerifiedTrajectory(const v1::PlanRequest& request, const v1::PlanResp
     EXPECT_NEAR(first.positions(j), request.start().positions(j), 1e-6) << "joint " << j;
     ExpectAtGoal(request, j, last.positions(j));
   }
+  // The limits the response reports are the ones every sample keeps.
+  const v1::TrajectoryLimits& limits = response.limits();
+  ASSERT_EQ(limits.max_velocity_size(), dofs);
+  ASSERT_EQ(limits.max_acceleration_size(), dofs);
   double previous = -1.0;
   for (const v1::TrajectoryPoint& point : trajectory.points()) {
     ASSERT_GT(point.time_from_start(), previous);
     previous = point.time_from_start();
     ASSERT_EQ(point.velocities_size(), dofs);
     ASSERT_EQ(point.accelerations_size(), dofs);
-    for (int j = 0; j < dofs; ++j) ASSERT_TRUE(std::isfinite(point.positions(j)));
+    for (int j = 0; j < dofs; ++j) {
+      ASSERT_TRUE(std::isfinite(point.positions(j)));
+      ASSERT_GT(limits.max_velocity(j), 0.0);
+      EXPECT_LE(std::abs(point.velocities(j)), limits.max_velocity(j) * (1 + 1e-9) + 1e-12) << "joint " << j;
+      EXPECT_LE(std::abs(point.accelerations(j)), limits.max_acceleration(j) * (1 + 1e-9) + 1e-12) << "joint " << j;
+    }
   }
   ASSERT_GE(response.path_size(), 2);
   for (int j = 0; j < dofs; ++j) {

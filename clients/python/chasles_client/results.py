@@ -101,6 +101,14 @@ def _path_array(states: Any, dof: int) -> np.ndarray:
     return np.array([list(s.positions) for s in states], dtype=float)
 
 
+def _limits_of(response: Any, velocity: Optional[np.ndarray], acceleration: Optional[np.ndarray]):
+    """The limits the response reports (TrajectoryLimits), else the client's own reckoning."""
+    if response.HasField("limits") and len(response.limits.max_velocity) > 0:
+        return (np.array(response.limits.max_velocity, dtype=float),
+                np.array(response.limits.max_acceleration, dtype=float))
+    return velocity, acceleration
+
+
 @dataclass
 class PlanResult:
     """The answer to a Plan request.
@@ -115,8 +123,9 @@ class PlanResult:
         timings, statistics, verification, quality, optimizer: the response's StageTimings,
             PlannerStatistics, Verification, TrajectoryQuality and OptimizerStatistics as dicts
             with snake_case keys (units as in the proto).
-        velocity_limits, acceleration_limits: the limits the trajectory was timed with, shape (n,),
-            when the client knows them (see ``limits_used``); else None.
+        velocity_limits, acceleration_limits: the limits the trajectory was timed with, shape (n,):
+            the response's ``limits`` (TrajectoryLimits); from a server that sends none, the
+            client's own reckoning when it knows the model (see ``limits_used``); else None.
         reached_goal: for a pose goal, the IK solution reached (else None).
         response: the raw chasles.v1.PlanResponse.
     """
@@ -144,6 +153,7 @@ class PlanResult:
     @classmethod
     def from_response(cls, response: pb.PlanResponse, velocity_limits: Optional[np.ndarray] = None,
                       acceleration_limits: Optional[np.ndarray] = None) -> "PlanResult":
+        velocity_limits, acceleration_limits = _limits_of(response, velocity_limits, acceleration_limits)
         success = response.outcome == pb.SUCCESS
         trajectory = Trajectory.from_response(response) if len(response.trajectory.points) > 0 else None
         dof = trajectory.dof if trajectory is not None else (len(response.path[0].positions) if response.path else 0)
@@ -188,6 +198,7 @@ class OptimizeResult:
     @classmethod
     def from_response(cls, response: pb.OptimizeResponse, velocity_limits: Optional[np.ndarray] = None,
                       acceleration_limits: Optional[np.ndarray] = None) -> "OptimizeResult":
+        velocity_limits, acceleration_limits = _limits_of(response, velocity_limits, acceleration_limits)
         trajectory = Trajectory.from_response(response) if len(response.trajectory.points) > 0 else None
         return cls(
             outcome=outcome_name(response.outcome), message=response.message,
