@@ -47,6 +47,7 @@ struct Obstacle {
   Eigen::Vector3d center;  // bounding centre, world
   double radius = 0.0;
   bool octree = false;
+  std::vector<char> allowed_links;  // per robot link, 1 = the scene allows it to touch; empty = none
 };
 
 }  // namespace
@@ -157,6 +158,16 @@ ObstacleProximity::ObstacleProximity(std::shared_ptr<const RobotModel> robot, st
     ob.radius = 0.5 * (hi - lo).norm();
     m.obstacles.push_back(std::move(ob));
   }
+  // The scene's allowed link–obstacle pairs (names the robot lacks are the checker's to reject).
+  for (const AllowedCollision& pair : scene_->allowed_collisions()) {
+    const int link = robot_->FindLink(pair.link);
+    if (link < 0) continue;
+    for (Obstacle& ob : m.obstacles) {
+      if (ob.name != pair.other) continue;
+      ob.allowed_links.resize(robot_->num_links(), 0);
+      ob.allowed_links[link] = 1;
+    }
+  }
 }
 
 ObstacleProximity::~ObstacleProximity() = default;
@@ -182,6 +193,7 @@ void ObstacleProximity::Query(const Eigen::VectorXd& q, double max_distance, std
       const fcl::Transform3d& tf = pose;
       const Eigen::Vector3d c = pose * s.g.center;
       for (const Obstacle& o : m.obstacles) {
+        if (!o.allowed_links.empty() && o.allowed_links[links_[i]]) continue;
         if ((c - o.center).norm() - s.g.radius - o.radius >= bound) continue;
         double d;
         Eigen::Vector3d p_link, p_obstacle;

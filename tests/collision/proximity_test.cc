@@ -106,6 +106,19 @@ TEST(ProximityTest, SphereLinkToSphereObstacleAndTheNearestOfTwo) {
   EXPECT_EQ(proximity.Query(Q(2.9))[0].obstacle_name, "far_ball");
 }
 
+TEST(ProximityTest, AnObstacleTheSceneAllowsTheLinkToTouchIsNotSeen) {
+  auto robot = SliderRobot(Shape::Sphere(0.1));
+  auto scene = std::make_shared<Scene>();
+  scene->AddObject({"far_ball", Shape::Sphere(0.2, At(3.0, 0.0, 0.0))});
+  scene->AddObject({"ball", Shape::Sphere(0.2, At(2.0, 0.3, 0.0))});
+  scene->AllowCollision("mover", "ball");
+  scene->AllowCollision("base", "far_ball");  // another link's allowance changes nothing here
+  const ObstacleProximity proximity(robot, scene);
+  const LinkProximity r = proximity.Query(Q(1.9))[0];
+  EXPECT_EQ(r.obstacle_name, "far_ball");
+  EXPECT_NEAR(r.distance, 3.0 - 1.9 - 0.3, kTol);
+}
+
 TEST(ProximityTest, BeyondMaxDistanceIsNone) {
   auto robot = SliderRobot(Shape::Sphere(0.1));
   auto scene = std::make_shared<Scene>();

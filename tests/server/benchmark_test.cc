@@ -465,6 +465,8 @@ TEST(BenchmarkReport, CsvHasAHeaderAndOneQuotedLinePerRun) {
   EXPECT_EQ(lines[2].rfind("\"odd, \"\"name\"\"\",a,3,0,NO_PATH_WITHIN_BUDGET,0,", 0), 0u) << lines[2];
 }
 
+void* volatile g_sink = nullptr;
+
 TEST(HeapTracking, ScopesCountTheirThreadsOperatorNew) {
   HeapScope outer;
   std::unique_ptr<std::vector<char>> block;
@@ -482,8 +484,7 @@ TEST(HeapTracking, ScopesCountTheirThreadsOperatorNew) {
   std::thread([] { std::vector<char> other(1 << 20); (void)other; }).join();
   EXPECT_LT(outer.peak_bytes(), 1u << 16);
   auto* array = new double[1000];
-  static void* volatile sink;
-  sink = array;  // keeps the compiler from eliding the new/delete pair
+  g_sink = array;  // keeps the compiler from eliding the new/delete pair
   EXPECT_GE(outer.live_bytes(), static_cast<std::int64_t>(sizeof(double) * 1000));
   delete[] array;
 }

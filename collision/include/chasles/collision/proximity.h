@@ -38,7 +38,8 @@ struct LinkProximity {
 /// Per-link nearest-obstacle queries by FCL distance with nearest points. The robot's and the
 /// scene's FCL geometry is built once (occupancy maps as fcl::OcTree, whose occupied leaves are
 /// the obstacles). Distances are to the unpadded shapes (CollisionOptions::padding is not
-/// applied) and ignore self-distance.
+/// applied) and ignore self-distance. A link the scene allows to touch an obstacle
+/// (Scene::allowed_collisions) does not see that obstacle.
 class ObstacleProximity {
  public:
   /// \throws Error(kInvalidArgument) when robot is null. A null scene is an empty one.
