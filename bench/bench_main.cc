@@ -41,6 +41,8 @@
 #include "chasles/robot/lie_group.h"
 #include "chasles/robot/mobile.h"
 #include "chasles/multi/coordinator.h"
+#include "chasles/server/benchmark.h"
+#include "chasles/server/benchmark_report.h"
 #include "chasles/server/convert.h"
 #include "chasles/server/convert_multi.h"
 #include "chasles/server/planning_server.h"
@@ -92,13 +94,9 @@ std::vector<std::string> Split(const std::string& s) {
   return out;
 }
 
+/// The report's quantile (linear interpolation), but nan for no values: a table cell, not a 0.
 double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const double pos = q * (v.size() - 1);
-  const auto lo = static_cast<size_t>(std::floor(pos));
-  const auto hi = std::min(lo + 1, v.size() - 1);
-  return v[lo] + (pos - lo) * (v[hi] - v[lo]);
+  return v.empty() ? std::nan("") : ::chasles::Quantile(std::move(v), q);
 }
 
 std::string examples_dir;
@@ -957,11 +955,9 @@ void BenchBenchmarkRpc(const Options& options) {
         plan.has_robot() ? RobotFromProto(plan.robot()) : LoadRobot("panda"),
         plan.has_scene() ? SceneFromProto(plan.scene()) : LoadScene("table"));
     for (const v1::BenchmarkConfig& config : request.configs()) {
-      v1::PlanRequest merged = problem.request();
-      *merged.mutable_planner() = config.planner();
-      merged.set_time_budget(options.budget);
       RequestSettings settings;
-      queries.push_back(PlanQueryFromProto(merged, checker, registry, &settings));
+      queries.push_back(PlanQueryFromProto(BenchmarkRunRequest(problem.request(), config, options.budget, options.seed),
+                                           checker, registry, &settings));
     }
   }
   const auto direct = [&]() {

@@ -262,15 +262,11 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkRespons
       const std::shared_ptr<const CollisionChecker> checker = services_.store->Checker(robot, scene);
       for (std::size_t c = 0; c < C; ++c) {
         const v1::BenchmarkConfig& config = r.configs(static_cast<int>(c));
-        v1::PlanRequest merged = problem;
-        *merged.mutable_planner() = config.planner();
-        if (config.has_trajectory()) *merged.mutable_trajectory() = config.trajectory();
-        merged.set_time_budget(run_budget_);
-        merged.set_seed(seed_);
         RequestSettings settings;
         try {
-          queries_[p * C + c] = PlanQueryFromProto(merged, checker, *services_.registry, &settings);
-          queries_[p * C + c].Validate(*services_.registry);
+          // Validated here (PlanQueryFromProto), so every error comes before any run starts.
+          queries_[p * C + c] = PlanQueryFromProto(BenchmarkRunRequest(problem, config, run_budget_, seed_), checker,
+                                                   *services_.registry, &settings);
         } catch (const Error& e) {
           // Name the field where the user wrote it: the configuration's planner/trajectory, or the problem.
           const std::string message = e.what();
@@ -570,6 +566,16 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkRespons
   std::optional<grpc::Status> final_status_;
   bool finish_called_ = false;
 };
+
+v1::PlanRequest BenchmarkRunRequest(const v1::PlanRequest& problem, const v1::BenchmarkConfig& config,
+                                    double run_budget, std::uint64_t seed) {
+  v1::PlanRequest request = problem;
+  *request.mutable_planner() = config.planner();
+  if (config.has_trajectory()) *request.mutable_trajectory() = config.trajectory();
+  request.set_time_budget(run_budget);
+  request.set_seed(seed);
+  return request;
+}
 
 bool BenchmarkRegistry::Add(const std::string& id, BenchmarkCall* call) {
   std::lock_guard<std::mutex> lock(mutex_);

@@ -14,6 +14,7 @@
 /// without a summary (the client has every finished run already).
 
 #include <chrono>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -54,6 +55,11 @@ class BenchmarkRegistry {
   std::mutex mutex_;
   std::map<std::string, BenchmarkCall*> calls_;
 };
+
+/// The PlanRequest one run executes: the problem's request with the configuration's planner,
+/// its trajectory options when it has them, and the run's budget [s] and seed.
+v1::PlanRequest BenchmarkRunRequest(const v1::PlanRequest& problem, const v1::BenchmarkConfig& config,
+                                    double run_budget, std::uint64_t seed);
 
 /// Starts a Benchmark call; `request_id` is the request's or a generated one; `deadline` is the
 /// call's gRPC deadline on the steady clock.
