@@ -16,7 +16,7 @@ from . import _health
 from ._stubs import pb, pb_grpc
 from .benchmark import BenchmarkProgress, BenchmarkResult, BenchmarkRun
 from .convert import (JointValues, joint_states, joint_values, plan_request,
-                      plan_request_from, set_fields, to_message, trajectory_options)
+                      plan_request_from, set_fields, set_sources, to_message, trajectory_options)
 from .convert import benchmark_request as build_benchmark_request
 from .errors import ChaslesError
 from .results import OptimizeResult, PlannerInfo, PlanResult, RobotInfo, limits_used
@@ -245,14 +245,7 @@ class Client:
             Others as in ``plan``; ``more`` sets any other OptimizeRequest field by name.
         """
         request = pb.OptimizeRequest()
-        if robot is not None:
-            request.robot.CopyFrom(to_message(robot, pb.RobotModel, "robot"))
-        if robot_id is not None:
-            request.robot_id = robot_id
-        if scene is not None:
-            request.scene.CopyFrom(to_message(scene, pb.Scene, "scene"))
-        if scene_id is not None:
-            request.scene_id = scene_id
+        set_sources(request, robot, robot_id, scene, scene_id)
         if isinstance(path, Trajectory):
             request.trajectory.CopyFrom(path.to_message())
         elif isinstance(path, pb.JointTrajectory):

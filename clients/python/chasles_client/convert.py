@@ -227,6 +227,23 @@ def set_fields(message: Message, fields: Mapping[str, Any], what: str) -> None:
             raise TypeError(f"{what}.{name}: {error}") from error
 
 
+def set_sources(request: Message, robot: Any, robot_id: Optional[str], scene: Any, scene_id: Optional[str]) -> None:
+    """Sets a request's robot (inline or by id) and scene (inline or by id); None leaves the
+    server's default. Giving both forms of one is a TypeError."""
+    if robot is not None and robot_id is not None:
+        raise TypeError("give robot or robot_id, not both")
+    if scene is not None and scene_id is not None:
+        raise TypeError("give scene or scene_id, not both")
+    if robot is not None:
+        request.robot.CopyFrom(to_message(robot, pb.RobotModel, "robot"))
+    if robot_id is not None:
+        request.robot_id = robot_id
+    if scene is not None:
+        request.scene.CopyFrom(to_message(scene, pb.Scene, "scene"))
+    if scene_id is not None:
+        request.scene_id = scene_id
+
+
 def plan_request(
     start: Any,
     goal_value: Any,
@@ -253,18 +270,7 @@ def plan_request(
     ``gravity={"z": -9.81}``, ``workcell={...}``).
     """
     request = pb.PlanRequest()
-    if robot is not None and robot_id is not None:
-        raise TypeError("give robot or robot_id, not both")
-    if scene is not None and scene_id is not None:
-        raise TypeError("give scene or scene_id, not both")
-    if robot is not None:
-        request.robot.CopyFrom(to_message(robot, pb.RobotModel, "robot"))
-    if robot_id is not None:
-        request.robot_id = robot_id
-    if scene is not None:
-        request.scene.CopyFrom(to_message(scene, pb.Scene, "scene"))
-    if scene_id is not None:
-        request.scene_id = scene_id
+    set_sources(request, robot, robot_id, scene, scene_id)
     request.start.CopyFrom(joint_state(start, "start"))
     target, message = goal(goal_value)
     getattr(request, target).CopyFrom(message)

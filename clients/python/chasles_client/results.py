@@ -109,6 +109,19 @@ def _limits_of(response: Any, velocity: Optional[np.ndarray], acceleration: Opti
     return velocity, acceleration
 
 
+def _common_fields(response: Any, velocity: Optional[np.ndarray], acceleration: Optional[np.ndarray]) -> Dict[str, Any]:
+    """The fields PlanResult and OptimizeResult read alike from their responses."""
+    velocity, acceleration = _limits_of(response, velocity, acceleration)
+    return dict(
+        outcome=outcome_name(response.outcome), message=response.message, success=response.outcome == pb.SUCCESS,
+        request_id=response.request_id,
+        trajectory=Trajectory.from_response(response) if len(response.trajectory.points) > 0 else None,
+        duration=response.duration, timings=message_to_dict(response.timings),
+        verification=message_to_dict(response.verification), quality=message_to_dict(response.quality),
+        optimizer=message_to_dict(response.optimizer), robot_id=response.robot_id, scene_id=response.scene_id,
+        velocity_limits=velocity, acceleration_limits=acceleration, response=response)
+
+
 @dataclass
 class PlanResult:
     """The answer to a Plan request.
@@ -153,21 +166,14 @@ class PlanResult:
     @classmethod
     def from_response(cls, response: pb.PlanResponse, velocity_limits: Optional[np.ndarray] = None,
                       acceleration_limits: Optional[np.ndarray] = None) -> "PlanResult":
-        velocity_limits, acceleration_limits = _limits_of(response, velocity_limits, acceleration_limits)
-        success = response.outcome == pb.SUCCESS
-        trajectory = Trajectory.from_response(response) if len(response.trajectory.points) > 0 else None
+        common = _common_fields(response, velocity_limits, acceleration_limits)
+        trajectory = common["trajectory"]
         dof = trajectory.dof if trajectory is not None else (len(response.path[0].positions) if response.path else 0)
         return cls(
-            outcome=outcome_name(response.outcome), message=response.message, success=success,
-            request_id=response.request_id, trajectory=trajectory, path=_path_array(response.path, dof),
-            duration=response.duration, timings=message_to_dict(response.timings),
-            statistics=message_to_dict(response.statistics), verification=message_to_dict(response.verification),
-            quality=message_to_dict(response.quality), optimizer=message_to_dict(response.optimizer),
-            robot_id=response.robot_id, scene_id=response.scene_id,
+            **common, path=_path_array(response.path, dof), statistics=message_to_dict(response.statistics),
             reached_goal=(np.array(response.reached_goal.positions, dtype=float)
                           if len(response.reached_goal.positions) > 0 else None),
-            goal_manipulability=response.goal_manipulability,
-            velocity_limits=velocity_limits, acceleration_limits=acceleration_limits, response=response)
+            goal_manipulability=response.goal_manipulability)
 
 
 @dataclass
@@ -198,13 +204,5 @@ class OptimizeResult:
     @classmethod
     def from_response(cls, response: pb.OptimizeResponse, velocity_limits: Optional[np.ndarray] = None,
                       acceleration_limits: Optional[np.ndarray] = None) -> "OptimizeResult":
-        velocity_limits, acceleration_limits = _limits_of(response, velocity_limits, acceleration_limits)
-        trajectory = Trajectory.from_response(response) if len(response.trajectory.points) > 0 else None
-        return cls(
-            outcome=outcome_name(response.outcome), message=response.message,
-            success=response.outcome == pb.SUCCESS, request_id=response.request_id, trajectory=trajectory,
-            duration=response.duration, input_duration=response.input_duration,
-            timings=message_to_dict(response.timings), verification=message_to_dict(response.verification),
-            quality=message_to_dict(response.quality), optimizer=message_to_dict(response.optimizer),
-            robot_id=response.robot_id, scene_id=response.scene_id,
-            velocity_limits=velocity_limits, acceleration_limits=acceleration_limits, response=response)
+        return cls(**_common_fields(response, velocity_limits, acceleration_limits),
+                   input_duration=response.input_duration)
