@@ -391,7 +391,7 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkRespons
         v1::BenchmarkResponse message = ProgressMessage();
         *message.mutable_run() = result;
         write = Enqueue(std::move(message));
-      } else if (!keep || stopping_) {
+      } else {
         ++dropped_;
       }
       if (!stopping_ && next_ < total_) {

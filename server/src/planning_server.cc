@@ -105,12 +105,7 @@ class PlanningService final : public v1::Planning::CallbackService {
                                  v1::PlanResponse* response) override {
     const Clock::time_point arrival = Clock::now();
     const Clock::time_point deadline = SteadyDeadline(*context);
-    std::string request_id = request->request_id();
-    if (request_id.empty()) {
-      char buffer[32];
-      std::snprintf(buffer, sizeof(buffer), "req-%06" PRIu64, ++next_request_);
-      request_id = buffer;
-    }
+    const std::string request_id = RequestId(request->request_id(), "req");
     auto* reactor = new PoolReactor();
     const bool queued = pool_->Submit([=] { RunPlan(reactor, context, request, response, request_id, arrival, deadline); });
     if (!queued) {
@@ -125,12 +120,7 @@ class PlanningService final : public v1::Planning::CallbackService {
                                      v1::OptimizeResponse* response) override {
     const Clock::time_point arrival = Clock::now();
     const Clock::time_point deadline = SteadyDeadline(*context);
-    std::string request_id = request->request_id();
-    if (request_id.empty()) {
-      char buffer[32];
-      std::snprintf(buffer, sizeof(buffer), "opt-%06" PRIu64, ++next_request_);
-      request_id = buffer;
-    }
+    const std::string request_id = RequestId(request->request_id(), "opt");
     response->set_request_id(request_id);
     return RunOnPool("optimize", [this, request, response, request_id, arrival, deadline](PoolReactor& reactor) {
       const StoredRobot robot = RobotOf(*request);
@@ -264,12 +254,7 @@ class PlanningService final : public v1::Planning::CallbackService {
                                        v1::CoordinateResponse* response) override {
     const Clock::time_point arrival = Clock::now();
     const Clock::time_point deadline = SteadyDeadline(*context);
-    std::string request_id = request->request_id();
-    if (request_id.empty()) {
-      char buffer[32];
-      std::snprintf(buffer, sizeof(buffer), "team-%06" PRIu64, ++next_request_);
-      request_id = buffer;
-    }
+    const std::string request_id = RequestId(request->request_id(), "team");
     response->set_request_id(request_id);
     return RunOnPool("coordinate", [this, request, response, request_id, arrival, deadline](PoolReactor& reactor) {
       const StoredScene scene = SceneOf(*request);
@@ -371,12 +356,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
   grpc::ServerWriteReactor<v1::BenchmarkResponse>* Benchmark(grpc::CallbackServerContext* context,
                                                              const v1::BenchmarkRequest* request) override {
-    std::string request_id = request->request_id();
-    if (request_id.empty()) {
-      char buffer[32];
-      std::snprintf(buffer, sizeof(buffer), "bench-%06" PRIu64, ++next_request_);
-      request_id = buffer;
-    }
+    const std::string request_id = RequestId(request->request_id(), "bench");
     BenchmarkServices services;
     services.registry = &registry_;
     services.pipeline = &pipeline_;
@@ -426,6 +406,14 @@ class PlanningService final : public v1::Planning::CallbackService {
       case v1::TeamRobot::kRobotId: return store_->FindRobot(robot.robot_id());
       default: ThrowInvalid(field + " has no robot: set robot or robot_id");
     }
+  }
+
+  /// The client's request id, or a generated "<prefix>-NNNNNN" when it sent none.
+  std::string RequestId(const std::string& given, const char* prefix) {
+    if (!given.empty()) return given;
+    char buffer[32];
+    std::snprintf(buffer, sizeof(buffer), "%s-%06" PRIu64, prefix, ++next_request_);
+    return buffer;
   }
 
   template <typename Request>
