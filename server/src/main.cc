@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <stdexcept>
 #include <string>
 #include <thread>
 
@@ -30,6 +31,13 @@ void PrintUsage(std::FILE* out) {
                "  --listen ADDR         address:port to listen on (default 127.0.0.1:50051; port 0 = any)\n"
                "  --threads N           planning worker threads (default: hardware threads)\n"
                "  --max-message-mb MB   largest request/response message in MiB (default 64)\n"
+               "  --tls-cert FILE       serve TLS with this certificate chain (PEM); needs --tls-key\n"
+               "  --tls-key FILE        the certificate's private key (PEM, unencrypted)\n"
+               "  --tls-client-ca FILE  mutual TLS: require client certificates signed by this CA (PEM)\n"
+               "  --tokens FILE         require bearer tokens: lines 'NAME ROLE TOKEN', ROLE 'plan' (planning,\n"
+               "                        uploads, benchmarks) or 'commit' (also CreateWorkcell, CommitTrajectory,\n"
+               "                        Release); '#' comments. Health checks need none. Without TLS, tokens\n"
+               "                        are accepted from loopback peers only (see README, Security)\n"
                "  --help                show this help\n"
                "\n"
                "SIGINT/SIGTERM shut the server down cleanly (running calls get 2 s to finish).\n");
@@ -73,6 +81,14 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "chasles-server: --max-message-mb '%s' is not an integer\n", value);
         return 2;
       }
+    } else if (arg == "--tls-cert") {
+      options.security.tls_cert = next("--tls-cert");
+    } else if (arg == "--tls-key") {
+      options.security.tls_key = next("--tls-key");
+    } else if (arg == "--tls-client-ca") {
+      options.security.tls_client_ca = next("--tls-client-ca");
+    } else if (arg == "--tokens") {
+      options.security.tokens_file = next("--tokens");
     } else {
       std::fprintf(stderr, "chasles-server: unknown argument '%s' (see --help)\n", arg.c_str());
       return 2;
@@ -80,7 +96,13 @@ int main(int argc, char** argv) {
   }
 
   try {
+    if (options.security.tokens() && !options.security.tls() && !chasles::IsLoopbackAddress(options.listen)) {
+      throw std::invalid_argument("--tokens without --tls-cert sends tokens in plaintext, accepted from loopback peers "
+                                  "only, but --listen " + options.listen +
+                                  " is not a loopback address: add --tls-cert and --tls-key, or listen on 127.0.0.1");
+    }
     chasles::PlanningServer server(options);
+    std::fprintf(stderr, "chasles-server: security: %s\n", chasles::AccessControl(options.security).Describe().c_str());
     const unsigned threads =
         options.threads > 0 ? static_cast<unsigned>(options.threads) : std::max(1u, std::thread::hardware_concurrency());
     std::fprintf(stderr,

@@ -98,11 +98,13 @@ class PoolReactor final : public grpc::ServerUnaryReactor {
 class PlanningService final : public v1::Planning::CallbackService {
  public:
   PlanningService(const PlannerRegistry& registry, ModelStore* store, ThreadPool* pool, WorkcellStore* workcells,
-                  bool log)
-      : registry_(registry), pipeline_(registry), store_(store), pool_(pool), workcells_(workcells), log_(log) {}
+                  bool log, const AccessControl* access)
+      : registry_(registry), pipeline_(registry), store_(store), pool_(pool), workcells_(workcells), log_(log),
+        access_(access) {}
 
   grpc::ServerUnaryReactor* Plan(grpc::CallbackServerContext* context, const v1::PlanRequest* request,
                                  v1::PlanResponse* response) override {
+    if (auto* refused = Refuse(context, "Plan")) return refused;
     const Clock::time_point arrival = Clock::now();
     const Clock::time_point deadline = SteadyDeadline(*context);
     const std::string request_id = RequestId(request->request_id(), "req");
@@ -118,6 +120,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
   grpc::ServerUnaryReactor* Optimize(grpc::CallbackServerContext* context, const v1::OptimizeRequest* request,
                                      v1::OptimizeResponse* response) override {
+    if (auto* refused = Refuse(context, "Optimize")) return refused;
     const Clock::time_point arrival = Clock::now();
     const Clock::time_point deadline = SteadyDeadline(*context);
     const std::string request_id = RequestId(request->request_id(), "opt");
@@ -147,6 +150,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
   grpc::ServerUnaryReactor* ListPlanners(grpc::CallbackServerContext* context, const v1::ListPlannersRequest*,
                                          v1::ListPlannersResponse* response) override {
+    if (auto* refused = Refuse(context, "ListPlanners")) return refused;
     grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
     grpc::Status status;
     try {
@@ -160,6 +164,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
   grpc::ServerUnaryReactor* UploadRobot(grpc::CallbackServerContext* context, const v1::UploadRobotRequest* request,
                                         v1::UploadRobotResponse* response) override {
+    if (auto* refused = Refuse(context, "UploadRobot")) return refused;
     return RunOnPool("upload-robot", [this, request, response](const PoolReactor&) {
       const Clock::time_point start = Clock::now();
       StoredRobot robot = store_->AddRobot(request->robot(), "robot");
@@ -178,6 +183,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
   grpc::ServerUnaryReactor* UploadScene(grpc::CallbackServerContext* context, const v1::UploadSceneRequest* request,
                                         v1::UploadSceneResponse* response) override {
+    if (auto* refused = Refuse(context, "UploadScene")) return refused;
     return RunOnPool("upload-scene", [this, request, response](const PoolReactor&) {
       const Clock::time_point start = Clock::now();
       StoredScene scene = store_->AddScene(request->scene(), "scene");
@@ -189,6 +195,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
   grpc::ServerUnaryReactor* UpdateScene(grpc::CallbackServerContext* context, const v1::UpdateSceneRequest* request,
                                         v1::UpdateSceneResponse* response) override {
+    if (auto* refused = Refuse(context, "UpdateScene")) return refused;
     return RunOnPool("update-scene", [this, request, response](const PoolReactor&) {
       const Clock::time_point start = Clock::now();
       const StoredScene base =
@@ -222,6 +229,7 @@ class PlanningService final : public v1::Planning::CallbackService {
   grpc::ServerUnaryReactor* InverseKinematics(grpc::CallbackServerContext* context,
                                               const v1::InverseKinematicsRequest* request,
                                               v1::InverseKinematicsResponse* response) override {
+    if (auto* refused = Refuse(context, "InverseKinematics")) return refused;
     const Clock::time_point arrival = Clock::now();
     const Clock::time_point deadline = SteadyDeadline(*context);
     return RunOnPool("ik", [this, request, response, arrival, deadline](const PoolReactor& reactor) {
@@ -252,6 +260,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
   grpc::ServerUnaryReactor* Coordinate(grpc::CallbackServerContext* context, const v1::CoordinateRequest* request,
                                        v1::CoordinateResponse* response) override {
+    if (auto* refused = Refuse(context, "Coordinate")) return refused;
     const Clock::time_point arrival = Clock::now();
     const Clock::time_point deadline = SteadyDeadline(*context);
     const std::string request_id = RequestId(request->request_id(), "team");
@@ -291,6 +300,7 @@ class PlanningService final : public v1::Planning::CallbackService {
   grpc::ServerUnaryReactor* CreateWorkcell(grpc::CallbackServerContext* context,
                                            const v1::CreateWorkcellRequest* request,
                                            v1::CreateWorkcellResponse* response) override {
+    if (auto* refused = Refuse(context, "CreateWorkcell")) return refused;
     grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
     grpc::Status status;
     try {
@@ -308,6 +318,7 @@ class PlanningService final : public v1::Planning::CallbackService {
   grpc::ServerUnaryReactor* CommitTrajectory(grpc::CallbackServerContext* context,
                                              const v1::CommitTrajectoryRequest* request,
                                              v1::CommitTrajectoryResponse* response) override {
+    if (auto* refused = Refuse(context, "CommitTrajectory")) return refused;
     return RunOnPool("commit", [this, request, response](const PoolReactor&) {
       const Clock::time_point start = Clock::now();
       if (request->robot_name().empty()) ThrowInvalid("robot_name is empty: name the robot that moves");
@@ -338,6 +349,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
   grpc::ServerUnaryReactor* Release(grpc::CallbackServerContext* context, const v1::ReleaseRequest* request,
                                     v1::ReleaseResponse* response) override {
+    if (auto* refused = Refuse(context, "Release")) return refused;
     grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
     grpc::Status status;
     try {
@@ -356,6 +368,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
   grpc::ServerWriteReactor<v1::BenchmarkResponse>* Benchmark(grpc::CallbackServerContext* context,
                                                              const v1::BenchmarkRequest* request) override {
+    if (grpc::Status s = access_->Authorize(*context, "Benchmark"); !s.ok()) return new RefusedWriter<v1::BenchmarkResponse>(s);
     const std::string request_id = RequestId(request->request_id(), "bench");
     BenchmarkServices services;
     services.registry = &registry_;
@@ -368,6 +381,7 @@ class PlanningService final : public v1::Planning::CallbackService {
 
   grpc::ServerUnaryReactor* StopBenchmark(grpc::CallbackServerContext* context, const v1::StopBenchmarkRequest* request,
                                           v1::StopBenchmarkResponse* response) override {
+    if (auto* refused = Refuse(context, "StopBenchmark")) return refused;
     grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
     grpc::Status status;
     if (request->request_id().empty()) {
@@ -384,6 +398,25 @@ class PlanningService final : public v1::Planning::CallbackService {
   }
 
  private:
+  /// Finishes the call with the access check's refusal (UNAUTHENTICATED, PERMISSION_DENIED), or
+  /// returns null when the caller may call `rpc`.
+  grpc::ServerUnaryReactor* Refuse(grpc::CallbackServerContext* context, const char* rpc) const {
+    const grpc::Status status = access_->Authorize(*context, rpc);
+    if (status.ok()) return nullptr;
+    Log("%s status=%d message=%s", rpc, static_cast<int>(status.error_code()), status.error_message().c_str());
+    grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+    reactor->Finish(status);
+    return reactor;
+  }
+
+  /// A server-streaming call refused before it started.
+  template <typename Response>
+  class RefusedWriter final : public grpc::ServerWriteReactor<Response> {
+   public:
+    explicit RefusedWriter(const grpc::Status& status) { this->Finish(status); }
+    void OnDone() override { delete this; }
+  };
+
   /// Thrown from pool work to finish the call with DEADLINE_EXCEEDED.
   struct DeadlineError {
     std::string message;
@@ -558,6 +591,7 @@ class PlanningService final : public v1::Planning::CallbackService {
   WorkcellStore* workcells_;
   BenchmarkRegistry benchmarks_;
   const bool log_;
+  const AccessControl* access_;  // tokens and roles (the credentials checked them already)
   std::atomic<std::uint64_t> next_request_{0};
 };
 
@@ -577,6 +611,7 @@ struct PlanningServer::Impl {
   std::unique_ptr<ModelStore> store;
   std::unique_ptr<ThreadPool> pool;
   WorkcellStore workcells;
+  std::unique_ptr<AccessControl> access;
   std::unique_ptr<PlanningService> service;
   std::unique_ptr<grpc::Server> server;
   int port = 0;
@@ -588,12 +623,13 @@ PlanningServer::PlanningServer(const ServerOptions& options) : impl_(std::make_u
   RegisterDefaultPlanners(&impl_->registry);
   impl_->store = std::make_unique<ModelStore>(DefaultRobotProto(), DefaultSceneProto(), options.cache_capacity);
   impl_->pool = std::make_unique<ThreadPool>(options.threads);
+  impl_->access = std::make_unique<AccessControl>(options.security);
   impl_->service = std::make_unique<PlanningService>(impl_->registry, impl_->store.get(), impl_->pool.get(),
-                                                     &impl_->workcells, options.log_requests);
+                                                     &impl_->workcells, options.log_requests, impl_->access.get());
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::ServerBuilder builder;
-  builder.AddListeningPort(options.listen, grpc::InsecureServerCredentials(), &impl_->port);
+  builder.AddListeningPort(options.listen, impl_->access->MakeServerCredentials(), &impl_->port);
   const int max_bytes = options.max_message_mb * 1024 * 1024;
   builder.SetMaxReceiveMessageSize(max_bytes);
   builder.SetMaxSendMessageSize(max_bytes);

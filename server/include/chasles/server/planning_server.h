@@ -8,6 +8,8 @@
 #include <memory>
 #include <string>
 
+#include "chasles/server/security.h"
+
 namespace chasles {
 
 struct ServerOptions {
@@ -16,6 +18,9 @@ struct ServerOptions {
   int max_message_mb = 64;                 ///< largest request/response message [MiB]; in [1, 2047]
   std::size_t cache_capacity = 64;         ///< robots, scenes and checkers kept each (LRU)
   bool log_requests = true;                ///< one line per request on stderr
+  /// TLS, mutual TLS and bearer tokens (--tls-cert, --tls-key, --tls-client-ca, --tokens);
+  /// all empty = plaintext without authentication. See security.h.
+  SecurityOptions security;
   /// \throws Error(kInvalidArgument) naming the option.
   void Validate() const;
 };
