@@ -8,6 +8,7 @@
 
 #include "chasles/robot/error.h"
 #include "chasles/robot/lie_group.h"
+#include "inertia_check.h"
 
 // Both front ends translate a description into RobotModel::FromTree links and joints. A Joint
 // turns its child frame about (or slides it along) `axis` through the child frame's origin,
@@ -171,6 +172,11 @@ Link MakeLink(const std::string& name, const LinkProperties& props,
     if (asym > 1e-9 * std::max(1.0, in.inertia.cwiseAbs().maxCoeff())) {
       ThrowInvalid(inf + " inertia must be symmetric (max |I − Iᵀ| = " + Num(asym) + ")");
     }
+    const Eigen::Matrix3d& i3 = in.inertia;
+    robot_internal::CheckInertiaPositiveSemidefinite(
+        0.5 * (i3 + i3.transpose()), inf + " inertia",
+        "(ixx " + Num(i3(0, 0)) + ", iyy " + Num(i3(1, 1)) + ", izz " + Num(i3(2, 2)) + ", ixy " + Num(i3(0, 1)) +
+            ", ixz " + Num(i3(0, 2)) + ", iyz " + Num(i3(1, 2)) + ")");
     Inertial out;
     out.mass = in.mass;
     const Eigen::Matrix3d r = link_from_given.linear();
@@ -234,15 +240,30 @@ void CheckAllowedPairs(const std::vector<std::pair<std::string, std::string>>& p
   }
 }
 
+/// A DH table or PoE list of n joints makes n degrees of freedom and n + 2 links.
+void CheckSize(std::size_t joints, const InputLimits& limits, const std::string& field) {
+  if (joints > static_cast<std::size_t>(limits.max_dofs)) {
+    ThrowResourceExhausted(field + " has " + std::to_string(joints) + " joints, more than the cap of " +
+                           std::to_string(limits.max_dofs) +
+                           " degrees of freedom (InputLimits::max_dofs); send a smaller robot or raise the server's cap");
+  }
+  if (joints + 2 > static_cast<std::size_t>(limits.max_links)) {
+    ThrowResourceExhausted(field + " has " + std::to_string(joints) + " joints, so " + std::to_string(joints + 2) +
+                           " links, more than the cap of " + std::to_string(limits.max_links) +
+                           " (InputLimits::max_links); send a smaller robot or raise the server's cap");
+  }
+}
+
 }  // namespace
 
-std::shared_ptr<const RobotModel> RobotFromDh(const DhDescription& dh) {
+std::shared_ptr<const RobotModel> RobotFromDh(const DhDescription& dh, const InputLimits& limits) {
   const bool standard = dh.convention == DhConvention::kStandard;
   if (dh.convention != DhConvention::kStandard && dh.convention != DhConvention::kModified) {
     ThrowInvalid("dh.convention = " + std::to_string(static_cast<int>(dh.convention)) +
                  " must be standard or modified");
   }
   if (dh.joints.empty()) ThrowInvalid("dh.joints is empty; a DH table needs at least one joint");
+  CheckSize(dh.joints.size(), limits, "dh.joints");
   const Eigen::Isometry3d base = CheckSe3(dh.base, "dh.base");
   const Eigen::Isometry3d tool = CheckSe3(dh.tool, "dh.tool");
   std::vector<std::string> given;
@@ -288,8 +309,9 @@ std::shared_ptr<const RobotModel> RobotFromDh(const DhDescription& dh) {
                               std::move(joints), dh.allowed_collisions);
 }
 
-std::shared_ptr<const RobotModel> RobotFromPoe(const PoeDescription& poe) {
+std::shared_ptr<const RobotModel> RobotFromPoe(const PoeDescription& poe, const InputLimits& limits) {
   if (poe.joints.empty()) ThrowInvalid("poe.joints is empty; a PoE description needs at least one joint");
+  CheckSize(poe.joints.size(), limits, "poe.joints");
   const Eigen::Isometry3d home = CheckSe3(poe.home, "poe.home");
   std::vector<std::string> given;
   for (const PoeJoint& j : poe.joints) given.push_back(j.name);

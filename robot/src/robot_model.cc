@@ -204,9 +204,18 @@ void RobotModel::Finalize(const std::vector<std::pair<std::string, std::string>>
   // Allowed collisions: every joint's parent/child pair (fixed joints too) + the given pairs.
   acm_ = AllowedCollisionMatrix(nl);
   for (const Joint& joint : joints_) acm_.Allow(joint.parent_link, joint.child_link);
+  // One index for the pairs (FindLink per pair would cost links × pairs on large inputs).
+  std::unordered_map<std::string_view, int> link_index;
+  if (!allowed_pairs.empty()) {
+    for (int i = 0; i < nl; ++i) link_index.emplace(links_[i].name, i);
+  }
+  const auto find = [&link_index](const std::string& name) {
+    const auto it = link_index.find(name);
+    return it == link_index.end() ? -1 : it->second;
+  };
   for (size_t i = 0; i < allowed_pairs.size(); ++i) {
-    const int a = FindLink(allowed_pairs[i].first);
-    const int b = FindLink(allowed_pairs[i].second);
+    const int a = find(allowed_pairs[i].first);
+    const int b = find(allowed_pairs[i].second);
     for (const auto& [which, index, link_name] :
          {std::tuple<const char*, int, const std::string&>{"first", a, allowed_pairs[i].first},
           std::tuple<const char*, int, const std::string&>{"second", b, allowed_pairs[i].second}}) {

@@ -1,7 +1,6 @@
 // RobotModel::FromUrdf: URDF via urdfdom, SRDF via tinyxml.
 
 #include <cmath>
-#include <functional>
 #include <mutex>
 #include <string>
 #include <unordered_map>
@@ -14,6 +13,8 @@
 #include "chasles/robot/error.h"
 #include "chasles/robot/robot_model.h"
 #include "format.h"
+#include "inertia_check.h"
+#include "xml_scan.h"
 
 namespace chasles {
 namespace {
@@ -112,7 +113,27 @@ Shape ConvertGeometry(const urdf::Collision& collision, const std::string& where
 
 std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
     std::string_view urdf_text, std::string_view srdf_text,
-    const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes) {
+    const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes, const InputLimits& limits) {
+  // 0. Sizes first, before any parser (tinyxml recurses once per nesting level): document
+  //    bytes, element nesting, and the links, joints and moving joints the document declares.
+  const robot_internal::XmlScan scan =
+      robot_internal::CheckXmlText(urdf_text, "urdf", limits.max_document_bytes, limits.max_xml_depth);
+  if (scan.links > static_cast<std::size_t>(limits.max_links)) {
+    ThrowResourceExhausted("urdf declares " + std::to_string(scan.links) + " links, more than the cap of " +
+                           std::to_string(limits.max_links) + " (InputLimits::max_links); send a smaller robot or raise the server's cap");
+  }
+  if (scan.joints > static_cast<std::size_t>(limits.max_links)) {
+    ThrowResourceExhausted("urdf declares " + std::to_string(scan.joints) + " joints, more than the cap of " +
+                           std::to_string(limits.max_links) + " (InputLimits::max_links bounds joints too); send a smaller robot or raise the server's cap");
+  }
+  if (scan.moving_joints > static_cast<std::size_t>(limits.max_dofs)) {
+    ThrowResourceExhausted("urdf declares " + std::to_string(scan.moving_joints) +
+                           " joints that are not fixed, more than the cap of " + std::to_string(limits.max_dofs) +
+                           " degrees of freedom (InputLimits::max_dofs); send a smaller robot or raise the server's cap");
+  }
+  if (!srdf_text.empty()) {
+    robot_internal::CheckXmlText(srdf_text, "srdf", limits.max_document_bytes, limits.max_xml_depth);
+  }
   const std::string urdf_string(urdf_text);
 
   // 1. Well-formed XML? tinyxml tells where it is not.
@@ -174,9 +195,12 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
       const Eigen::Isometry3d frame = ToIsometry(in.origin);
       Eigen::Matrix3d inertia;
       inertia << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
-      if (!frame.matrix().allFinite() || !inertia.allFinite()) {
-        ThrowInvalid(where + " origin and inertia must be finite");
-      }
+      if (!frame.matrix().allFinite()) ThrowInvalid(where + " origin must be finite");
+      const std::string given = "(ixx " + FormatNumber(in.ixx) + ", iyy " + FormatNumber(in.iyy) + ", izz " +
+                                FormatNumber(in.izz) + ", ixy " + FormatNumber(in.ixy) + ", ixz " +
+                                FormatNumber(in.ixz) + ", iyz " + FormatNumber(in.iyz) + ")";
+      if (!inertia.allFinite()) ThrowInvalid(where + " inertia = " + given + " must be finite");
+      robot_internal::CheckInertiaPositiveSemidefinite(inertia, where + " inertia", given);
       Inertial inertial;
       inertial.mass = in.mass;
       inertial.com = frame.translation();
@@ -187,84 +211,102 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
     links.push_back(std::move(link));
   };
 
-  std::function<void(const urdf::Link&)> visit = [&](const urdf::Link& parent) {
-    const auto it = child_joints.find(parent.name);
-    if (it == child_joints.end()) return;
-    for (const urdf::JointConstSharedPtr& ujoint : it->second) {
-      const std::string where = "urdf: joint '" + ujoint->name + "'";
-      Joint joint;
-      joint.name = ujoint->name;
-      switch (ujoint->type) {
-        case urdf::Joint::REVOLUTE: joint.type = JointType::kRevolute; break;
-        case urdf::Joint::CONTINUOUS: joint.type = JointType::kContinuous; break;
-        case urdf::Joint::PRISMATIC: joint.type = JointType::kPrismatic; break;
-        case urdf::Joint::FIXED: joint.type = JointType::kFixed; break;
-        case urdf::Joint::PLANAR:
-          ThrowInvalid(where + " has type planar; only revolute, continuous, prismatic and fixed joints are supported");
-        case urdf::Joint::FLOATING:
-          ThrowInvalid(where + " has type floating; only revolute, continuous, prismatic and fixed joints are supported");
-        default:
-          ThrowInvalid(where + " has an unknown type; only revolute, continuous, prismatic and fixed joints are supported");
-      }
-      joint.origin = ToIsometry(ujoint->parent_to_joint_origin_transform);
-      if (!joint.origin.matrix().allFinite()) ThrowInvalid(where + " origin must be finite");
-      joint.axis = ToVector(ujoint->axis);
-      if (joint.type != JointType::kFixed) {
-        if (!joint.axis.allFinite() || !(joint.axis.norm() > 1e-12)) {
-          ThrowInvalid(where + " axis = (" + FormatNumber(joint.axis.x()) + " " +
-                       FormatNumber(joint.axis.y()) + " " + FormatNumber(joint.axis.z()) +
-                       ") must be finite and non-zero");
-        }
-        joint.axis.normalize();
-        if (!ujoint->limits) {
-          ThrowInvalid(where + " has no <limit>; limit velocity must be > 0 and finite");
-        }
-        const urdf::JointLimits& ul = *ujoint->limits;
-        joint.limits.velocity = ul.velocity;
-        joint.limits.effort = ul.effort;
-        if (joint.type == JointType::kContinuous) {
-          joint.limits.lower = -M_PI;
-          joint.limits.upper = M_PI;
-        } else {
-          joint.limits.lower = ul.lower;
-          joint.limits.upper = ul.upper;
-          if (!std::isfinite(ul.lower)) ThrowInvalid(where + " limit lower = " + FormatNumber(ul.lower) + " must be finite");
-          if (!std::isfinite(ul.upper)) ThrowInvalid(where + " limit upper = " + FormatNumber(ul.upper) + " must be finite");
-          if (ul.lower > ul.upper) {
-            ThrowInvalid(where + " limit lower = " + FormatNumber(ul.lower) + " > upper = " +
-                         FormatNumber(ul.upper));
-          }
-        }
-        if (!(ul.velocity > 0.0) || !std::isfinite(ul.velocity)) {
-          ThrowInvalid(where + " limit velocity = " + FormatNumber(ul.velocity) + " must be > 0 and finite");
-        }
-        if (!(ul.effort >= 0.0) || !std::isfinite(ul.effort)) {
-          ThrowInvalid(where + " limit effort = " + FormatNumber(ul.effort) + " must be >= 0 and finite");
-        }
-      }
-      if (ujoint->dynamics) {
-        // <dynamics damping=".." friction=".."/>: viscous [N·m·s/rad] and Coulomb [N·m] friction.
-        const urdf::JointDynamics& ud = *ujoint->dynamics;
-        if (!(ud.damping >= 0.0) || !std::isfinite(ud.damping)) {
-          ThrowInvalid(where + " dynamics damping = " + FormatNumber(ud.damping) + " must be >= 0 and finite");
-        }
-        if (!(ud.friction >= 0.0) || !std::isfinite(ud.friction)) {
-          ThrowInvalid(where + " dynamics friction = " + FormatNumber(ud.friction) + " must be >= 0 and finite");
-        }
-        joint.damping = ud.damping;
-        joint.friction = ud.friction;
-      }
-      urdf::LinkConstSharedPtr child = model->getLink(ujoint->child_link_name);
-      if (!child) ThrowInvalid(where + " child = '" + ujoint->child_link_name + "' is not a link");
-      joint.parent_link = link_index.at(parent.name);
-      add_link(*child);
-      joint.child_link = link_index.at(child->name);
-      joints.push_back(std::move(joint));
-      visit(*child);
-    }
+  // Iterative (an explicit stack: a long chain must not overflow the call stack), in the order
+  // of a recursive depth-first walk: a child's subtree right after the child, siblings in
+  // document order.
+  struct Visit {
+    const urdf::Link* link;
+    const std::vector<urdf::JointConstSharedPtr>* children;  // null: none
+    std::size_t next = 0;
+  };
+  auto children_of = [&](const urdf::Link& link) -> const std::vector<urdf::JointConstSharedPtr>* {
+    const auto it = child_joints.find(link.name);
+    return it == child_joints.end() ? nullptr : &it->second;
   };
   add_link(*model->getRoot());
-  visit(*model->getRoot());
+  std::vector<Visit> stack{{model->getRoot().get(), children_of(*model->getRoot())}};
+  while (!stack.empty()) {
+    Visit& top = stack.back();
+    if (top.children == nullptr || top.next == top.children->size()) {
+      stack.pop_back();
+      continue;
+    }
+    const urdf::Link& parent = *top.link;
+    const urdf::JointConstSharedPtr& ujoint = (*top.children)[top.next++];
+    const std::string where = "urdf: joint '" + ujoint->name + "'";
+    Joint joint;
+    joint.name = ujoint->name;
+    switch (ujoint->type) {
+      case urdf::Joint::REVOLUTE: joint.type = JointType::kRevolute; break;
+      case urdf::Joint::CONTINUOUS: joint.type = JointType::kContinuous; break;
+      case urdf::Joint::PRISMATIC: joint.type = JointType::kPrismatic; break;
+      case urdf::Joint::FIXED: joint.type = JointType::kFixed; break;
+      case urdf::Joint::PLANAR:
+        ThrowInvalid(where + " has type planar; only revolute, continuous, prismatic and fixed joints are supported");
+      case urdf::Joint::FLOATING:
+        ThrowInvalid(where + " has type floating; only revolute, continuous, prismatic and fixed joints are supported");
+      default:
+        ThrowInvalid(where + " has an unknown type; only revolute, continuous, prismatic and fixed joints are supported");
+    }
+    joint.origin = ToIsometry(ujoint->parent_to_joint_origin_transform);
+    if (!joint.origin.matrix().allFinite()) ThrowInvalid(where + " origin must be finite");
+    joint.axis = ToVector(ujoint->axis);
+    if (joint.type != JointType::kFixed) {
+      if (!joint.axis.allFinite() || !(joint.axis.norm() > 1e-12)) {
+        ThrowInvalid(where + " axis = (" + FormatNumber(joint.axis.x()) + " " +
+                     FormatNumber(joint.axis.y()) + " " + FormatNumber(joint.axis.z()) +
+                     ") must be finite and non-zero");
+      }
+      joint.axis.normalize();
+      if (!ujoint->limits) {
+        ThrowInvalid(where + " has no <limit>; limit velocity must be > 0 and finite");
+      }
+      const urdf::JointLimits& ul = *ujoint->limits;
+      joint.limits.velocity = ul.velocity;
+      joint.limits.effort = ul.effort;
+      if (joint.type == JointType::kContinuous) {
+        joint.limits.lower = -M_PI;
+        joint.limits.upper = M_PI;
+      } else {
+        joint.limits.lower = ul.lower;
+        joint.limits.upper = ul.upper;
+        if (!std::isfinite(ul.lower)) ThrowInvalid(where + " limit lower = " + FormatNumber(ul.lower) + " must be finite");
+        if (!std::isfinite(ul.upper)) ThrowInvalid(where + " limit upper = " + FormatNumber(ul.upper) + " must be finite");
+        if (ul.lower > ul.upper) {
+          ThrowInvalid(where + " limit lower = " + FormatNumber(ul.lower) + " > upper = " +
+                       FormatNumber(ul.upper));
+        }
+      }
+      if (!(ul.velocity > 0.0) || !std::isfinite(ul.velocity)) {
+        ThrowInvalid(where + " limit velocity = " + FormatNumber(ul.velocity) + " must be > 0 and finite");
+      }
+      if (!(ul.effort >= 0.0) || !std::isfinite(ul.effort)) {
+        ThrowInvalid(where + " limit effort = " + FormatNumber(ul.effort) + " must be >= 0 and finite");
+      }
+    }
+    if (ujoint->dynamics) {
+      // <dynamics damping=".." friction=".."/>: viscous [N·m·s/rad] and Coulomb [N·m] friction.
+      const urdf::JointDynamics& ud = *ujoint->dynamics;
+      if (!(ud.damping >= 0.0) || !std::isfinite(ud.damping)) {
+        ThrowInvalid(where + " dynamics damping = " + FormatNumber(ud.damping) + " must be >= 0 and finite");
+      }
+      if (!(ud.friction >= 0.0) || !std::isfinite(ud.friction)) {
+        ThrowInvalid(where + " dynamics friction = " + FormatNumber(ud.friction) + " must be >= 0 and finite");
+      }
+      joint.damping = ud.damping;
+      joint.friction = ud.friction;
+    }
+    urdf::LinkConstSharedPtr child = model->getLink(ujoint->child_link_name);
+    if (!child) ThrowInvalid(where + " child = '" + ujoint->child_link_name + "' is not a link");
+    if (link_index.count(child->name) != 0) {
+      ThrowInvalid(where + " child = '" + child->name + "' is already in the tree; a link has one parent joint");
+    }
+    joint.parent_link = link_index.at(parent.name);
+    add_link(*child);
+    joint.child_link = link_index.at(child->name);
+    joints.push_back(std::move(joint));
+    stack.push_back({child.get(), children_of(*child)});
+  }
 
   // 5. SRDF: pairs of links whose collisions are never checked.
   std::vector<std::pair<std::string, std::string>> allowed_pairs;

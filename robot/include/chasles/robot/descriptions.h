@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include "chasles/robot/geometry.h"
+#include "chasles/robot/input_limits.h"
 #include "chasles/robot/lie_group.h"
 #include "chasles/robot/robot_model.h"
 
@@ -87,8 +88,11 @@ struct PoeDescription {
 /// \throws Error(kInvalidArgument) naming the field, e.g.
 /// `poe.joints[2].screw: |ω| = 0.5 must be 1 for a revolute joint`,
 /// `poe.joints[1].screw: ω = 0 and |v| = 2 must be 1 for a prismatic joint`,
-/// `poe.home is not in SE(3): rotation part has det = -1`, `dh.joints[0].limits lower = 2 > upper = 1`.
-std::shared_ptr<const RobotModel> RobotFromDh(const DhDescription& dh);
-std::shared_ptr<const RobotModel> RobotFromPoe(const PoeDescription& poe);
+/// `poe.home is not in SE(3): rotation part has det = -1`, `dh.joints[0].limits lower = 2 > upper = 1`,
+/// `dh.joints[1].link.inertial inertia = (ixx 1, iyy -2, …) has principal moment -2; principal moments must be >= 0 …`.
+/// \throws Error(kResourceExhausted) when the joints are more than `limits.max_dofs` or the
+///         links (joints + 2) more than `limits.max_links`.
+std::shared_ptr<const RobotModel> RobotFromDh(const DhDescription& dh, const InputLimits& limits = {});
+std::shared_ptr<const RobotModel> RobotFromPoe(const PoeDescription& poe, const InputLimits& limits = {});
 
 }  // namespace chasles

@@ -12,6 +12,8 @@ enum class ErrorCode {
   kInvalidArgument,     ///< malformed input: the message names field, index, value and rule
   kNotFound,            ///< an unknown planner, robot, scene or link id
   kFailedPrecondition,  ///< a capability that is not there for this input
+  kResourceExhausted,   ///< an input within the rules but beyond a size cap of this server
+                        ///< (the message names the field, the size, the cap and what to change)
 };
 
 /// Thrown for contract violations (never for expected outcomes such as "no path").
@@ -34,6 +36,11 @@ std::string FormatNumber(double value);
 /// Throws Error(kInvalidArgument, message).
 [[noreturn]] inline void ThrowInvalid(const std::string& message) {
   throw Error(ErrorCode::kInvalidArgument, message);
+}
+
+/// Throws Error(kResourceExhausted, message).
+[[noreturn]] inline void ThrowResourceExhausted(const std::string& message) {
+  throw Error(ErrorCode::kResourceExhausted, message);
 }
 
 }  // namespace chasles

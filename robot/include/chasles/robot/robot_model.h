@@ -16,6 +16,7 @@
 #include <Eigen/Geometry>
 
 #include "chasles/robot/geometry.h"
+#include "chasles/robot/input_limits.h"
 
 namespace chasles {
 
@@ -102,12 +103,19 @@ class RobotModel {
   /// Mesh collision geometry is looked up in `meshes` by the URDF `filename` attribute
   /// (already parsed, e.g. by ParseMesh); the URDF `scale` is applied on top.
   /// Allowed collisions = SRDF `disable_collisions` pairs + every parent/child link pair.
+  /// Before any XML parser runs, both texts are checked against `limits` (max_document_bytes,
+  /// max_xml_depth) and the URDF's <link>/<joint> elements are counted (max_links for each,
+  /// max_dofs for joints that are not fixed).
   /// \throws Error(kInvalidArgument) naming the element for malformed URDF/SRDF (unparsable XML,
-  ///         SRDF naming an unknown link, a mesh that is not in `meshes`, limits with
-  ///         lower > upper, velocity <= 0, non-finite numbers, planar/floating joints).
+  ///         a NUL byte, SRDF naming an unknown link, a mesh that is not in `meshes`, limits with
+  ///         lower > upper, velocity <= 0, non-finite numbers, negative mass, an inertia with a
+  ///         negative principal moment, planar/floating joints).
+  /// \throws Error(kResourceExhausted) when a text is beyond `limits`, e.g.
+  ///         `urdf nests XML elements 100000 deep, more than the cap of 64 (InputLimits::max_xml_depth); …`.
   static std::shared_ptr<const RobotModel> FromUrdf(
       std::string_view urdf, std::string_view srdf = {},
-      const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes = {});
+      const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes = {},
+      const InputLimits& limits = {});
 
   const std::string& name() const { return name_; }
   int num_dofs() const { return static_cast<int>(dof_joints_.size()); }
