@@ -55,8 +55,9 @@ std::vector<std::string> KnownRpcs() {
   return names;
 }
 
+// PlanOutcome names, and InverseKinematics' SOLVED / UNSOLVED (its response has no outcome enum).
 std::vector<std::string> KnownOutcomes() {
-  std::vector<std::string> names;
+  std::vector<std::string> names = {"SOLVED", "UNSOLVED"};
   const google::protobuf::EnumDescriptor* outcomes = v1::PlanOutcome_descriptor();
   for (int i = 0; i < outcomes->value_count(); ++i) {
     if (outcomes->value(i)->number() != v1::PLAN_OUTCOME_UNSPECIFIED) names.push_back(outcomes->value(i)->name());

@@ -163,6 +163,7 @@ TEST(ServerMetrics, CountersAndHistogramsMoveByWhatWasRecorded) {
   metrics.RequestFinished(ok);
   metrics.RequestFinished(Record("Plan", "", 3, 0.0005, 0.0));                 // INVALID_ARGUMENT
   metrics.RequestFinished(Record("Optimize", "NO_PATH_WITHIN_BUDGET", 0, 1.5, 0.3));
+  metrics.RequestFinished(Record("InverseKinematics", "UNSOLVED", 0, 0.05, 0.0));
 
   const std::vector<Sample> after = Scrape(metrics.port());
   EXPECT_EQ(Value(after, "chasles_requests_total", {{"rpc", "Plan"}, {"outcome", "SUCCESS"}, {"code", "OK"}}), 2.0);
@@ -171,7 +172,8 @@ TEST(ServerMetrics, CountersAndHistogramsMoveByWhatWasRecorded) {
   EXPECT_EQ(Value(after, "chasles_requests_total",
                   {{"rpc", "Optimize"}, {"outcome", "NO_PATH_WITHIN_BUDGET"}, {"code", "OK"}}),
             1.0);
-  EXPECT_EQ(Sum(after, "chasles_requests_total"), 4.0);
+  EXPECT_EQ(Value(after, "chasles_requests_total", {{"rpc", "InverseKinematics"}, {"outcome", "UNSOLVED"}}), 1.0);
+  EXPECT_EQ(Sum(after, "chasles_requests_total"), 5.0);
 
   EXPECT_EQ(Value(after, "chasles_request_duration_seconds_count", {{"rpc", "Plan"}}), 3.0);
   EXPECT_NEAR(Value(after, "chasles_request_duration_seconds_sum", {{"rpc", "Plan"}}), 0.2045, 1e-12);
@@ -196,7 +198,7 @@ TEST(ServerMetrics, CountersAndHistogramsMoveByWhatWasRecorded) {
 
   // The in-process text and the scraped one agree.
   const std::vector<Sample> text = ParseExposition(metrics.ExpositionText());
-  EXPECT_EQ(Sum(text, "chasles_requests_total"), 4.0);
+  EXPECT_EQ(Sum(text, "chasles_requests_total"), 5.0);
 }
 
 TEST(ServerMetrics, GaugesAreTheCallbacksValuesAtEachScrape) {

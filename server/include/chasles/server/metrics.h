@@ -5,7 +5,7 @@
 /// callbacks at every scrape. Served as the Prometheus text format on `http://ADDR/metrics`.
 ///
 /// Label values are bounded: `rpc` is a method of chasles.v1.Planning, `outcome` a PlanOutcome
-/// name, `code` a gRPC status code name, `stage` one of the first kMaxStageLabels distinct
+/// name (or SOLVED / UNSOLVED, as InverseKinematics answers), `code` a gRPC status code name, `stage` one of the first kMaxStageLabels distinct
 /// well-formed stage names; anything else is counted under "other" (an empty outcome under
 /// "none"). Request ids and client names never become labels.
 
