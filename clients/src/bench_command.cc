@@ -38,7 +38,7 @@ constexpr int kExitFailed = 1;
 constexpr int kExitUsage = 2;
 
 const char kBenchUsage[] =
-    "Usage: chasles [--server ADDR] [--timeout S] bench CONFIG.yaml [--out DIR] [--runs N]\n"
+    "Usage: chasles [--server ADDR] [--tls-ca F] [--token T] [--timeout S] bench CONFIG.yaml [--out DIR] [--runs N]\n"
     "                                  [--parallelism N] [--run-budget S] [--no-db] [--quiet]\n"
     "\n"
     "CONFIG.yaml (paths relative to the file):\n"
@@ -302,7 +302,8 @@ void PrintTable(const v1::BenchmarkSummary& summary) {
 
 }  // namespace
 
-int BenchCommand(const std::string& server, double timeout, const std::vector<std::string>& args) {
+int BenchCommand(const ConnectionOptions& connection, double timeout, const std::vector<std::string>& args) {
+  const std::string& server = connection.server;
   std::string config_path, out_dir;
   std::int64_t runs = -1, parallelism = -1;
   double run_budget = -1;
@@ -373,7 +374,7 @@ int BenchCommand(const std::string& server, double timeout, const std::vector<st
   grpc::ChannelArguments channel_args;
   channel_args.SetMaxReceiveMessageSize(-1);
   channel_args.SetMaxSendMessageSize(-1);
-  auto channel = grpc::CreateCustomChannel(server, grpc::InsecureChannelCredentials(), channel_args);
+  auto channel = MakeChannel(connection, channel_args);
   auto stub = v1::Planning::NewStub(channel);
   grpc::ClientContext context;
   if (timeout > 0) {

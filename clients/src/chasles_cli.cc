@@ -22,6 +22,7 @@
 
 #include "chasles/v1/chasles.grpc.pb.h"
 #include "commands.h"
+#include "connection.h"
 #include "trajectory_csv.h"
 
 namespace {
@@ -95,14 +96,14 @@ const char kUsage[] =
     "                                  chasles.v1.PlanRequest and print it as JSON (robot joint order from\n"
     "                                  the URDF; default: the server's default robot, a Panda)\n"
     "\n"
-    "Options:\n"
-    "  --server ADDR   server address (default 127.0.0.1:50051)\n"
-    "  --timeout S     gRPC deadline in seconds (default: 10; plan, optimize, coordinate: the request's\n"
-    "                  budget + 30)\n"
-    "  --help          show this help\n";
+    "Options (before COMMAND or among its arguments):\n"
+    "%s"
+    "  --timeout S            gRPC deadline in seconds (default: 10; plan, optimize, coordinate: the\n"
+    "                         request's budget + 30)\n"
+    "  --help                 show this help\n";
 
 struct Options {
-  std::string server = "127.0.0.1:50051";
+  chasles::cli::ConnectionOptions connection;  // --server, --tls-*, --token*
   double timeout = 0.0;  // 0 = per command default
   std::string out;
   std::string srdf;
@@ -164,7 +165,7 @@ std::shared_ptr<grpc::Channel> MakeChannel(const Options& options) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(-1);
   args.SetMaxSendMessageSize(-1);
-  return grpc::CreateCustomChannel(options.server, grpc::InsecureChannelCredentials(), args);
+  return chasles::cli::MakeChannel(options.connection, args);
 }
 
 void SetDeadline(grpc::ClientContext* context, double seconds) {
@@ -197,7 +198,7 @@ const char* CodeName(grpc::StatusCode code) {
 }
 
 int ReportRpcError(const char* rpc, const Options& options, const grpc::Status& status) {
-  std::cerr << "chasles: " << rpc << " on " << options.server << " failed: " << CodeName(status.error_code())
+  std::cerr << "chasles: " << rpc << " on " << options.connection.server << " failed: " << CodeName(status.error_code())
             << ": " << status.error_message() << "\n";
   return kExitFailed;
 }
@@ -229,7 +230,7 @@ int Health(const Options& options) {
   }
   static const char* kNames[] = {"UNKNOWN", "SERVING", "NOT_SERVING", "SERVICE_UNKNOWN"};
   const char* name = serving_status >= 0 && serving_status <= 3 ? kNames[serving_status] : "?";
-  std::cout << options.server << ": " << name << "\n";
+  std::cout << options.connection.server << ": " << name << "\n";
   return serving_status == 1 ? kExitOk : kExitFailed;
 }
 
@@ -808,26 +809,27 @@ int Release(const Options& options) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // bench and import-moveit parse their own options (after the global --server / --timeout).
+  // bench and import-moveit parse their own options (after the global connection flags and --timeout).
   {
-    std::string server = "127.0.0.1:50051";
+    chasles::cli::ConnectionOptions connection;
     double timeout = 0.0;
     int i = 1;
-    while (i + 1 < argc && (std::strcmp(argv[i], "--server") == 0 || std::strcmp(argv[i], "--timeout") == 0)) {
-      if (std::strcmp(argv[i], "--server") == 0) {
-        server = argv[i + 1];
-      } else {
-        char* end = nullptr;
-        timeout = std::strtod(argv[i + 1], &end);
-        if (end == argv[i + 1] || *end != '\0' || !(timeout > 0)) {
-          UsageError(std::string("--timeout '") + argv[i + 1] + "' must be a number of seconds > 0");
-        }
+    while (i + 1 < argc) {
+      if (chasles::cli::ParseConnectionFlag(argc, argv, &i, &connection)) {
+        ++i;
+        continue;
+      }
+      if (std::strcmp(argv[i], "--timeout") != 0) break;
+      char* end = nullptr;
+      timeout = std::strtod(argv[i + 1], &end);
+      if (end == argv[i + 1] || *end != '\0' || !(timeout > 0)) {
+        UsageError(std::string("--timeout '") + argv[i + 1] + "' must be a number of seconds > 0");
       }
       i += 2;
     }
     if (i < argc && (std::strcmp(argv[i], "bench") == 0 || std::strcmp(argv[i], "import-moveit") == 0)) {
       const std::vector<std::string> args(argv + i + 1, argv + argc);
-      return std::strcmp(argv[i], "bench") == 0 ? chasles::cli::BenchCommand(server, timeout, args)
+      return std::strcmp(argv[i], "bench") == 0 ? chasles::cli::BenchCommand(connection, timeout, args)
                                                 : chasles::cli::ImportMoveItCommand(args);
     }
   }
@@ -839,10 +841,10 @@ int main(int argc, char** argv) {
       return argv[++i];
     };
     if (arg == "--help" || arg == "-h") {
-      std::cout << kUsage;
+      std::printf(kUsage, chasles::cli::kConnectionUsage);
       return kExitOk;
-    } else if (arg == "--server") {
-      options.server = value();
+    } else if (chasles::cli::ParseConnectionFlag(argc, argv, &i, &options.connection)) {
+      continue;
     } else if (arg == "--timeout") {
       const std::string text = value();
       char* end = nullptr;
