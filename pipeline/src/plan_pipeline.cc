@@ -237,7 +237,7 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
   }
   out.trajectory = std::move(timed.trajectory);
   out.quality = timed.quality;
-  out.samples = SampleTrajectory(out.trajectory, checker.robot(), query.sample_period, query.gravity);
+  out.samples = SampleTrajectory(out.trajectory, checker.robot(), query.sample_period, query.gravity, query.sample_cap);
   const RobotModel& robot = checker.robot();
   if (query.pose_goal) {
     out.goal_manipulability = Manipulability(SpaceJacobian(robot, out.goal, query.pose_goal->link));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <sstream>
 #include <string>
 
 #include "chasles/robot/dynamics.h"
@@ -181,8 +182,39 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
   return out;
 }
 
+std::uint64_t SampleCap::EstimateBytes(std::uint64_t samples, int dofs) {
+  // Per sample: the submessage's tag and length (≤ 4), t (9), four packed double fields
+  // (tag, length ≤ 2, 8 bytes a joint).
+  const std::uint64_t per_sample = 4 + 9 + 4 * (3 + 8 * static_cast<std::uint64_t>(std::max(dofs, 0)));
+  return samples * per_sample;
+}
+
+void SampleCap::Check(double duration, double period, int dofs) const {
+  if (!(duration >= 0.0) || !(period > 0.0)) return;  // Sample() names these
+  const double estimate = std::floor(duration / period) + 2.0;
+  const double per_sample = static_cast<double>(EstimateBytes(1, dofs));
+  const double bytes = estimate * per_sample;
+  const double fit_samples =
+      std::min(static_cast<double>(max_samples), std::floor(static_cast<double>(max_reply_bytes) / per_sample));
+  if (estimate <= static_cast<double>(max_samples) && bytes <= static_cast<double>(max_reply_bytes)) return;
+  const double smallest_period = duration / std::max(1.0, fit_samples - 2.0);
+  std::ostringstream message;
+  message << field << " = " << FormatNumber(period) << " s over the " << FormatNumber(duration)
+          << " s trajectory gives about " << static_cast<std::uint64_t>(estimate) << " samples (~"
+          << static_cast<std::uint64_t>(std::ceil(bytes / 1048576.0)) << " MiB for " << dofs << " joints), more than ";
+  if (estimate > static_cast<double>(max_samples)) {
+    message << "the server's cap of " << max_samples << " samples (--max-samples)";
+  } else {
+    message << "the server's reply cap of " << (max_reply_bytes >> 20) << " MiB (" << reply_cap_source << ")";
+  }
+  message << "; use a " << field << " of at least " << FormatNumber(smallest_period)
+          << " s, or sample the trajectory on the client";
+  ThrowResourceExhausted(message.str());
+}
+
 std::vector<TrajectorySample> SampleTrajectory(const TimedTrajectory& trajectory, const RobotModel& robot,
-                                               double period, const Eigen::Vector3d& gravity) {
+                                               double period, const Eigen::Vector3d& gravity, const SampleCap& cap) {
+  cap.Check(trajectory.duration(), period, robot.num_dofs());
   std::vector<TrajectorySample> samples = trajectory.Sample(period);
   const bool effort = HasInertia(robot);
   DynamicsOptions dynamics;
@@ -245,7 +277,8 @@ OptimizeOutcome OptimizePath(const OptimizeQuery& query, const Termination& term
   out.stage = RunTrajectoryStage(query.path, checker, query.trajectory, std::min(0.005, query.collision_resolution),
                                  termination);
   if (out.stage.code != TrajectoryStageCode::kSuccess) return finish(out.stage.code, out.stage.message);
-  out.samples = SampleTrajectory(out.stage.trajectory, robot, query.sample_period, query.trajectory.gravity);
+  out.samples =
+      SampleTrajectory(out.stage.trajectory, robot, query.sample_period, query.trajectory.gravity, query.sample_cap);
   std::string message = std::string(ToString(out.stage.optimizer.used)) + " trajectory of " +
                         FormatNumber(out.stage.trajectory.duration()) + " s, verified at " +
                         std::to_string(out.stage.verification.states_checked) + " states";

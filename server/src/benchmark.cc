@@ -90,7 +90,7 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkRespons
 
   /// Queues the preparation on the pool.
   void Begin() {
-    if (!services_.pool->Submit([this] { Prepare(); })) {
+    if (!services_.pool->Submit([this] { Prepare(); }, services_.ticket)) {
       Finish(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, "the server's work queue is full; retry later"));
     }
   }
@@ -298,7 +298,7 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkRespons
   // --- runs ----------------------------------------------------------------------------------
 
   void Submit(std::uint32_t index, std::uint32_t slot) {
-    if (services_.pool->Submit([this, index, slot] { Run(index, slot); })) return;
+    if (services_.pool->Submit([this, index, slot] { Run(index, slot); }, services_.ticket)) return;
     bool complete = false;
     {
       std::lock_guard<std::mutex> lock(mutex_);

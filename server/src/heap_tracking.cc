@@ -15,19 +15,36 @@ namespace {
 // Static TLS: the counter pointer is read on every allocation of the process.
 thread_local HeapCounter* t_counter __attribute__((tls_model("initial-exec"))) = nullptr;
 
+/// Throws std::bad_alloc when a block of `size` bytes would take the scope over its limit.
+inline void CheckLimit(std::size_t size) {
+  for (HeapCounter* c = t_counter; c; c = c->outer) {
+    if (c->limit > 0 && c->live + static_cast<std::int64_t>(size) > c->limit) {
+      c->exceeded = true;
+      throw std::bad_alloc();
+    }
+  }
+}
+
 inline void CountAlloc(void* p) {
   if (HeapCounter* c = t_counter) {
-    c->live += static_cast<std::int64_t>(malloc_usable_size(p));
-    if (c->live > c->peak) c->peak = c->live;
+    const auto bytes = static_cast<std::int64_t>(malloc_usable_size(p));
+    for (; c; c = c->outer) {
+      c->live += bytes;
+      if (c->live > c->peak) c->peak = c->live;
+    }
   }
 }
 
 inline void CountFree(void* p) {
-  if (HeapCounter* c = t_counter) c->live -= static_cast<std::int64_t>(malloc_usable_size(p));
+  if (HeapCounter* c = t_counter) {
+    const auto bytes = static_cast<std::int64_t>(malloc_usable_size(p));
+    for (; c; c = c->outer) c->live -= bytes;
+  }
 }
 
 void* Allocate(std::size_t size) {
   if (size == 0) size = 1;
+  CheckLimit(size);
   for (;;) {
     if (void* p = std::malloc(size)) {
       CountAlloc(p);
@@ -42,6 +59,7 @@ void* Allocate(std::size_t size) {
 void* AllocateAligned(std::size_t size, std::align_val_t alignment) {
   const std::size_t align = static_cast<std::size_t>(alignment);
   if (size == 0) size = 1;
+  CheckLimit(size);
   for (;;) {
     void* p = nullptr;
     if (posix_memalign(&p, align < sizeof(void*) ? sizeof(void*) : align, size) == 0) {
@@ -62,8 +80,16 @@ void Release(void* p) noexcept {
 
 }  // namespace
 
-HeapScope::HeapScope() : previous_(t_counter) { t_counter = &counter_; }
+HeapScope::HeapScope(std::uint64_t limit_bytes) : previous_(t_counter) {
+  counter_.limit = static_cast<std::int64_t>(limit_bytes);
+  counter_.outer = previous_;
+  t_counter = &counter_;
+}
 HeapScope::~HeapScope() { t_counter = previous_; }
+
+void ReleaseFreeHeapMemory() { malloc_trim(0); }
+
+void UseFixedMmapThreshold(std::size_t bytes) { mallopt(M_MMAP_THRESHOLD, static_cast<int>(bytes)); }
 
 }  // namespace chasles
 

@@ -2,16 +2,19 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstddef>
+#include <cstdint>
 #include <csignal>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <exception>
 #include <stdexcept>
 #include <string>
 #include <thread>
 
+#include <CLI/CLI.hpp>
+
 #include "chasles/server/planning_server.h"
+#include "chasles/server/security.h"
 
 namespace {
 
@@ -19,81 +22,92 @@ std::atomic<int> g_signal{0};
 
 extern "C" void OnSignal(int signal) { g_signal.store(signal); }
 
-void PrintUsage(std::FILE* out) {
-  std::fprintf(out,
-               "Usage: chasles-server [--listen ADDR] [--threads N] [--max-message-mb MB]\n"
-               "\n"
-               "Serves chasles.v1.Planning (Plan, Optimize, InverseKinematics, ListPlanners, UploadRobot,\n"
-               "UploadScene, UpdateScene, Coordinate, workcells, Benchmark, StopBenchmark) and the standard\n"
-               "gRPC health service. Requests that name no robot/scene use the embedded Franka Panda and\n"
-               "table scene. Planning, benchmark runs and coordination share the N worker threads.\n"
-               "\n"
-               "  --listen ADDR         address:port to listen on (default 127.0.0.1:50051; port 0 = any)\n"
-               "  --threads N           planning worker threads (default: hardware threads)\n"
-               "  --max-message-mb MB   largest request/response message in MiB (default 64)\n"
-               "  --tls-cert FILE       serve TLS with this certificate chain (PEM); needs --tls-key\n"
-               "  --tls-key FILE        the certificate's private key (PEM, unencrypted)\n"
-               "  --tls-client-ca FILE  mutual TLS: require client certificates signed by this CA (PEM)\n"
-               "  --tokens FILE         require bearer tokens: lines 'NAME ROLE TOKEN', ROLE 'plan' (planning,\n"
-               "                        uploads, benchmarks) or 'commit' (also CreateWorkcell, CommitTrajectory,\n"
-               "                        Release); '#' comments. Health checks need none. Without TLS, tokens\n"
-               "                        are accepted from loopback peers only (see README, Security)\n"
-               "  --help                show this help\n"
-               "\n"
-               "SIGINT/SIGTERM shut the server down cleanly (running calls get 2 s to finish).\n");
-}
+/// Every flag, with its default shown by --help. Values are checked by ServerOptions::Validate
+/// (messages name the flag, the value and the rule).
+void AddFlags(CLI::App& app, chasles::ServerOptions& o, std::size_t& document_mb) {
+  app.add_option("--listen", o.listen, "address:port to listen on (port 0 = any free port)")->capture_default_str();
+  app.add_option("--threads", o.threads, "planning worker threads (0 = hardware threads)")->capture_default_str();
+  app.add_option("--max-message-mb", o.max_message_mb, "largest request/response message [MiB], in [1, 2047]")
+      ->capture_default_str();
 
-bool ParseInt(const char* text, int* value) {
-  char* end = nullptr;
-  const long parsed = std::strtol(text, &end, 10);
-  if (end == text || *end != '\0' || parsed < -1000000 || parsed > 1000000) return false;
-  *value = static_cast<int>(parsed);
-  return true;
+  auto* caps = "Caps (checked before the work they drive)";
+  app.add_option("--cache-mb", o.cache_mb, "uploaded robots, scenes and checkers kept, together [MiB]")
+      ->capture_default_str()->group(caps);
+  app.add_option("--max-samples", o.max_samples,
+                 "trajectory samples in one reply (per robot) and points in one committed trajectory; the count "
+                 "is estimated from the duration before sampling")
+      ->capture_default_str()->group(caps);
+  app.add_option("--request-memory-mb", o.request_memory_mb,
+                 "heap one call may hold [MiB]; beyond it the call is abandoned with RESOURCE_EXHAUSTED (0 = no cap)")
+      ->capture_default_str()->group(caps);
+  app.add_option("--max-document-mb", document_mb, "one URDF/SRDF, robot description, mesh or OctoMap document [MiB]")
+      ->capture_default_str()->group(caps);
+  app.add_option("--max-xml-depth", o.limits.max_xml_depth, "element nesting depth of URDF/SRDF")
+      ->capture_default_str()->group(caps);
+  app.add_option("--max-links", o.limits.max_links, "links of one robot")->capture_default_str()->group(caps);
+  app.add_option("--max-dofs", o.limits.max_dofs, "degrees of freedom of one robot")->capture_default_str()->group(caps);
+  app.add_option("--max-mesh-triangles", o.limits.max_mesh_triangles, "triangles of one mesh")
+      ->capture_default_str()->group(caps);
+  app.add_option("--max-octomap-nodes", o.limits.max_octomap_nodes, "nodes of one OctoMap")
+      ->capture_default_str()->group(caps);
+  app.add_option("--max-cloud-points", o.limits.max_cloud_points, "points of one UpdateScene point cloud")
+      ->capture_default_str()->group(caps);
+
+  auto* fair = "Fairness (per-client queues served round-robin)";
+  app.add_option("--max-budget", o.max_budget, "largest time budget a call may ask for [s], in (0, 600]")
+      ->capture_default_str()->group(fair);
+  app.add_option("--long-budget", o.long_budget, "a call whose budget exceeds this [s] is long")
+      ->capture_default_str()->group(fair);
+  app.add_option("--long-share", o.long_share,
+                 "share of the workers long calls may hold at once, in (0, 1]; with 2+ workers at least one stays "
+                 "free for short calls while the share is below 1")
+      ->capture_default_str()->group(fair);
+  app.add_option("--max-queued", o.max_queued, "calls waiting for a worker, all clients together")
+      ->capture_default_str()->group(fair);
+  app.add_option("--max-queued-per-client", o.max_queued_per_client, "calls of one client waiting for a worker")
+      ->capture_default_str()->group(fair);
+
+  auto* security = "Security";
+  app.add_option("--tls-cert", o.security.tls_cert, "server certificate chain (PEM); enables TLS")->group(security);
+  app.add_option("--tls-key", o.security.tls_key, "the certificate's private key (PEM, unencrypted)")->group(security);
+  app.add_option("--tls-client-ca", o.security.tls_client_ca,
+                 "CA certificates (PEM) that client certificates must chain to (mutual TLS)")
+      ->group(security);
+  app.add_option("--tokens", o.security.tokens_file,
+                 "bearer tokens, one 'NAME ROLE TOKEN' per line (ROLE: plan or commit); without TLS only loopback "
+                 "peers may use them")
+      ->group(security);
+
+  auto* ops = "Logs and metrics";
+  app.add_option("--log-format", o.log_format, "request log on stderr: text (key=value) or json (one object per call)")
+      ->capture_default_str()->group(ops);
+  app.add_option("--log-field-max", o.log_field_max, "client-supplied log values are cut at this many bytes")
+      ->capture_default_str()->group(ops);
+  app.add_flag("--quiet", [&o](std::int64_t) { o.log_requests = false; }, "no request log")->group(ops);
+  app.add_option("--metrics-listen", o.metrics_listen,
+                 "serve Prometheus metrics on http://ADDR/metrics (default: off); a bare PORT means 127.0.0.1:PORT")
+      ->group(ops);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   chasles::ServerOptions options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto next = [&](const char* name) -> const char* {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "chasles-server: %s needs a value (see --help)\n", name);
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    if (arg == "--help" || arg == "-h") {
-      PrintUsage(stdout);
-      return 0;
-    } else if (arg == "--listen") {
-      options.listen = next("--listen");
-    } else if (arg == "--threads") {
-      const char* value = next("--threads");
-      if (!ParseInt(value, &options.threads)) {
-        std::fprintf(stderr, "chasles-server: --threads '%s' is not an integer\n", value);
-        return 2;
-      }
-    } else if (arg == "--max-message-mb") {
-      const char* value = next("--max-message-mb");
-      if (!ParseInt(value, &options.max_message_mb)) {
-        std::fprintf(stderr, "chasles-server: --max-message-mb '%s' is not an integer\n", value);
-        return 2;
-      }
-    } else if (arg == "--tls-cert") {
-      options.security.tls_cert = next("--tls-cert");
-    } else if (arg == "--tls-key") {
-      options.security.tls_key = next("--tls-key");
-    } else if (arg == "--tls-client-ca") {
-      options.security.tls_client_ca = next("--tls-client-ca");
-    } else if (arg == "--tokens") {
-      options.security.tokens_file = next("--tokens");
-    } else {
-      std::fprintf(stderr, "chasles-server: unknown argument '%s' (see --help)\n", arg.c_str());
-      return 2;
-    }
+  CLI::App app{
+      "chasles-server: serves chasles.v1.Planning (Plan, Optimize, InverseKinematics, ListPlanners, UploadRobot,\n"
+      "UploadScene, UpdateScene, Coordinate, workcells, Benchmark, StopBenchmark), the standard gRPC health\n"
+      "service and server reflection. Requests that name no robot/scene use the embedded Franka Panda and table\n"
+      "scene. Planning, benchmark runs and coordination share the worker threads. SIGINT/SIGTERM shut the\n"
+      "server down cleanly (running calls get 2 s to finish).",
+      "chasles-server"};
+  std::size_t document_mb = options.limits.max_document_bytes >> 20;
+  AddFlags(app, options, document_mb);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
   }
+  options.limits.max_document_bytes = document_mb << 20;
 
   try {
     if (options.security.tokens() && !options.security.tls() && !chasles::IsLoopbackAddress(options.listen)) {
@@ -102,9 +116,13 @@ int main(int argc, char** argv) {
                                   " is not a loopback address: add --tls-cert and --tls-key, or listen on 127.0.0.1");
     }
     chasles::PlanningServer server(options);
-    std::fprintf(stderr, "chasles-server: security: %s\n", chasles::AccessControl(options.security).Describe().c_str());
     const unsigned threads =
         options.threads > 0 ? static_cast<unsigned>(options.threads) : std::max(1u, std::thread::hardware_concurrency());
+    std::fprintf(stderr, "chasles-server: security: %s\n", server.security_description().c_str());
+    if (server.metrics_port() != 0) {
+      std::fprintf(stderr, "chasles-server: metrics on %s (port %d) at /metrics\n", options.metrics_listen.c_str(),
+                   server.metrics_port());
+    }
     std::fprintf(stderr,
                  "chasles-server: listening on %s (port %d), %u planning threads; requests that name no robot or "
                  "scene use the embedded default robot 'panda' (7 DOF) and scene 'table'\n",

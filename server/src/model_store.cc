@@ -1,13 +1,29 @@
 #include "chasles/server/model_store.h"
 
+#include <algorithm>
+
 #include "chasles/robot/error.h"
 #include "chasles/server/convert.h"
+#include "chasles/server/heap_tracking.h"
 
 namespace chasles {
+namespace {
+
+/// Runs `make` and returns its result with the bytes it left allocated (operator new on this
+/// thread), at least `message_bytes`.
+template <typename Make>
+auto Measured(std::size_t message_bytes, std::uint64_t* bytes, Make make) {
+  HeapScope scope;
+  auto value = make();
+  *bytes = std::max<std::uint64_t>(message_bytes, static_cast<std::uint64_t>(std::max<std::int64_t>(0, scope.live_bytes())));
+  return value;
+}
+
+}  // namespace
 
 ModelStore::ModelStore(const v1::RobotModel& default_robot, const v1::Scene& default_scene,
-                       std::size_t capacity)
-    : robots_(capacity), scenes_(capacity), checkers_(capacity) {
+                       std::uint64_t cache_bytes, const InputLimits& limits)
+    : limits_(limits), cache_(cache_bytes) {
   default_robot_ = {ProtoContentId(default_robot), RobotFromProto(default_robot, "default robot")};
   default_scene_ = {ProtoContentId(default_scene), SceneFromProto(default_scene, "default scene")};
 }
@@ -15,27 +31,31 @@ ModelStore::ModelStore(const v1::RobotModel& default_robot, const v1::Scene& def
 StoredRobot ModelStore::AddRobot(const v1::RobotModel& robot, const std::string& field) {
   std::string id = ProtoContentId(robot);
   if (id == default_robot_.id) return default_robot_;
-  if (auto model = robots_.Get(id)) return {id, model};
-  auto model = robots_.Put(id, RobotFromProto(robot, field));
+  if (auto model = cache_.Get<RobotModel>("robot:" + id)) return {id, model};
+  std::uint64_t bytes = 0;
+  auto parsed = Measured(robot.ByteSizeLong(), &bytes, [&] { return RobotFromProto(robot, field, limits_); });
+  auto model = cache_.Put<RobotModel>("robot:" + id, std::move(parsed), bytes);
   return {std::move(id), std::move(model)};
 }
 
 StoredScene ModelStore::AddScene(const v1::Scene& scene, const std::string& field) {
   std::string id = ProtoContentId(scene);
   if (id == default_scene_.id) return default_scene_;
-  if (auto stored = scenes_.Get(id)) return {id, stored};
-  auto stored = scenes_.Put(id, SceneFromProto(scene, field));
+  if (auto stored = cache_.Get<Scene>("scene:" + id)) return {id, stored};
+  std::uint64_t bytes = 0;
+  auto parsed = Measured(scene.ByteSizeLong(), &bytes, [&] { return SceneFromProto(scene, field, limits_); });
+  auto stored = cache_.Put<Scene>("scene:" + id, std::move(parsed), bytes);
   return {std::move(id), std::move(stored)};
 }
 
-StoredScene ModelStore::PutScene(const std::string& id, std::shared_ptr<const Scene> scene) {
+StoredScene ModelStore::PutScene(const std::string& id, std::shared_ptr<const Scene> scene, std::uint64_t bytes) {
   if (id == default_scene_.id) return default_scene_;
-  return {id, scenes_.Put(id, std::move(scene))};
+  return {id, cache_.Put<Scene>("scene:" + id, std::move(scene), std::max<std::uint64_t>(bytes, 1))};
 }
 
 StoredRobot ModelStore::FindRobot(const std::string& id) const {
   if (id == default_robot_.id) return default_robot_;
-  if (auto model = robots_.Get(id)) return {id, model};
+  if (auto model = cache_.Get<RobotModel>("robot:" + id)) return {id, model};
   throw Error(ErrorCode::kNotFound, "robot_id '" + id +
                                         "' is not stored on this server (never uploaded here, or evicted); "
                                         "re-send the robot inline (the request's robot field) or call UploadRobot again");
@@ -43,16 +63,18 @@ StoredRobot ModelStore::FindRobot(const std::string& id) const {
 
 StoredScene ModelStore::FindScene(const std::string& id) const {
   if (id == default_scene_.id) return default_scene_;
-  if (auto scene = scenes_.Get(id)) return {id, scene};
+  if (auto scene = cache_.Get<Scene>("scene:" + id)) return {id, scene};
   throw Error(ErrorCode::kNotFound, "scene_id '" + id +
                                         "' is not stored on this server (never uploaded here, or evicted); "
                                         "send the scene inline (the request's scene field) or call UploadScene again");
 }
 
 std::shared_ptr<const CollisionChecker> ModelStore::Checker(const StoredRobot& robot, const StoredScene& scene) {
-  const std::string key = robot.id + "/" + scene.id;
-  if (auto checker = checkers_.Get(key)) return checker;
-  return checkers_.Put(key, std::make_shared<const CollisionChecker>(robot.model, scene.scene));
+  const std::string key = "checker:" + robot.id + "/" + scene.id;
+  if (auto checker = cache_.Get<CollisionChecker>(key)) return checker;
+  std::uint64_t bytes = 0;
+  auto built = Measured(0, &bytes, [&] { return std::make_shared<const CollisionChecker>(robot.model, scene.scene); });
+  return cache_.Put<CollisionChecker>(key, std::move(built), std::max<std::uint64_t>(bytes, 1));
 }
 
 }  // namespace chasles

@@ -3,17 +3,22 @@
 #include <algorithm>
 #include <atomic>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <mutex>
+#include <new>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
 #include <google/protobuf/util/json_util.h>
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
+#include <grpcpp/support/proto_buffer_reader.h>
+#include <grpcpp/support/proto_buffer_writer.h>
 
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/planners/registry.h"
@@ -23,7 +28,11 @@
 #include "chasles/server/convert.h"
 #include "chasles/server/convert_multi.h"
 #include "chasles/server/default_assets.h"
+#include "chasles/server/heap_tracking.h"
+#include "chasles/server/metrics.h"
 #include "chasles/server/model_store.h"
+#include "chasles/server/request_log.h"
+#include "chasles/server/security.h"
 #include "chasles/server/status.h"
 #include "chasles/server/thread_pool.h"
 #include "chasles/server/workcells.h"
@@ -65,16 +74,78 @@ v1::Scene DefaultSceneProto() {
   return scene;
 }
 
-std::string IdPrefix(const std::string& id) { return id.substr(0, 8); }
+std::string IdPrefix(const std::string& id) { return id.empty() ? "-" : id.substr(0, 8); }
 
-/// A unary reactor whose work runs on the pool; cancellation (client cancel, deadline, server
-/// shutdown) reaches the Termination of the running job.
-class PoolReactor final : public grpc::ServerUnaryReactor {
+// ---- Budgets: how long a call may hold a worker --------------------------------------------
+
+/// A budget field with the proto's "0 = default" rule; other values are validated later by the
+/// conversion (this only classifies and caps).
+double Defaulted(double value, double fallback) { return value == 0.0 ? fallback : value; }
+
+/// The post-processing's own budget [s] (collocation and spline solves run after planning).
+double PostProcessingBudget(const v1::TrajectoryOptions& options) {
+  switch (options.post_processing()) {
+    case v1::TrajectoryOptions::COLLOCATION: return Defaulted(options.collocation().time_budget(), 5.0);
+    case v1::TrajectoryOptions::SPLINE: return Defaulted(options.spline().time_budget(), 5.0);
+    case v1::TrajectoryOptions::POST_PROCESSING_UNSPECIFIED:
+      return options.max_jerk_size() > 0 ? Defaulted(options.collocation().time_budget(), 5.0) : 0.0;
+    default: return 0.0;
+  }
+}
+
+/// The fields that set how long a call runs, with their values [s], per request type.
+using BudgetFields = std::vector<std::pair<std::string, double>>;
+BudgetFields BudgetsOf(const v1::PlanRequest& r) {
+  BudgetFields fields{{"time_budget", Defaulted(r.time_budget(), 5.0)}};
+  if (const double post = PostProcessingBudget(r.trajectory()); post > 0.0) fields.push_back({"trajectory post-processing time_budget", post});
+  return fields;
+}
+BudgetFields BudgetsOf(const v1::OptimizeRequest& r) {
+  BudgetFields fields{{"time_budget", Defaulted(r.time_budget(), 10.0)}};
+  if (const double post = PostProcessingBudget(r.options()); post > 0.0) fields.push_back({"options post-processing time_budget", post});
+  return fields;
+}
+BudgetFields BudgetsOf(const v1::CoordinateRequest& r) { return {{"time_budget", Defaulted(r.time_budget(), 30.0)}}; }
+BudgetFields BudgetsOf(const v1::InverseKinematicsRequest& r) { return {{"time_budget", Defaulted(r.time_budget(), 0.05)}}; }
+template <typename Request>
+BudgetFields BudgetsOf(const Request&) {
+  return {};
+}
+
+// ---- One unary call -----------------------------------------------------------------------
+
+/// Everything one unary call owns: its parsed request, its response, its record (log line and
+/// metrics), and its cancellation, which reaches the running job's Termination. The request is
+/// parsed here from the raw bytes so a malformed message gets INVALID_ARGUMENT with a reason
+/// (gRPC's generated handler answers UNIMPLEMENTED with no message).
+template <typename Request, typename Response>
+class UnaryCall final : public grpc::ServerUnaryReactor {
  public:
+  UnaryCall(const char* rpc, grpc::CallbackServerContext* context, grpc::ByteBuffer* reply,
+            std::function<void(const RequestRecord&)> on_done)
+      : context(context), arrival(Clock::now()), deadline(SteadyDeadline(*context)), reply_(reply),
+        on_done_(std::move(on_done)) {
+    record.rpc = rpc;
+  }
+
+  /// Parses the request bytes. False (and the call finished with INVALID_ARGUMENT) when they
+  /// are not a `Request`.
+  bool Parse(const grpc::ByteBuffer* bytes) {
+    grpc::ByteBuffer copy(*bytes);
+    grpc::ProtoBufferReader reader(&copy);
+    if (request.ParseFromZeroCopyStream(&reader)) return true;
+    Complete(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                          "the request is not a valid " + Request::descriptor()->full_name() + " message (" +
+                              std::to_string(bytes->Length()) +
+                              " bytes that do not parse as protobuf wire format of that type); check that the "
+                              "client and server use the same chasles.v1 proto"));
+    return false;
+  }
+
   /// Creates the job's Termination; if the call was already cancelled, it is cancelled too.
-  Termination Start(Clock::time_point budget_end, Clock::time_point deadline) {
+  Termination Start(Clock::time_point budget_end, Clock::time_point call_deadline) {
     std::lock_guard<std::mutex> lock(mutex_);
-    termination_.emplace(budget_end, deadline);
+    termination_.emplace(budget_end, call_deadline);
     if (cancelled_) termination_->Cancel();
     return *termination_;
   }
@@ -89,338 +160,598 @@ class PoolReactor final : public grpc::ServerUnaryReactor {
   }
   void OnDone() override { delete this; }
 
+  /// Serialises the response (when OK), records and logs the call, and finishes it. Called once.
+  void Complete(grpc::Status status) {
+    if (status.ok()) {
+      grpc::ProtoBufferWriter writer(reply_, grpc::kProtoBufferWriterMaxBufferLength, response.ByteSizeLong());
+      if (!response.SerializeToZeroCopyStream(&writer)) {
+        status = grpc::Status(grpc::StatusCode::INTERNAL, "internal error: the response could not be serialised");
+      }
+    }
+    if (!status.ok()) status = grpc::Status(status.error_code(), StatusMessage(status.error_message()));
+    record.status_code = static_cast<int>(status.error_code());
+    record.status_message = status.error_message();
+    record.total_seconds = SecondsSince(arrival);
+    if (on_done_) on_done_(record);
+    Finish(status);
+  }
+
+  grpc::CallbackServerContext* const context;
+  const Clock::time_point arrival;
+  const Clock::time_point deadline;
+  Request request;
+  Response response;
+  RequestRecord record;
+
  private:
+  grpc::ByteBuffer* const reply_;
+  std::function<void(const RequestRecord&)> on_done_;
   mutable std::mutex mutex_;
   bool cancelled_ = false;
   std::optional<Termination> termination_;
 };
 
-class PlanningService final : public v1::Planning::CallbackService {
- public:
-  PlanningService(const PlannerRegistry& registry, ModelStore* store, ThreadPool* pool, WorkcellStore* workcells,
-                  bool log, const AccessControl* access)
-      : registry_(registry), pipeline_(registry), store_(store), pool_(pool), workcells_(workcells), log_(log),
-        access_(access) {}
+/// Thrown from pool work to finish the call with DEADLINE_EXCEEDED.
+struct DeadlineError {
+  std::string message;
+};
 
-  grpc::ServerUnaryReactor* Plan(grpc::CallbackServerContext* context, const v1::PlanRequest* request,
-                                 v1::PlanResponse* response) override {
-    if (auto* refused = Refuse(context, "Plan")) return refused;
-    const Clock::time_point arrival = Clock::now();
-    const Clock::time_point deadline = SteadyDeadline(*context);
-    const std::string request_id = RequestId(request->request_id(), "req");
-    auto* reactor = new PoolReactor();
-    const bool queued = pool_->Submit([=] { RunPlan(reactor, context, request, response, request_id, arrival, deadline); });
-    if (!queued) {
-      Log("plan request=%s status=RESOURCE_EXHAUSTED (planning queue full)", request_id.c_str());
-      reactor->Finish(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                                   "the server's planning queue is full; retry later"));
-    }
-    return reactor;
+/// Thrown from work to finish the call with this status (after the response was filled).
+struct StatusError {
+  grpc::Status status;
+};
+
+using RawService = v1::Planning::WithRawCallbackMethod_Plan<v1::Planning::WithRawCallbackMethod_ListPlanners<
+    v1::Planning::WithRawCallbackMethod_UploadRobot<v1::Planning::WithRawCallbackMethod_UploadScene<
+        v1::Planning::WithRawCallbackMethod_UpdateScene<v1::Planning::WithRawCallbackMethod_InverseKinematics<
+            v1::Planning::WithRawCallbackMethod_Optimize<v1::Planning::WithRawCallbackMethod_Coordinate<
+                v1::Planning::WithRawCallbackMethod_CreateWorkcell<v1::Planning::WithRawCallbackMethod_CommitTrajectory<
+                    v1::Planning::WithRawCallbackMethod_Release<v1::Planning::WithCallbackMethod_Benchmark<
+                        v1::Planning::WithRawCallbackMethod_StopBenchmark<v1::Planning::Service>>>>>>>>>>>>>;
+
+/// The service's collaborators and its share of the server options.
+struct ServiceContext {
+  const PlannerRegistry* registry = nullptr;
+  ModelStore* store = nullptr;
+  ThreadPool* pool = nullptr;
+  WorkcellStore* workcells = nullptr;
+  const AccessControl* access = nullptr;  ///< tokens and roles (the credentials checked them already)
+  const ServerOptions* options = nullptr;
+  ServerMetrics* metrics = nullptr;  ///< counts every call; never null
+};
+
+class PlanningService final : public RawService {
+ public:
+  explicit PlanningService(const ServiceContext& services)
+      : services_(services),
+        registry_(*services.registry),
+        pipeline_(*services.registry),
+        store_(services.store),
+        pool_(services.pool),
+        workcells_(services.workcells),
+        access_(services.access),
+        options_(*services.options),
+        log_format_(options_.log_format == "json" ? LogFormat::kJson : LogFormat::kText) {}
+
+  grpc::ServerUnaryReactor* Plan(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                 grpc::ByteBuffer* out) override {
+    return Serve<v1::PlanRequest, v1::PlanResponse>("Plan", context, in, out, Where::kPool,
+                                                    [this](auto& call) { RunPlan(call); });
   }
 
-  grpc::ServerUnaryReactor* Optimize(grpc::CallbackServerContext* context, const v1::OptimizeRequest* request,
-                                     v1::OptimizeResponse* response) override {
-    if (auto* refused = Refuse(context, "Optimize")) return refused;
-    const Clock::time_point arrival = Clock::now();
-    const Clock::time_point deadline = SteadyDeadline(*context);
-    const std::string request_id = RequestId(request->request_id(), "opt");
-    response->set_request_id(request_id);
-    return RunOnPool("optimize", [this, request, response, request_id, arrival, deadline](PoolReactor& reactor) {
-      const StoredRobot robot = RobotOf(*request);
-      const StoredScene scene = SceneOf(*request);
-      response->set_robot_id(robot.id);
-      response->set_scene_id(scene.id);
+  grpc::ServerUnaryReactor* Optimize(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                     grpc::ByteBuffer* out) override {
+    return Serve<v1::OptimizeRequest, v1::OptimizeResponse>("Optimize", context, in, out, Where::kPool, [this](auto& call) {
+      const v1::OptimizeRequest& request = call.request;
+      v1::OptimizeResponse& response = call.response;
+      call.record.request_id = RequestId(request.request_id(), "opt");
+      response.set_request_id(call.record.request_id);
+      const StoredRobot robot = RobotOfRequest(*store_, request);
+      const StoredScene scene = SceneOfRequest(*store_, request);
+      response.set_robot_id(robot.id);
+      response.set_scene_id(scene.id);
       RequestSettings settings;
       double input_duration = 0.0;
-      const OptimizeQuery query =
-          OptimizeQueryFromProto(*request, store_->Checker(robot, scene), &settings, &input_duration);
-      const Termination termination = reactor.Start(BudgetEnd(settings.time_budget, deadline), deadline);
+      OptimizeQuery query = OptimizeQueryFromProto(request, store_->Checker(robot, scene), &settings, &input_duration);
+      query.sample_cap.max_samples = options_.max_samples;
+      query.sample_cap.max_reply_bytes = ReplyBytes();
+      query.sample_cap.reply_cap_source = ReplyCapSource();
+      const Termination termination = call.Start(BudgetEnd(settings.time_budget, call.deadline), call.deadline);
       const OptimizeOutcome outcome = OptimizePath(query, termination);
-      OptimizeOutcomeToProto(outcome, query, response);
-      response->set_input_duration(input_duration);
-      Log("optimize request=%s robot=%s scene=%s waypoints=%zu method=%s used=%s outcome=%s duration=%.3f ms "
-          "parameterize=%.1f optimize=%.1f verify=%.1f total=%.1f",
-          request_id.c_str(), IdPrefix(robot.id).c_str(), IdPrefix(scene.id).c_str(), query.path.size(),
-          ToString(outcome.stage.optimizer.requested), ToString(outcome.stage.optimizer.used),
-          v1::PlanOutcome_Name(response->outcome()).c_str(), response->duration(),
-          1e3 * outcome.stage.parameterize_seconds, 1e3 * outcome.stage.optimize_seconds,
-          1e3 * outcome.stage.verify_seconds, 1e3 * SecondsSince(arrival));
+      OptimizeOutcomeToProto(outcome, query, &response);
+      response.set_input_duration(input_duration);
+      call.record.outcome = v1::PlanOutcome_Name(response.outcome());
+      call.record.fields = {{"robot", IdPrefix(robot.id)},
+                            {"scene", IdPrefix(scene.id)},
+                            {"waypoints", std::to_string(query.path.size())},
+                            {"method", ToString(outcome.stage.optimizer.requested)},
+                            {"used", ToString(outcome.stage.optimizer.used)},
+                            {"duration_s", FormatNumber(response.duration())}};
+      call.record.stages = {{"parameterize", outcome.stage.parameterize_seconds},
+                            {"optimize", outcome.stage.optimize_seconds},
+                            {"verify", outcome.stage.verify_seconds}};
     });
   }
 
-  grpc::ServerUnaryReactor* ListPlanners(grpc::CallbackServerContext* context, const v1::ListPlannersRequest*,
-                                         v1::ListPlannersResponse* response) override {
-    if (auto* refused = Refuse(context, "ListPlanners")) return refused;
-    grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-    grpc::Status status;
-    try {
-      for (const PlannerSpec& spec : registry_.List()) PlannerSpecToProto(spec, response->add_planners());
-    } catch (...) {
-      status = StatusFromException(std::current_exception());
-    }
-    reactor->Finish(status);
-    return reactor;
+  grpc::ServerUnaryReactor* ListPlanners(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                         grpc::ByteBuffer* out) override {
+    return Serve<v1::ListPlannersRequest, v1::ListPlannersResponse>(
+        "ListPlanners", context, in, out, Where::kInline, [this](auto& call) {
+          for (const PlannerSpec& spec : registry_.List()) PlannerSpecToProto(spec, call.response.add_planners());
+        });
   }
 
-  grpc::ServerUnaryReactor* UploadRobot(grpc::CallbackServerContext* context, const v1::UploadRobotRequest* request,
-                                        v1::UploadRobotResponse* response) override {
-    if (auto* refused = Refuse(context, "UploadRobot")) return refused;
-    return RunOnPool("upload-robot", [this, request, response](const PoolReactor&) {
-      const Clock::time_point start = Clock::now();
-      StoredRobot robot = store_->AddRobot(request->robot(), "robot");
-      response->set_robot_id(robot.id);
-      const RobotModel& model = *robot.model;
-      for (int i = 0; i < model.num_dofs(); ++i) {
-        response->add_joint_names(model.dof_names()[i]);
-        response->add_lower_limits(model.lower_limits()[i]);
-        response->add_upper_limits(model.upper_limits()[i]);
-        response->add_velocity_limits(model.velocity_limits()[i]);
-      }
-      Log("upload-robot robot=%s name=%s dofs=%d status=OK ms=%.1f", IdPrefix(robot.id).c_str(),
-          model.name().c_str(), model.num_dofs(), 1e3 * SecondsSince(start));
-    });
+  grpc::ServerUnaryReactor* UploadRobot(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                        grpc::ByteBuffer* out) override {
+    return Serve<v1::UploadRobotRequest, v1::UploadRobotResponse>(
+        "UploadRobot", context, in, out, Where::kPool, [this](auto& call) {
+          const StoredRobot robot = store_->AddRobot(call.request.robot(), "robot");
+          call.response.set_robot_id(robot.id);
+          const RobotModel& model = *robot.model;
+          for (int i = 0; i < model.num_dofs(); ++i) {
+            call.response.add_joint_names(model.dof_names()[i]);
+            call.response.add_lower_limits(model.lower_limits()[i]);
+            call.response.add_upper_limits(model.upper_limits()[i]);
+            call.response.add_velocity_limits(model.velocity_limits()[i]);
+          }
+          call.record.fields = {{"robot", IdPrefix(robot.id)}, {"name", model.name()}, {"dofs", std::to_string(model.num_dofs())}};
+        });
   }
 
-  grpc::ServerUnaryReactor* UploadScene(grpc::CallbackServerContext* context, const v1::UploadSceneRequest* request,
-                                        v1::UploadSceneResponse* response) override {
-    if (auto* refused = Refuse(context, "UploadScene")) return refused;
-    return RunOnPool("upload-scene", [this, request, response](const PoolReactor&) {
-      const Clock::time_point start = Clock::now();
-      StoredScene scene = store_->AddScene(request->scene(), "scene");
-      response->set_scene_id(scene.id);
-      Log("upload-scene scene=%s objects=%zu maps=%zu status=OK ms=%.1f", IdPrefix(scene.id).c_str(),
-          scene.scene->objects().size(), scene.scene->occupancy_maps().size(), 1e3 * SecondsSince(start));
-    });
+  grpc::ServerUnaryReactor* UploadScene(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                        grpc::ByteBuffer* out) override {
+    return Serve<v1::UploadSceneRequest, v1::UploadSceneResponse>(
+        "UploadScene", context, in, out, Where::kPool, [this](auto& call) {
+          const StoredScene scene = store_->AddScene(call.request.scene(), "scene");
+          call.response.set_scene_id(scene.id);
+          call.record.fields = {{"scene", IdPrefix(scene.id)},
+                                {"objects", std::to_string(scene.scene->objects().size())},
+                                {"maps", std::to_string(scene.scene->occupancy_maps().size())}};
+        });
   }
 
-  grpc::ServerUnaryReactor* UpdateScene(grpc::CallbackServerContext* context, const v1::UpdateSceneRequest* request,
-                                        v1::UpdateSceneResponse* response) override {
-    if (auto* refused = Refuse(context, "UpdateScene")) return refused;
-    return RunOnPool("update-scene", [this, request, response](const PoolReactor&) {
-      const Clock::time_point start = Clock::now();
-      const StoredScene base =
-          request->scene_id().empty() ? store_->default_scene() : store_->FindScene(request->scene_id());
-      PointCloudInsertion insertion;
-      insertion.octomap = request->octomap();
-      insertion.points.assign(request->points().begin(), request->points().end());
-      const v1::Vector3& origin = request->sensor_origin();
-      insertion.sensor_origin = Eigen::Vector3d(origin.x(), origin.y(), origin.z());
-      insertion.max_range = request->max_range();
-      insertion.resolution = request->resolution();
-      PointCloudInsertionStats stats;
-      auto updated = std::make_shared<const Scene>(base.scene->InsertPointCloud(insertion, &stats));
-      // Content id: the base scene's id and the update (the same update of the same scene gives
-      // the same id).
-      v1::UpdateSceneRequest key = *request;
-      key.set_scene_id(base.id);
-      const StoredScene scene = store_->PutScene(ProtoContentId(key), std::move(updated));
-      response->set_scene_id(scene.id);
-      response->set_octomap(stats.octomap);
-      response->set_points_inserted(stats.points_inserted);
-      response->set_occupied_leaves(stats.occupied_leaves);
-      response->set_resolution(stats.resolution);
-      response->set_seconds(stats.seconds);
-      Log("update-scene scene=%s->%s map=%s%s points=%zu occupied=%zu status=OK ms=%.1f", IdPrefix(base.id).c_str(),
-          IdPrefix(scene.id).c_str(), stats.octomap.c_str(), stats.created ? " (new)" : "", stats.points_inserted,
-          stats.occupied_leaves, 1e3 * SecondsSince(start));
-    });
+  grpc::ServerUnaryReactor* UpdateScene(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                        grpc::ByteBuffer* out) override {
+    return Serve<v1::UpdateSceneRequest, v1::UpdateSceneResponse>(
+        "UpdateScene", context, in, out, Where::kPool, [this](auto& call) {
+          const v1::UpdateSceneRequest& request = call.request;
+          v1::UpdateSceneResponse& response = call.response;
+          const StoredScene base =
+              request.scene_id().empty() ? store_->default_scene() : store_->FindScene(request.scene_id());
+          PointCloudInsertion insertion;
+          insertion.octomap = request.octomap();
+          insertion.points.assign(request.points().begin(), request.points().end());
+          const v1::Vector3& origin = request.sensor_origin();
+          insertion.sensor_origin = Eigen::Vector3d(origin.x(), origin.y(), origin.z());
+          insertion.max_range = request.max_range();
+          insertion.resolution = request.resolution();
+          PointCloudInsertionStats stats;
+          std::shared_ptr<const Scene> updated;
+          std::uint64_t bytes = 0;
+          {
+            HeapScope measure;
+            updated = std::make_shared<const Scene>(base.scene->InsertPointCloud(insertion, &stats, store_->limits()));
+            bytes = static_cast<std::uint64_t>(std::max<std::int64_t>(measure.live_bytes(), 0));
+          }
+          // Content id: the base scene's id and the update (the same update of the same scene
+          // gives the same id).
+          v1::UpdateSceneRequest key = request;
+          key.set_scene_id(base.id);
+          const StoredScene scene = store_->PutScene(ProtoContentId(key), std::move(updated), bytes);
+          response.set_scene_id(scene.id);
+          response.set_octomap(stats.octomap);
+          response.set_points_inserted(stats.points_inserted);
+          response.set_occupied_leaves(stats.occupied_leaves);
+          response.set_resolution(stats.resolution);
+          response.set_seconds(stats.seconds);
+          call.record.fields = {{"scene", IdPrefix(base.id) + "->" + IdPrefix(scene.id)},
+                                {"map", stats.octomap + (stats.created ? " (new)" : "")},
+                                {"points", std::to_string(stats.points_inserted)},
+                                {"occupied", std::to_string(stats.occupied_leaves)}};
+        });
   }
 
-  grpc::ServerUnaryReactor* InverseKinematics(grpc::CallbackServerContext* context,
-                                              const v1::InverseKinematicsRequest* request,
-                                              v1::InverseKinematicsResponse* response) override {
-    if (auto* refused = Refuse(context, "InverseKinematics")) return refused;
-    const Clock::time_point arrival = Clock::now();
-    const Clock::time_point deadline = SteadyDeadline(*context);
-    return RunOnPool("ik", [this, request, response, arrival, deadline](const PoolReactor& reactor) {
-      // Robot (inline, id or default) and, for collision_free, the scene's cached checker.
-      const StoredRobot robot = RobotOf(*request);
-      response->set_robot_id(robot.id);
-      IkRequest ik = IkRequestFromProto(*request, *robot.model);
-      std::string scene_id = "-";
-      std::shared_ptr<const CollisionChecker> checker;
-      if (request->collision_free()) {
-        const StoredScene scene = SceneOf(*request);
-        scene_id = IdPrefix(scene.id);
-        checker = store_->Checker(robot, scene);
-        ik.accept = [checker](const Eigen::VectorXd& q) { return checker->IsValid(q); };
-      }
-      // The solver's budget ends before the gRPC deadline, leaving time for the answer.
-      const double left = std::chrono::duration<double>(deadline - Clock::now()).count();
-      ik.time_budget = std::min(ik.time_budget, std::max(1e-3, 0.9 * left));
-      ik.stop = [&reactor] { return reactor.cancelled(); };
-      const IkResult result = SolveIk(*robot.model, ik);
-      IkResultToProto(result, ik, *robot.model, response);
-      Log("ik robot=%s scene=%s link=%s solutions=%d/%d attempts=%d status=OK ms=%.1f%s%s",
-          IdPrefix(robot.id).c_str(), scene_id.c_str(), robot.model->links()[ik.link].name.c_str(),
-          response->solutions_size(), ik.max_solutions, result.attempts, 1e3 * SecondsSince(arrival),
-          response->solved() ? "" : " message=", response->solved() ? "" : result.message.c_str());
-    });
+  grpc::ServerUnaryReactor* InverseKinematics(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                              grpc::ByteBuffer* out) override {
+    return Serve<v1::InverseKinematicsRequest, v1::InverseKinematicsResponse>(
+        "InverseKinematics", context, in, out, Where::kPool, [this](auto& call) {
+          const v1::InverseKinematicsRequest& request = call.request;
+          v1::InverseKinematicsResponse& response = call.response;
+          // Robot (inline, id or default) and, for collision_free, the scene's cached checker.
+          const StoredRobot robot = RobotOfRequest(*store_, request);
+          response.set_robot_id(robot.id);
+          IkRequest ik = IkRequestFromProto(request, *robot.model);
+          std::string scene_id = "-";
+          std::shared_ptr<const CollisionChecker> checker;
+          if (request.collision_free()) {
+            const StoredScene scene = SceneOfRequest(*store_, request);
+            scene_id = IdPrefix(scene.id);
+            checker = store_->Checker(robot, scene);
+            ik.accept = [checker](const Eigen::VectorXd& q) { return checker->IsValid(q); };
+          }
+          // The solver's budget ends before the gRPC deadline, leaving time for the answer.
+          const double left = std::chrono::duration<double>(call.deadline - Clock::now()).count();
+          ik.time_budget = std::min(ik.time_budget, std::max(1e-3, 0.9 * left));
+          ik.stop = [&call] { return call.cancelled(); };
+          const IkResult result = SolveIk(*robot.model, ik);
+          IkResultToProto(result, ik, *robot.model, &response);
+          call.record.outcome = response.solved() ? "SOLVED" : "UNSOLVED";
+          call.record.fields = {{"robot", IdPrefix(robot.id)},
+                                {"scene", scene_id},
+                                {"link", robot.model->links()[ik.link].name},
+                                {"solutions", std::to_string(response.solutions_size()) + "/" + std::to_string(ik.max_solutions)},
+                                {"attempts", std::to_string(result.attempts)}};
+          if (!response.solved()) call.record.fields.push_back({"message", result.message});
+        });
   }
 
-  grpc::ServerUnaryReactor* Coordinate(grpc::CallbackServerContext* context, const v1::CoordinateRequest* request,
-                                       v1::CoordinateResponse* response) override {
-    if (auto* refused = Refuse(context, "Coordinate")) return refused;
-    const Clock::time_point arrival = Clock::now();
-    const Clock::time_point deadline = SteadyDeadline(*context);
-    const std::string request_id = RequestId(request->request_id(), "team");
-    response->set_request_id(request_id);
-    return RunOnPool("coordinate", [this, request, response, request_id, arrival, deadline](PoolReactor& reactor) {
-      const StoredScene scene = SceneOf(*request);
-      response->set_scene_id(scene.id);
-      CoordinationQuery query = CoordinationQueryFromProto(
-          *request, scene.scene,
-          [this](const v1::TeamRobot& robot, const std::string& field) { return TeamRobotOf(robot, field).model; },
-          registry_);
-      if (request->has_workcell()) {
-        const double origin = request->workcell().start_time() == 0.0 ? workcells_->Now() : request->workcell().start_time();
-        response->set_start_time(origin);
-        for (const Reservation& r : workcells_->Active(request->workcell().name())) {
-          const bool own = std::any_of(query.robots.begin(), query.robots.end(),
-                                       [&r](const TeamRobotSpec& robot) { return robot.placement.name == r.robot_name; });
-          if (!own) query.committed.push_back(MotionOf(r, origin));
-        }
-      }
-      const Termination termination = reactor.Start(BudgetEnd(query.time_budget, deadline), deadline);
-      const CoordinationOutcome outcome = chasles::Coordinate(query, registry_, termination);
-      CoordinationOutcomeToProto(outcome, query, response);
-      if (outcome.code == CoordinationCode::kDeadlineExceeded) {
-        throw DeadlineError{"the gRPC deadline passed before coordination finished"};
-      }
-      Log("coordinate request=%s scene=%s robots=%d method=%s used=%s outcome=%s makespan=%.3f sum=%.3f "
-          "reorderings=%d states=%llu ms=%.1f",
-          request_id.c_str(), IdPrefix(scene.id).c_str(), request->robots_size(), ToString(query.method),
-          outcome.code == CoordinationCode::kSuccess ? ToString(outcome.method) : "-",
-          v1::PlanOutcome_Name(response->outcome()).c_str(), outcome.makespan, outcome.sum_of_durations,
-          outcome.reorderings, static_cast<unsigned long long>(outcome.verification.states_checked),
-          1e3 * SecondsSince(arrival));
-    });
+  grpc::ServerUnaryReactor* Coordinate(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                       grpc::ByteBuffer* out) override {
+    return Serve<v1::CoordinateRequest, v1::CoordinateResponse>(
+        "Coordinate", context, in, out, Where::kPool, [this](auto& call) {
+          const v1::CoordinateRequest& request = call.request;
+          v1::CoordinateResponse& response = call.response;
+          call.record.request_id = RequestId(request.request_id(), "team");
+          response.set_request_id(call.record.request_id);
+          const StoredScene scene = SceneOfRequest(*store_, request);
+          response.set_scene_id(scene.id);
+          CoordinationQuery query = CoordinationQueryFromProto(
+              request, scene.scene,
+              [this](const v1::TeamRobot& robot, const std::string& field) { return TeamRobotOf(robot, field).model; },
+              registry_);
+          query.sample_cap.max_samples = options_.max_samples;
+          query.sample_cap.max_reply_bytes = ReplyBytes() / std::max<std::uint64_t>(1, query.robots.size());
+          query.sample_cap.reply_cap_source = ReplyCapSource() + " shared by " + std::to_string(query.robots.size()) + " robots";
+          if (request.has_workcell()) {
+            const double origin =
+                request.workcell().start_time() == 0.0 ? workcells_->Now() : request.workcell().start_time();
+            response.set_start_time(origin);
+            for (const Reservation& r : workcells_->Active(request.workcell().name())) {
+              const bool own = std::any_of(query.robots.begin(), query.robots.end(), [&r](const TeamRobotSpec& robot) {
+                return robot.placement.name == r.robot_name;
+              });
+              if (!own) query.committed.push_back(MotionOf(r, origin));
+            }
+          }
+          const Termination termination = call.Start(BudgetEnd(query.time_budget, call.deadline), call.deadline);
+          const CoordinationOutcome outcome = chasles::Coordinate(query, registry_, termination);
+          CoordinationOutcomeToProto(outcome, query, &response);
+          call.record.outcome = v1::PlanOutcome_Name(response.outcome());
+          call.record.fields = {
+              {"scene", IdPrefix(scene.id)},
+              {"robots", std::to_string(request.robots_size())},
+              {"method", ToString(query.method)},
+              {"used", outcome.code == CoordinationCode::kSuccess ? ToString(outcome.method) : "-"},
+              {"makespan_s", FormatNumber(outcome.makespan)},
+              {"reorderings", std::to_string(outcome.reorderings)},
+              {"states", std::to_string(static_cast<unsigned long long>(outcome.verification.states_checked))}};
+          if (outcome.code == CoordinationCode::kDeadlineExceeded) {
+            throw DeadlineError{"the gRPC deadline passed before coordination finished"};
+          }
+        });
   }
 
-  grpc::ServerUnaryReactor* CreateWorkcell(grpc::CallbackServerContext* context,
-                                           const v1::CreateWorkcellRequest* request,
-                                           v1::CreateWorkcellResponse* response) override {
-    if (auto* refused = Refuse(context, "CreateWorkcell")) return refused;
-    grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-    grpc::Status status;
-    try {
-      response->set_created(workcells_->Create(request->name()));
-      response->set_active_reservations(static_cast<std::uint32_t>(workcells_->ActiveCount(request->name())));
-      response->set_now(workcells_->Now());
-      Log("create-workcell name=%s created=%d", request->name().c_str(), response->created() ? 1 : 0);
-    } catch (...) {
-      status = StatusFromException(std::current_exception());
-    }
-    reactor->Finish(status);
-    return reactor;
+  grpc::ServerUnaryReactor* CreateWorkcell(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                           grpc::ByteBuffer* out) override {
+    return Serve<v1::CreateWorkcellRequest, v1::CreateWorkcellResponse>(
+        "CreateWorkcell", context, in, out, Where::kInline, [this](auto& call) {
+          call.response.set_created(workcells_->Create(call.request.name()));
+          call.response.set_active_reservations(static_cast<std::uint32_t>(workcells_->ActiveCount(call.request.name())));
+          call.response.set_now(workcells_->Now());
+          call.record.fields = {{"workcell", call.request.name()}, {"created", call.response.created() ? "1" : "0"}};
+        });
   }
 
-  grpc::ServerUnaryReactor* CommitTrajectory(grpc::CallbackServerContext* context,
-                                             const v1::CommitTrajectoryRequest* request,
-                                             v1::CommitTrajectoryResponse* response) override {
-    if (auto* refused = Refuse(context, "CommitTrajectory")) return refused;
-    return RunOnPool("commit", [this, request, response](const PoolReactor&) {
-      const Clock::time_point start = Clock::now();
-      if (request->robot_name().empty()) ThrowInvalid("robot_name is empty: name the robot that moves");
-      const StoredRobot robot = RobotOf(*request);
-      Reservation reservation;
-      reservation.robot_name = request->robot_name();
-      reservation.placement.name = request->robot_name();
-      reservation.placement.model = robot.model;
-      if (request->has_base_pose()) reservation.placement.base_pose = PoseFromProto(request->base_pose(), "base_pose");
-      reservation.trajectory = TrajectoryFromPoints(request->trajectory(), *robot.model, "trajectory");
-      const double start_time = request->start_time();
-      if (!std::isfinite(start_time) || start_time < 0.0) {
-        ThrowInvalid("start_time = " + FormatNumber(start_time) + " must be finite and >= 0 s since the Unix epoch (0 = now)");
-      }
-      reservation.start_time = start_time == 0.0 ? workcells_->Now() : start_time;
-      const Reservation committed =
-          workcells_->Commit(request->workcell(), reservation, request->hold(), request->robot_padding());
-      response->set_reservation_id(committed.id);
-      response->set_start_time(committed.start_time);
-      response->set_end_time(committed.end_time);
-      response->set_expires_at(committed.expires_at);
-      response->set_active_reservations(static_cast<std::uint32_t>(workcells_->ActiveCount(request->workcell())));
-      Log("commit workcell=%s robot=%s reservation=%s duration=%.3f hold=%.3f status=OK ms=%.1f",
-          request->workcell().c_str(), request->robot_name().c_str(), committed.id.c_str(),
-          committed.end_time - committed.start_time, committed.expires_at - committed.end_time, 1e3 * SecondsSince(start));
-    });
+  grpc::ServerUnaryReactor* CommitTrajectory(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                             grpc::ByteBuffer* out) override {
+    return Serve<v1::CommitTrajectoryRequest, v1::CommitTrajectoryResponse>(
+        "CommitTrajectory", context, in, out, Where::kPool, [this](auto& call) {
+          const v1::CommitTrajectoryRequest& request = call.request;
+          v1::CommitTrajectoryResponse& response = call.response;
+          if (request.robot_name().empty()) ThrowInvalid("robot_name is empty: name the robot that moves");
+          if (static_cast<std::uint64_t>(request.trajectory().points_size()) > options_.max_samples) {
+            ThrowResourceExhausted("trajectory.points has " + std::to_string(request.trajectory().points_size()) +
+                                   " points, more than the server's cap of " + std::to_string(options_.max_samples) +
+                                   " (--max-samples); commit a coarser trajectory (the server interpolates between "
+                                   "points with cubic Hermite pieces)");
+          }
+          const StoredRobot robot = RobotOfRequest(*store_, request);
+          Reservation reservation;
+          reservation.robot_name = request.robot_name();
+          reservation.placement.name = request.robot_name();
+          reservation.placement.model = robot.model;
+          if (request.has_base_pose()) reservation.placement.base_pose = PoseFromProto(request.base_pose(), "base_pose");
+          reservation.trajectory = TrajectoryFromPoints(request.trajectory(), *robot.model, "trajectory");
+          const double start_time = request.start_time();
+          if (!std::isfinite(start_time) || start_time < 0.0) {
+            ThrowInvalid("start_time = " + FormatNumber(start_time) +
+                         " must be finite and >= 0 s since the Unix epoch (0 = now)");
+          }
+          reservation.start_time = start_time == 0.0 ? workcells_->Now() : start_time;
+          const Reservation committed =
+              workcells_->Commit(request.workcell(), reservation, request.hold(), request.robot_padding());
+          response.set_reservation_id(committed.id);
+          response.set_start_time(committed.start_time);
+          response.set_end_time(committed.end_time);
+          response.set_expires_at(committed.expires_at);
+          response.set_active_reservations(static_cast<std::uint32_t>(workcells_->ActiveCount(request.workcell())));
+          call.record.fields = {{"workcell", request.workcell()},
+                                {"robot", request.robot_name()},
+                                {"reservation", committed.id},
+                                {"duration_s", FormatNumber(committed.end_time - committed.start_time)},
+                                {"hold_s", FormatNumber(committed.expires_at - committed.end_time)}};
+        });
   }
 
-  grpc::ServerUnaryReactor* Release(grpc::CallbackServerContext* context, const v1::ReleaseRequest* request,
-                                    v1::ReleaseResponse* response) override {
-    if (auto* refused = Refuse(context, "Release")) return refused;
-    grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-    grpc::Status status;
-    try {
-      const int released = workcells_->Release(request->workcell(), request->reservation_id(), request->robot_name());
-      response->set_released(static_cast<std::uint32_t>(released));
-      response->set_active_reservations(static_cast<std::uint32_t>(workcells_->ActiveCount(request->workcell())));
-      Log("release workcell=%s reservation=%s robot=%s released=%d", request->workcell().c_str(),
-          request->reservation_id().c_str(), request->robot_name().c_str(), released);
-    } catch (...) {
-      status = StatusFromException(std::current_exception());
-      Log("release status=%d message=%s", static_cast<int>(status.error_code()), status.error_message().c_str());
-    }
-    reactor->Finish(status);
-    return reactor;
+  grpc::ServerUnaryReactor* Release(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                    grpc::ByteBuffer* out) override {
+    return Serve<v1::ReleaseRequest, v1::ReleaseResponse>(
+        "Release", context, in, out, Where::kInline, [this](auto& call) {
+          const v1::ReleaseRequest& request = call.request;
+          const int released = workcells_->Release(request.workcell(), request.reservation_id(), request.robot_name());
+          call.response.set_released(static_cast<std::uint32_t>(released));
+          call.response.set_active_reservations(static_cast<std::uint32_t>(workcells_->ActiveCount(request.workcell())));
+          call.record.fields = {{"workcell", request.workcell()},
+                                {"reservation", request.reservation_id()},
+                                {"robot", request.robot_name()},
+                                {"released", std::to_string(released)}};
+        });
   }
 
   grpc::ServerWriteReactor<v1::BenchmarkResponse>* Benchmark(grpc::CallbackServerContext* context,
                                                              const v1::BenchmarkRequest* request) override {
-    if (grpc::Status s = access_->Authorize(*context, "Benchmark"); !s.ok()) return new RefusedWriter<v1::BenchmarkResponse>(s);
+    if (grpc::Status refused = access_->Authorize(*context, "Benchmark"); !refused.ok()) return new RefusedWriter(refused);
     const std::string request_id = RequestId(request->request_id(), "bench");
     BenchmarkServices services;
     services.registry = &registry_;
     services.pipeline = &pipeline_;
     services.store = store_;
     services.pool = pool_;
-    if (log_) services.log = [](const std::string& line) { std::fprintf(stderr, "chasles-server: %s\n", line.c_str()); };
+    services.ticket.client = ClientOf(*context);
+    services.ticket.long_running = Defaulted(request->run_budget(), 5.0) > options_.long_budget;
+    if (options_.log_requests) {
+      const std::size_t cap = options_.log_field_max;
+      services.log = [cap](const std::string& line) {
+        std::fprintf(stderr, "chasles-server: %s\n", EscapeForLog(line, 8 * cap).c_str());
+      };
+    }
+    const double run_budget = Defaulted(request->run_budget(), 5.0);
+    if (run_budget > options_.max_budget) {
+      auto* refused = new RefusedWriter(grpc::Status(
+          grpc::StatusCode::INVALID_ARGUMENT, "run_budget = " + FormatNumber(run_budget) + " s exceeds this server's maximum budget of " +
+                                                  FormatNumber(options_.max_budget) + " s (--max-budget)"));
+      return refused;
+    }
     return StartBenchmark(services, &benchmarks_, request, request_id, SteadyDeadline(*context));
   }
 
-  grpc::ServerUnaryReactor* StopBenchmark(grpc::CallbackServerContext* context, const v1::StopBenchmarkRequest* request,
-                                          v1::StopBenchmarkResponse* response) override {
-    if (auto* refused = Refuse(context, "StopBenchmark")) return refused;
-    grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-    grpc::Status status;
-    if (request->request_id().empty()) {
-      status = grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "request_id is empty: name the running benchmark");
-    } else if (!benchmarks_.Stop(request->request_id())) {
-      status = grpc::Status(grpc::StatusCode::NOT_FOUND,
-                            "request_id = '" + request->request_id() + "' names no running benchmark (finished, or never started)");
-    } else {
-      response->set_stopped(true);
-      Log("stop-benchmark request=%s stopping", request->request_id().c_str());
-    }
-    reactor->Finish(status);
-    return reactor;
+  grpc::ServerUnaryReactor* StopBenchmark(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                          grpc::ByteBuffer* out) override {
+    return Serve<v1::StopBenchmarkRequest, v1::StopBenchmarkResponse>(
+        "StopBenchmark", context, in, out, Where::kInline, [this](auto& call) {
+          const std::string& id = call.request.request_id();
+          call.record.request_id = id;
+          if (id.empty()) {
+            throw StatusError{grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "request_id is empty: name the running benchmark")};
+          }
+          if (!benchmarks_.Stop(id)) {
+            throw StatusError{grpc::Status(grpc::StatusCode::NOT_FOUND,
+                                           "request_id = '" + EscapeForLog(id, options_.log_field_max) +
+                                               "' names no running benchmark (finished, or never started)")};
+          }
+          call.response.set_stopped(true);
+        });
   }
 
  private:
-  /// Finishes the call with the access check's refusal (UNAUTHENTICATED, PERMISSION_DENIED), or
-  /// returns null when the caller may call `rpc`.
-  grpc::ServerUnaryReactor* Refuse(grpc::CallbackServerContext* context, const char* rpc) const {
-    const grpc::Status status = access_->Authorize(*context, rpc);
-    if (status.ok()) return nullptr;
-    Log("%s status=%d message=%s", rpc, static_cast<int>(status.error_code()), status.error_message().c_str());
-    grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
-    reactor->Finish(status);
-    return reactor;
-  }
+  enum class Where { kInline, kPool };
 
-  /// A server-streaming call refused before it started.
-  template <typename Response>
-  class RefusedWriter final : public grpc::ServerWriteReactor<Response> {
+  /// A write reactor that only answers an error (a Benchmark refused before it starts).
+  class RefusedWriter final : public grpc::ServerWriteReactor<v1::BenchmarkResponse> {
    public:
-    explicit RefusedWriter(const grpc::Status& status) { this->Finish(status); }
+    explicit RefusedWriter(const grpc::Status& status) { Finish(status); }
     void OnDone() override { delete this; }
   };
 
-  /// Thrown from pool work to finish the call with DEADLINE_EXCEEDED.
-  struct DeadlineError {
-    std::string message;
-  };
+  /// Who the caller is, for fair queueing and the log: the authenticated identity (token name or
+  /// client certificate) when there is one, else the peer's address without its port (so
+  /// opening more connections buys no larger share).
+  std::string ClientOf(const grpc::CallbackServerContext& context) const {
+    const ClientIdentity identity = access_->IdentifyClient(context);
+    if (identity.authenticated) return identity.name;
+    std::string peer = context.peer();
+    const std::size_t colon = peer.rfind(':');
+    if (colon != std::string::npos && colon > peer.find(':')) peer.resize(colon);
+    return peer;
+  }
+
+  /// Parses the call, then runs `work(call)` inline (cheap calls) or on the pool under the fair
+  /// scheduler, and finishes the call with OK, the work's own status, or the mapped exception.
+  /// Every path records the call once (log line, metrics).
+  template <typename Request, typename Response, typename Work>
+  grpc::ServerUnaryReactor* Serve(const char* rpc, grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                  grpc::ByteBuffer* out, Where where, Work work) {
+    using Call = UnaryCall<Request, Response>;
+    services_.metrics->RequestStarted(rpc);
+    auto* call = new Call(rpc, context, out, [this](const RequestRecord& record) { Record(record); });
+    call->record.client = ClientOf(*context);
+    if (grpc::Status refused = access_->Authorize(*context, rpc); !refused.ok()) {
+      call->Complete(refused);
+      return call;
+    }
+    if (!call->Parse(in)) return call;
+    if (const grpc::Status refused = CheckBudgets(BudgetsOf(call->request)); !refused.ok()) {
+      call->Complete(refused);
+      return call;
+    }
+    JobTicket ticket;
+    ticket.client = call->record.client;
+    for (const auto& [field, seconds] : BudgetsOf(call->request)) {
+      if (seconds > options_.long_budget) ticket.long_running = true;
+    }
+    auto job = [this, call, work = std::move(work)]() mutable {
+      call->record.queue_seconds = SecondsSince(call->arrival);
+      if (call->cancelled()) {
+        call->Complete(grpc::Status(grpc::StatusCode::CANCELLED, "cancelled before it started"));
+        return;
+      }
+      grpc::Status status;
+      std::uint64_t peak = 0;
+      {
+        HeapScope heap(options_.request_memory_mb << 20);
+        try {
+          work(*call);
+          if (call->cancelled() && status.ok()) status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
+        } catch (const DeadlineError& e) {
+          status = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, e.message);
+        } catch (const StatusError& e) {
+          status = e.status;
+        } catch (...) {
+          status = heap.exceeded() ? MemoryCapStatus() : StatusFromException(std::current_exception());
+        }
+        peak = heap.peak_bytes();
+      }
+      call->record.peak_heap_bytes = peak;
+      call->Complete(status);
+      // A large call leaves free blocks behind in malloc's arenas: give them back to the system.
+      if (peak > kTrimAboveBytes) ReleaseFreeHeapMemory();
+    };
+    if (where == Where::kInline) {
+      job();
+      return call;
+    }
+    switch (pool_->TrySubmit(std::move(job), ticket)) {
+      case SubmitResult::kQueued: break;
+      case SubmitResult::kClientQueueFull:
+        call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                    "this client already has " + std::to_string(options_.max_queued_per_client) +
+                                        " calls waiting for a worker (--max-queued-per-client); wait for answers "
+                                        "before sending more"));
+        break;
+      case SubmitResult::kQueueFull:
+        call->Complete(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                                    "the server's work queue is full (" + std::to_string(options_.max_queued) +
+                                        " calls waiting, --max-queued); retry later"));
+        break;
+      case SubmitResult::kStopping:
+        call->Complete(grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is shutting down"));
+        break;
+    }
+    return call;
+  }
+
+  /// INVALID_ARGUMENT naming the first budget above --max-budget, else OK.
+  grpc::Status CheckBudgets(const BudgetFields& budgets) const {
+    for (const auto& [field, seconds] : budgets) {
+      if (seconds > options_.max_budget) {
+        return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                            field + " = " + FormatNumber(seconds) + " s exceeds this server's maximum budget of " +
+                                FormatNumber(options_.max_budget) + " s (--max-budget); ask for less, or run a server "
+                                "with a larger --max-budget");
+      }
+    }
+    return grpc::Status::OK;
+  }
+
+  grpc::Status MemoryCapStatus() const {
+    return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                        "the request needed more than this server's per-request memory cap of " +
+                            std::to_string(options_.request_memory_mb) +
+                            " MiB (--request-memory-mb) and was abandoned; use a smaller input, budget or "
+                            "planner graph (e.g. max_nodes), or a larger sample_period");
+  }
+
+  /// The estimated bytes a reply may carry: the message cap less room for everything else.
+  std::uint64_t ReplyBytes() const {
+    const std::uint64_t max_message = static_cast<std::uint64_t>(options_.max_message_mb) << 20;
+    return max_message - std::min<std::uint64_t>(max_message / 8, 1u << 20);
+  }
+
+  std::string ReplyCapSource() const {
+    const std::uint64_t max_message = static_cast<std::uint64_t>(options_.max_message_mb) << 20;
+    return "--max-message-mb " + std::to_string(options_.max_message_mb) + " less " +
+           std::to_string((max_message - ReplyBytes()) >> 10 >= 1024 ? (max_message - ReplyBytes()) >> 20 : 0) + " MiB";
+  }
+
+  /// Logs the finished call and hands it to the metrics.
+  void Record(const RequestRecord& record) const {
+    if (options_.log_requests) {
+      const std::string line = FormatLogLine(record, log_format_, options_.log_field_max);
+      std::fprintf(stderr, "%s\n", line.c_str());
+    }
+    services_.metrics->RequestFinished(record);
+  }
+
+  void RunPlan(UnaryCall<v1::PlanRequest, v1::PlanResponse>& call) {
+    const v1::PlanRequest& request = call.request;
+    v1::PlanResponse& response = call.response;
+    call.record.request_id = RequestId(request.request_id(), "req");
+    response.set_request_id(call.record.request_id);
+    std::string planner = request.planner().planner_id().empty() ? "rrt_connect" : request.planner().planner_id();
+    call.record.fields = {{"planner", planner}};
+
+    // 1. Robot, scene and checker (parsed or cached).
+    const StoredRobot robot = RobotOfRequest(*store_, request);
+    response.set_robot_id(robot.id);
+    const StoredScene scene = SceneOfRequest(*store_, request);
+    response.set_scene_id(scene.id);
+    call.record.fields.push_back({"robot", IdPrefix(robot.id)});
+    call.record.fields.push_back({"scene", IdPrefix(scene.id)});
+    if (request.has_workcell()) {
+      // A team of one among the workcell's committed trajectories.
+      call.record.fields.front().second = "workcell:" + planner;
+      CoordinationQuery query = WorkcellPlanQuery(request, robot.model, scene.scene, registry_);
+      query.sample_cap.max_samples = options_.max_samples;
+      query.sample_cap.max_reply_bytes = ReplyBytes();
+      query.sample_cap.reply_cap_source = ReplyCapSource();
+      query.sample_cap.field = "trajectory.sample_period";
+      const double origin =
+          request.workcell().start_time() == 0.0 ? workcells_->Now() : request.workcell().start_time();
+      for (const Reservation& r : workcells_->Active(request.workcell().name())) {
+        if (r.robot_name != query.robots.front().placement.name) query.committed.push_back(MotionOf(r, origin));
+      }
+      const Termination termination = call.Start(BudgetEnd(query.time_budget, call.deadline), call.deadline);
+      const CoordinationOutcome outcome = chasles::Coordinate(query, registry_, termination);
+      WorkcellPlanToProto(outcome, query, &response);
+      call.record.outcome = v1::PlanOutcome_Name(response.outcome());
+      if (outcome.code == CoordinationCode::kCancelled) {
+        throw StatusError{grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client")};
+      }
+      if (outcome.code == CoordinationCode::kDeadlineExceeded) {
+        throw DeadlineError{"the gRPC deadline passed before planning finished"};
+      }
+      return;
+    }
+    std::shared_ptr<const CollisionChecker> checker = store_->Checker(robot, scene);
+
+    // 2. The query, with the proto's defaults and the server's caps.
+    RequestSettings settings;
+    PlanQuery query = PlanQueryFromProto(request, checker, registry_, &settings);
+    query.sample_cap.max_samples = options_.max_samples;
+    query.sample_cap.max_reply_bytes = ReplyBytes();
+      query.sample_cap.reply_cap_source = ReplyCapSource();
+    const double prepare = SecondsSince(call.arrival) - call.record.queue_seconds;
+
+    // 3. Budget: the request's, cut short so a result can still travel back before the gRPC
+    //    deadline (which itself stops everything).
+    const Termination termination = call.Start(BudgetEnd(settings.time_budget, call.deadline), call.deadline);
+
+    // 4. Plan.
+    PlanOutcome outcome = pipeline_.Plan(query, termination);
+    outcome.seconds.validate += prepare;
+    call.record.outcome = v1::PlanOutcome_Name(OutcomeToProto(outcome.code));
+    call.record.stages = {{"validate", outcome.seconds.validate},   {"plan", outcome.seconds.plan},
+                          {"shortcut", outcome.seconds.shortcut},   {"parameterize", outcome.seconds.parameterize},
+                          {"optimize", outcome.seconds.optimize},   {"verify", outcome.seconds.verify}};
+    outcome.seconds.total = SecondsSince(call.arrival);
+    PlanOutcomeToProto(outcome, query, &response);
+    grpc::Status status = StatusFromOutcome(outcome.code, outcome.message);
+    if (status.ok() && (call.cancelled() || termination.Reason() == StopReason::kCancelled) &&
+        outcome.code != PlanOutcomeCode::kSuccess) {
+      status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
+    }
+    if (!status.ok()) throw StatusError{status};
+  }
 
   /// The end of a request's budget, cut short so a result can still travel back before the
   /// gRPC deadline.
@@ -449,149 +780,19 @@ class PlanningService final : public v1::Planning::CallbackService {
     return buffer;
   }
 
-  template <typename Request>
-  StoredRobot RobotOf(const Request& request) {
-    return RobotOfRequest(*store_, request);
-  }
-  template <typename Request>
-  StoredScene SceneOf(const Request& request) {
-    return SceneOfRequest(*store_, request);
-  }
+  /// Calls whose peak heap exceeds this are followed by giving free memory back to the system.
+  static constexpr std::uint64_t kTrimAboveBytes = 32ull << 20;
 
-  /// Runs `work` on the pool and finishes the call with OK or the mapped exception.
-  grpc::ServerUnaryReactor* RunOnPool(const char* what, std::function<void(PoolReactor&)> work) {
-    auto* reactor = new PoolReactor();
-    const bool queued = pool_->Submit([this, reactor, what, work = std::move(work)] {
-      grpc::Status status;
-      if (reactor->cancelled()) {
-        status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled before it started");
-      } else {
-        try {
-          work(*reactor);
-          if (reactor->cancelled()) status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
-        } catch (const DeadlineError& e) {
-          status = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, e.message);
-        } catch (...) {
-          status = StatusFromException(std::current_exception());
-          Log("%s status=%d message=%s", what, static_cast<int>(status.error_code()),
-              status.error_message().c_str());
-        }
-      }
-      reactor->Finish(status);
-    });
-    if (!queued) {
-      reactor->Finish(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, "the server's work queue is full; retry later"));
-    }
-    return reactor;
-  }
-
-  void RunPlan(PoolReactor* reactor, grpc::CallbackServerContext* context, const v1::PlanRequest* request,
-               v1::PlanResponse* response, const std::string& request_id, Clock::time_point arrival,
-               Clock::time_point deadline) {
-    grpc::Status status;
-    std::string robot_id, scene_id;
-    std::string planner = request->planner().planner_id().empty() ? "rrt_connect" : request->planner().planner_id();
-    std::string outcome_name = "-";
-    StageSeconds seconds;
-    if (reactor->cancelled() || context->IsCancelled()) {
-      status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled before planning started");
-    } else try {
-      // 1. Robot, scene and checker (parsed or cached).
-      const StoredRobot robot = RobotOf(*request);
-      robot_id = robot.id;
-      const StoredScene scene = SceneOf(*request);
-      scene_id = scene.id;
-      if (request->has_workcell()) {
-        // A team of one among the workcell's committed trajectories.
-        planner = "workcell:" + planner;
-        CoordinationQuery query = WorkcellPlanQuery(*request, robot.model, scene.scene, registry_);
-        const double origin =
-            request->workcell().start_time() == 0.0 ? workcells_->Now() : request->workcell().start_time();
-        for (const Reservation& r : workcells_->Active(request->workcell().name())) {
-          if (r.robot_name != query.robots.front().placement.name) query.committed.push_back(MotionOf(r, origin));
-        }
-        Termination termination = reactor->Start(BudgetEnd(query.time_budget, deadline), deadline);
-        const CoordinationOutcome outcome = chasles::Coordinate(query, registry_, termination);
-        outcome_name = ToString(outcome.code);
-        WorkcellPlanToProto(outcome, query, response);
-        seconds.total = SecondsSince(arrival);
-        if (outcome.code == CoordinationCode::kCancelled) {
-          status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
-        } else if (outcome.code == CoordinationCode::kDeadlineExceeded) {
-          status = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "the gRPC deadline passed before planning finished");
-        }
-      } else {
-        std::shared_ptr<const CollisionChecker> checker = store_->Checker(robot, scene);
-
-        // 2. The query, with the proto's defaults.
-        RequestSettings settings;
-        PlanQuery query = PlanQueryFromProto(*request, checker, registry_, &settings);
-        const double prepare = SecondsSince(arrival);
-
-        // 3. Budget: the request's, cut short so a result can still travel back before the
-        //    gRPC deadline (which itself stops everything).
-        Termination termination = reactor->Start(BudgetEnd(settings.time_budget, deadline), deadline);
-
-        // 4. Plan.
-        PlanOutcome outcome = pipeline_.Plan(query, termination);
-        outcome.seconds.validate += prepare;
-        outcome.seconds.total = SecondsSince(arrival);
-        seconds = outcome.seconds;
-        outcome_name = ToString(outcome.code);
-        PlanOutcomeToProto(outcome, query, response);
-        status = StatusFromOutcome(outcome.code, outcome.message);
-        if (status.ok() && (reactor->cancelled() || termination.Reason() == StopReason::kCancelled) &&
-            outcome.code != PlanOutcomeCode::kSuccess) {
-          status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
-        }
-      }
-    } catch (...) {
-      status = StatusFromException(std::current_exception());
-    }
-    response->set_request_id(request_id);
-    response->set_robot_id(robot_id);
-    response->set_scene_id(scene_id);
-    if (!status.ok()) seconds.total = SecondsSince(arrival);
-    Log("plan request=%s robot=%s scene=%s planner=%s status=%s outcome=%s ms validate=%.1f plan=%.1f "
-        "shortcut=%.1f parameterize=%.1f optimize=%.1f verify=%.1f total=%.1f%s%s",
-        request_id.c_str(), robot_id.empty() ? "-" : IdPrefix(robot_id).c_str(),
-        scene_id.empty() ? "-" : IdPrefix(scene_id).c_str(), planner.c_str(), StatusName(status.error_code()),
-        outcome_name.c_str(), 1e3 * seconds.validate, 1e3 * seconds.plan, 1e3 * seconds.shortcut,
-        1e3 * seconds.parameterize, 1e3 * seconds.optimize, 1e3 * seconds.verify, 1e3 * seconds.total, status.ok() ? "" : " error=",
-        status.ok() ? "" : status.error_message().c_str());
-    reactor->Finish(status);
-  }
-
-  static const char* StatusName(grpc::StatusCode code) {
-    switch (code) {
-      case grpc::StatusCode::OK: return "OK";
-      case grpc::StatusCode::CANCELLED: return "CANCELLED";
-      case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
-      case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
-      case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
-      case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
-      case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
-      case grpc::StatusCode::INTERNAL: return "INTERNAL";
-      default: return "OTHER";
-    }
-  }
-
-  template <typename... Args>
-  void Log(const char* format, Args... args) const {
-    if (!log_) return;
-    char line[2048];
-    std::snprintf(line, sizeof(line), format, args...);
-    std::fprintf(stderr, "chasles-server: %s\n", line);
-  }
-
+  const ServiceContext services_;
   const PlannerRegistry& registry_;
   const PlanningPipeline pipeline_;
   ModelStore* store_;
   ThreadPool* pool_;
   WorkcellStore* workcells_;
+  const AccessControl* access_;
+  const ServerOptions& options_;
+  const LogFormat log_format_;
   BenchmarkRegistry benchmarks_;
-  const bool log_;
-  const AccessControl* access_;  // tokens and roles (the credentials checked them already)
   std::atomic<std::uint64_t> next_request_{0};
 };
 
@@ -603,15 +804,37 @@ void ServerOptions::Validate() const {
   if (max_message_mb < 1 || max_message_mb > 2047) {
     ThrowInvalid("--max-message-mb = " + std::to_string(max_message_mb) + " must be within [1, 2047]");
   }
-  if (cache_capacity == 0) ThrowInvalid("cache_capacity = 0 must be >= 1");
+  if (cache_mb < 1 || cache_mb > (1ull << 30)) ThrowInvalid("--cache-mb = " + std::to_string(cache_mb) + " must be within [1, 2^30]");
+  if (max_samples < 1) ThrowInvalid("--max-samples = 0 must be >= 1");
+  if (request_memory_mb > (1ull << 30)) {
+    ThrowInvalid("--request-memory-mb = " + std::to_string(request_memory_mb) + " must be within [0, 2^30] (0 = no cap)");
+  }
+  if (!(max_budget > 0.0 && max_budget <= 600.0)) {
+    ThrowInvalid("--max-budget = " + FormatNumber(max_budget) + " must be within (0, 600] s");
+  }
+  if (!(long_budget > 0.0) || !std::isfinite(long_budget)) {
+    ThrowInvalid("--long-budget = " + FormatNumber(long_budget) + " must be finite and > 0 s");
+  }
+  if (!(long_share > 0.0 && long_share <= 1.0)) {
+    ThrowInvalid("--long-share = " + FormatNumber(long_share) + " must be within (0, 1]");
+  }
+  if (max_queued < 1) ThrowInvalid("--max-queued = 0 must be >= 1");
+  if (max_queued_per_client < 1) ThrowInvalid("--max-queued-per-client = 0 must be >= 1");
+  if (log_format != "text" && log_format != "json") {
+    ThrowInvalid("--log-format = '" + EscapeForLog(log_format, 64) + "' must be 'text' or 'json'");
+  }
+  limits.Validate();
+  if (log_field_max < 16) ThrowInvalid("--log-field-max = " + std::to_string(log_field_max) + " must be >= 16");
 }
 
 struct PlanningServer::Impl {
+  ServerOptions options;
   PlannerRegistry registry;
   std::unique_ptr<ModelStore> store;
   std::unique_ptr<ThreadPool> pool;
   WorkcellStore workcells;
   std::unique_ptr<AccessControl> access;
+  std::unique_ptr<ServerMetrics> metrics;
   std::unique_ptr<PlanningService> service;
   std::unique_ptr<grpc::Server> server;
   int port = 0;
@@ -620,14 +843,36 @@ struct PlanningServer::Impl {
 
 PlanningServer::PlanningServer(const ServerOptions& options) : impl_(std::make_unique<Impl>()) {
   options.Validate();
+  impl_->options = options;
+  // Large blocks (samples, meshes, maps) come from mmap and go back to the system when freed.
+  UseFixedMmapThreshold(1u << 20);
   RegisterDefaultPlanners(&impl_->registry);
-  impl_->store = std::make_unique<ModelStore>(DefaultRobotProto(), DefaultSceneProto(), options.cache_capacity);
-  impl_->pool = std::make_unique<ThreadPool>(options.threads);
+  impl_->store =
+      std::make_unique<ModelStore>(DefaultRobotProto(), DefaultSceneProto(), options.cache_mb << 20, options.limits);
+  PoolOptions pool;
+  pool.threads = options.threads;
+  pool.max_queued = options.max_queued;
+  pool.max_queued_per_client = options.max_queued_per_client;
+  pool.long_share = options.long_share;
+  impl_->pool = std::make_unique<ThreadPool>(pool);
   impl_->access = std::make_unique<AccessControl>(options.security);
-  impl_->service = std::make_unique<PlanningService>(impl_->registry, impl_->store.get(), impl_->pool.get(),
-                                                     &impl_->workcells, options.log_requests, impl_->access.get());
+  ModelStore* store = impl_->store.get();
+  ThreadPool* workers = impl_->pool.get();
+  impl_->metrics = std::make_unique<ServerMetrics>(
+      options.metrics_listen, [workers] { return workers->stats(); }, [store] { return store->cache_stats(); });
+
+  ServiceContext services;
+  services.registry = &impl_->registry;
+  services.store = impl_->store.get();
+  services.pool = impl_->pool.get();
+  services.workcells = &impl_->workcells;
+  services.access = impl_->access.get();
+  services.metrics = impl_->metrics.get();
+  services.options = &impl_->options;
+  impl_->service = std::make_unique<PlanningService>(services);
 
   grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   builder.AddListeningPort(options.listen, impl_->access->MakeServerCredentials(), &impl_->port);
   const int max_bytes = options.max_message_mb * 1024 * 1024;
@@ -651,6 +896,10 @@ PlanningServer::~PlanningServer() {
 }
 
 int PlanningServer::port() const { return impl_->port; }
+
+int PlanningServer::metrics_port() const { return impl_->metrics->port(); }
+
+std::string PlanningServer::security_description() const { return impl_->access->Describe(); }
 
 void PlanningServer::Shutdown(std::chrono::milliseconds grace) {
   std::call_once(impl_->shutdown_once, [&] {

@@ -1,10 +1,35 @@
 #include "chasles/server/status.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <string>
 
 namespace chasles {
 
+std::string StatusMessage(std::string_view text) {
+  constexpr std::size_t kMaxBytes = 4096;
+  std::string out;
+  out.reserve(std::min(text.size(), kMaxBytes) + 32);
+  for (std::size_t k = 0; k < text.size() && k < kMaxBytes; ++k) {
+    const auto byte = static_cast<unsigned char>(text[k]);
+    if (byte < 0x20 || byte == 0x7f) {
+      char hex[8];
+      std::snprintf(hex, sizeof(hex), "\\x%02x", byte);
+      out += hex;
+    } else {
+      out += text[k];
+    }
+  }
+  if (text.size() > kMaxBytes) out += "…(+" + std::to_string(text.size() - kMaxBytes) + " bytes)";
+  return out;
+}
+
 grpc::Status StatusFromException(std::exception_ptr error) {
+  grpc::Status status = StatusFromExceptionRaw(error);
+  return grpc::Status(status.error_code(), StatusMessage(status.error_message()));
+}
+
+grpc::Status StatusFromExceptionRaw(std::exception_ptr error) {
   try {
     if (error) std::rethrow_exception(error);
     return grpc::Status(grpc::StatusCode::INTERNAL, "internal error: no exception to report");
@@ -13,6 +38,7 @@ grpc::Status StatusFromException(std::exception_ptr error) {
       case ErrorCode::kInvalidArgument: return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, e.what());
       case ErrorCode::kNotFound: return grpc::Status(grpc::StatusCode::NOT_FOUND, e.what());
       case ErrorCode::kFailedPrecondition: return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION, e.what());
+      case ErrorCode::kResourceExhausted: return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, e.what());
     }
     return grpc::Status(grpc::StatusCode::INTERNAL, e.what());
   } catch (const std::bad_alloc&) {

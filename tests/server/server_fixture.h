@@ -48,17 +48,26 @@ inline v1::Scene LoadScene(const std::string& name) {
 /// A server on 127.0.0.1:<free port> plus a stub talking to it over loopback.
 class LoopbackServer {
  public:
-  explicit LoopbackServer(int threads = 2) {
-    ServerOptions options;
+  explicit LoopbackServer(int threads = 2) : LoopbackServer(QuietOptions(threads)) {}
+  /// A server with these options (listen is set to 127.0.0.1:0).
+  explicit LoopbackServer(ServerOptions options) {
     options.listen = "127.0.0.1:0";
-    options.threads = threads;
-    options.log_requests = false;
     server_ = std::make_unique<PlanningServer>(options);
     address_ = "127.0.0.1:" + std::to_string(server_->port());
-    channel_ = grpc::CreateChannel(address_, grpc::InsecureChannelCredentials());
+    grpc::ChannelArguments arguments;
+    arguments.SetMaxReceiveMessageSize(options.max_message_mb << 20);  // as large as the server sends
+    channel_ = grpc::CreateCustomChannel(address_, grpc::InsecureChannelCredentials(), arguments);
     stub_ = v1::Planning::NewStub(channel_);
   }
+  static ServerOptions QuietOptions(int threads) {
+    ServerOptions options;
+    options.threads = threads;
+    options.log_requests = false;
+    return options;
+  }
   const std::string& address() const { return address_; }
+  std::shared_ptr<grpc::Channel> channel() const { return channel_; }
+  PlanningServer& server() { return *server_; }
   int port() const { return server_->port(); }
   v1::Planning::Stub& stub() { return *stub_; }
 

@@ -39,18 +39,30 @@ TEST(ContentHash, ProtoIdIsDeterministicAndDistinguishesTypes) {
   EXPECT_NE(ProtoContentId(v1::Scene()), ProtoContentId(v1::RobotModel()));
 }
 
-TEST(LruCache, EvictsTheLeastRecentlyUsed) {
-  LruCache<int> cache(2);
-  cache.Put("a", std::make_shared<const int>(1));
-  cache.Put("b", std::make_shared<const int>(2));
-  ASSERT_NE(cache.Get("a"), nullptr);  // a is now the most recent
-  cache.Put("c", std::make_shared<const int>(3));
+TEST(LruCache, EvictsTheLeastRecentlyUsedUntilTheBytesFit) {
+  LruCache cache(100);  // bytes
+  cache.Put<int>("a", std::make_shared<const int>(1), 40);
+  cache.Put<int>("b", std::make_shared<const int>(2), 40);
+  ASSERT_NE(cache.Get<int>("a"), nullptr);  // a is now the most recent
+  cache.Put<int>("c", std::make_shared<const int>(3), 30);  // 110 > 100: b goes
   EXPECT_EQ(cache.size(), 2u);
-  EXPECT_EQ(cache.Get("b"), nullptr);
-  ASSERT_NE(cache.Get("a"), nullptr);
-  EXPECT_EQ(*cache.Get("c"), 3);
+  EXPECT_EQ(cache.Get<int>("b"), nullptr);
+  ASSERT_NE(cache.Get<int>("a"), nullptr);
+  EXPECT_EQ(*cache.Get<int>("c"), 3);
+  EXPECT_EQ(cache.stats().bytes, 70u);
+  EXPECT_EQ(cache.stats().evictions, 1u);
   // Put keeps the first value stored under a key.
-  EXPECT_EQ(*cache.Put("c", std::make_shared<const int>(4)), 3);
+  EXPECT_EQ(*cache.Put<int>("c", std::make_shared<const int>(4), 30), 3);
+  // One large entry evicts as many as it takes.
+  cache.Put<int>("d", std::make_shared<const int>(5), 95);
+  EXPECT_EQ(cache.size(), 1u);
+  EXPECT_EQ(cache.stats().bytes, 95u);
+  // A value larger than the whole cache is handed back but not kept (nothing is evicted for it).
+  const auto huge = cache.Put<int>("e", std::make_shared<const int>(6), 101);
+  EXPECT_EQ(*huge, 6);
+  EXPECT_EQ(cache.Get<int>("e"), nullptr);
+  ASSERT_NE(cache.Get<int>("d"), nullptr);
+  EXPECT_LE(cache.stats().bytes, cache.stats().capacity_bytes);
 }
 
 TEST(ThreadPool, RunsEveryJobAndRefusesBeyondItsQueue) {

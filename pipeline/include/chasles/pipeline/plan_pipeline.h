@@ -47,6 +47,7 @@ struct PlanQuery {
   double collision_resolution = 0.005;  ///< [rad], in [1e-4, 0.1]
   TrajectorySpec trajectory;          ///< limits and post-processing (gravity: set from `gravity`)
   double sample_period = 0.01;        ///< [s], in [1e-4, 1]
+  SampleCap sample_cap;               ///< checked before sampling (server flags set it)
   int shortcut_attempts = 100;        ///< -1 = off; never applied to a car's path (its shape is kept)
 
   /// \throws Error(kInvalidArgument/kNotFound) naming the field (proto field names), e.g.

@@ -5,6 +5,7 @@
 /// waypoint), verified, with its quality figures. Plan runs it after shortcutting; the Optimize
 /// RPC runs it on a user's own path.
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -95,11 +96,27 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
                                          const TrajectorySpec& spec, double max_joint_step,
                                          const Termination& termination);
 
+/// How much a reply may carry, checked from the trajectory's duration before any sample is made.
+struct SampleCap {
+  std::uint64_t max_samples = 1000000;          ///< samples of one trajectory
+  std::uint64_t max_reply_bytes = 64ull << 20;  ///< estimated encoded bytes of those samples
+  std::string field = "trajectory.sample_period";  ///< the period's field, named in the error
+  std::string reply_cap_source = "the reply cap";   ///< where max_reply_bytes comes from, for the error
+  /// Encoded bytes of `samples` samples of a `dofs`-joint robot (t, q, q̇, q̈ and τ as packed
+  /// doubles), an upper estimate.
+  static std::uint64_t EstimateBytes(std::uint64_t samples, int dofs);
+  /// \throws Error(kResourceExhausted) naming `field`, the estimate, the cap and the period that
+  ///         would fit, when sampling `duration` seconds at `period` would exceed a cap.
+  void Check(double duration, double period, int dofs) const;
+};
+
 /// Samples at `period` (TimedTrajectory::Sample) with positions clamped to the joint limits
 /// (verification bounded any excess by 1e-12: rounding) and, when the robot has inertia on every
 /// moving link, the inverse-dynamics efforts under `gravity`.
+/// \throws Error(kResourceExhausted) before sampling when `cap` would be exceeded.
 std::vector<TrajectorySample> SampleTrajectory(const TimedTrajectory& trajectory, const RobotModel& robot,
-                                               double period, const Eigen::Vector3d& gravity);
+                                               double period, const Eigen::Vector3d& gravity,
+                                               const SampleCap& cap = {});
 
 /// The Optimize RPC in domain types: a user's own path → a verified trajectory.
 struct OptimizeQuery {
@@ -108,6 +125,7 @@ struct OptimizeQuery {
   TrajectorySpec trajectory;      ///< gravity included
   double sample_period = 0.01;    ///< [s], in [1e-4, 1]
   double collision_resolution = 0.005;  ///< [rad], in [1e-4, 0.1]
+  SampleCap sample_cap{1000000, 64ull << 20, "options.sample_period"};
 };
 
 struct OptimizeOutcome {

@@ -37,6 +37,7 @@ struct BenchmarkServices {
   const PlanningPipeline* pipeline = nullptr;
   ModelStore* store = nullptr;
   ThreadPool* pool = nullptr;
+  JobTicket ticket;  ///< the calling client and whether its runs are long (fair queueing)
   std::function<void(const std::string&)> log;  ///< one line per event; may be empty
 };
 

@@ -1,12 +1,15 @@
 #pragma once
 /// \file
-/// Parsed robots, scenes and collision checkers by content-hash id. Thread-safe; bounded (LRU).
+/// Parsed robots, scenes and collision checkers by content-hash id. Thread-safe; bounded in
+/// bytes (one LRU over all three kinds).
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 
 #include "chasles/collision/collision_checker.h"
+#include "chasles/robot/input_limits.h"
 #include "chasles/server/lru_cache.h"
 #include "chasles/v1/chasles.pb.h"
 
@@ -26,15 +29,20 @@ class ModelStore {
  public:
   /// Parses the default robot and scene (used when a request names none); they are never
   /// evicted. \throws Error when either does not parse.
+  /// `cache_bytes` bounds the estimated bytes of every cached robot, scene and checker together
+  /// (the defaults are outside it). An entry's estimate is the larger of its message size and
+  /// the operator-new bytes its parsing/construction left allocated.
+  /// `limits` caps every robot and scene parsed here (documents, links, DOF, meshes, maps).
   ModelStore(const v1::RobotModel& default_robot, const v1::Scene& default_scene,
-             std::size_t capacity = 64);
+             std::uint64_t cache_bytes = 256ull << 20, const InputLimits& limits = {});
 
   /// Parses (unless its id is already stored) and stores a robot. \throws Error naming `field`.
   StoredRobot AddRobot(const v1::RobotModel& robot, const std::string& field = "robot");
   StoredScene AddScene(const v1::Scene& scene, const std::string& field = "scene");
   /// Stores a scene made on the server (UpdateScene) under its content id `id`. When `id` is
   /// stored already, keeps and returns the stored scene (same id, same content).
-  StoredScene PutScene(const std::string& id, std::shared_ptr<const Scene> scene);
+  /// `bytes` is its estimated size (e.g. measured with a HeapScope around its making).
+  StoredScene PutScene(const std::string& id, std::shared_ptr<const Scene> scene, std::uint64_t bytes);
   /// \throws Error(kNotFound) telling the client to re-send the robot/scene inline.
   StoredRobot FindRobot(const std::string& id) const;
   StoredScene FindScene(const std::string& id) const;
@@ -44,12 +52,14 @@ class ModelStore {
   /// The checker for (robot, scene), built once per pair and cached.
   std::shared_ptr<const CollisionChecker> Checker(const StoredRobot& robot, const StoredScene& scene);
 
+  CacheStats cache_stats() const { return cache_.stats(); }
+  const InputLimits& limits() const { return limits_; }
+
  private:
   StoredRobot default_robot_;
   StoredScene default_scene_;
-  mutable LruCache<RobotModel> robots_;
-  mutable LruCache<Scene> scenes_;
-  LruCache<CollisionChecker> checkers_;
+  InputLimits limits_;
+  mutable LruCache cache_;
 };
 
 /// The request's robot: inline (parsed and cached; errors name `field`), by id, or the store's
