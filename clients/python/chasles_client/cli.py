@@ -27,6 +27,14 @@ def _parser() -> argparse.ArgumentParser:
         epilog="exit status: 0 ok, 1 failed (RPC error or no trajectory), 2 bad arguments or files")
     parser.add_argument("--server", default=os.environ.get("CHASLES_SERVER", "127.0.0.1:50051"),
                         help="server address (default $CHASLES_SERVER or 127.0.0.1:50051)")
+    parser.add_argument("--tls-ca", metavar="FILE", help="use TLS; trust server certificates signed by this CA (PEM)")
+    parser.add_argument("--tls-cert", metavar="FILE", help="client certificate (PEM) for mutual TLS; with --tls-key")
+    parser.add_argument("--tls-key", metavar="FILE", help="the client certificate's private key (PEM)")
+    parser.add_argument("--tls-server-name", metavar="NAME",
+                        help="verify the server certificate for NAME (default: the --server host)")
+    parser.add_argument("--token", help="bearer token (else --token-file, else $CHASLES_TOKEN); without TLS "
+                                        "it is sent to loopback servers only")
+    parser.add_argument("--token-file", metavar="FILE", help="read the bearer token from the first line of FILE")
     parser.add_argument("--timeout", type=float, default=None,
                         help="gRPC deadline [s] (default 10; plan/optimize: the request's budget + 30; "
                              "bench: none)")
@@ -84,7 +92,25 @@ def main(argv: Optional[List[str]] = None) -> int:
 def _client(args: argparse.Namespace, default_timeout: Optional[float] = 10.0) -> Any:
     from .client import Client
 
-    return Client(args.server, timeout=args.timeout if args.timeout is not None else default_timeout)
+    return Client(args.server, timeout=args.timeout if args.timeout is not None else default_timeout,
+                  tls_ca=args.tls_ca, tls_cert=args.tls_cert, tls_key=args.tls_key,
+                  tls_server_name=args.tls_server_name, token=_token(args))
+
+
+def _token(args: argparse.Namespace) -> Optional[str]:
+    """--token, else the first line of --token-file, else $CHASLES_TOKEN, else None."""
+    if args.token:
+        return args.token
+    if args.token_file:
+        try:
+            lines = Path(args.token_file).read_text().splitlines()
+        except OSError as error:
+            raise ValueError(f"--token-file {args.token_file!r} cannot be read: {error.strerror}") from None
+        token = lines[0].strip() if lines else ""
+        if not token:
+            raise ValueError(f"--token-file {args.token_file!r} holds no token on its first line")
+        return token
+    return os.environ.get("CHASLES_TOKEN", "").strip() or None
 
 
 def _read_json(path: str) -> Any:

@@ -22,6 +22,52 @@ from .errors import ChaslesError
 from .results import OptimizeResult, PlannerInfo, PlanResult, RobotInfo, limits_used
 from .trajectory import Trajectory
 
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _read_pem(path: PathLike, what: str) -> bytes:
+    try:
+        return Path(path).read_bytes()
+    except OSError as error:
+        raise ValueError(f"{what} {str(path)!r} cannot be read: {error.strerror}") from None
+
+
+def channel_credentials(*, tls_ca: Optional[PathLike] = None, tls_cert: Optional[PathLike] = None,
+                        tls_key: Optional[PathLike] = None, tls_server_name: Optional[str] = None,
+                        token: Optional[str] = None,
+                        options: Optional[List[Any]] = None) -> Optional[grpc.ChannelCredentials]:
+    """The credentials of a channel to chasles-server, or ``None`` for plaintext without a token.
+
+    TLS when ``tls_ca`` is given (mutual with ``tls_cert`` and ``tls_key``); a ``token`` rides on
+    every call as ``authorization: Bearer TOKEN`` (over TLS, or over gRPC local credentials, which
+    reach loopback servers only). ``tls_server_name`` is appended to ``options`` as the TLS target
+    name override. Raises ValueError naming the argument when they do not fit together or a file
+    cannot be read.
+    """
+    if (tls_cert is None) != (tls_key is None):
+        raise ValueError("tls_cert and tls_key go together (a client certificate and its private key)")
+    if tls_cert is not None and tls_ca is None:
+        raise ValueError("tls_cert needs tls_ca: a client certificate is only sent over TLS")
+    if tls_server_name and tls_ca is None:
+        raise ValueError("tls_server_name needs tls_ca (TLS)")
+    if tls_ca is not None:
+        credentials = grpc.ssl_channel_credentials(
+            root_certificates=_read_pem(tls_ca, "tls_ca"),
+            private_key=_read_pem(tls_key, "tls_key") if tls_key is not None else None,
+            certificate_chain=_read_pem(tls_cert, "tls_cert") if tls_cert is not None else None)
+        if tls_server_name:
+            if options is None:
+                raise ValueError("tls_server_name needs channel options to set")
+            options.append(("grpc.ssl_target_name_override", tls_server_name))
+    elif token:
+        credentials = grpc.local_channel_credentials(grpc.LocalConnectionType.LOCAL_TCP)
+    else:
+        return None
+    if token:
+        credentials = grpc.composite_channel_credentials(credentials, grpc.access_token_call_credentials(token))
+    return credentials
+
+
 #: Default deadline of unary calls [s] (planning budgets are at most 600 s; pass more if needed).
 DEFAULT_TIMEOUT = 60.0
 
@@ -34,7 +80,15 @@ class Client:
         timeout: default deadline of each unary call [s]; ``None`` = no deadline. Every method
             also takes its own ``timeout``. A plan's ``time_budget`` must fit in it.
         max_message_mb: largest message sent or received [MiB] (the server's default is 64).
-        channel: an existing channel to use instead of opening one (``address`` is then ignored).
+        channel: an existing channel to use instead of opening one (``address`` and the TLS and
+            token arguments are then ignored).
+        tls_ca: PEM file of the CA the server certificate must chain to; enables TLS.
+        tls_cert, tls_key: PEM files of a client certificate and its key, for mutual TLS
+            (both or neither; need ``tls_ca``).
+        tls_server_name: the name to verify in the server certificate instead of the address's host.
+        token: a bearer token of the server's ``--tokens`` file; every call then carries
+            ``authorization: Bearer TOKEN``. Without TLS it is sent over gRPC local credentials,
+            which reach loopback servers only.
 
     Every call raises ``ChaslesError`` (status code and the server's message) when the RPC fails;
     an expected planning failure (no path within the budget) is a result, not an exception.
@@ -42,13 +96,21 @@ class Client:
     """
 
     def __init__(self, address: str = "127.0.0.1:50051", timeout: Optional[float] = DEFAULT_TIMEOUT, *,
-                 max_message_mb: int = 64, channel: Optional[grpc.Channel] = None) -> None:
+                 max_message_mb: int = 64, channel: Optional[grpc.Channel] = None,
+                 tls_ca: Optional[PathLike] = None, tls_cert: Optional[PathLike] = None,
+                 tls_key: Optional[PathLike] = None, tls_server_name: Optional[str] = None,
+                 token: Optional[str] = None) -> None:
         self.address = address
         self.timeout = timeout
         if channel is None:
             size = int(max_message_mb) * 1024 * 1024
-            channel = grpc.insecure_channel(address, options=[("grpc.max_send_message_length", size),
-                                                              ("grpc.max_receive_message_length", size)])
+            options = [("grpc.max_send_message_length", size), ("grpc.max_receive_message_length", size)]
+            credentials = channel_credentials(tls_ca=tls_ca, tls_cert=tls_cert, tls_key=tls_key,
+                                              tls_server_name=tls_server_name, token=token, options=options)
+            if credentials is None:
+                channel = grpc.insecure_channel(address, options=options)
+            else:
+                channel = grpc.secure_channel(address, credentials, options=options)
             self._owns_channel = True
         else:
             self._owns_channel = False
