@@ -1,7 +1,11 @@
 #include "chasles/collision/mesh.h"
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
@@ -12,13 +16,74 @@
 namespace chasles {
 namespace {
 
-// Appends every triangle of every mesh in `scene` (node transforms applied) to `out`.
-void CollectNode(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent,
-                 const Eigen::Vector3d& scale, TriangleMesh* out) {
-  const aiMatrix4x4 transform = parent * node.mTransformation;
-  for (unsigned m = 0; m < node.mNumMeshes; ++m) {
-    const aiMesh* mesh = scene.mMeshes[node.mMeshes[m]];
-    if (mesh == nullptr) continue;
+// The name assimp gives a file read from memory (AI_MEMORYIO_MAGIC_FILENAME); its messages
+// quote it, and ours name the caller's field instead.
+constexpr char kAssimpMemoryName[] = "$$$___magic___$$$";
+
+std::string ReplaceAll(std::string text, const std::string& from, const std::string& to) {
+  for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size())) {
+    text.replace(at, from.size(), to);
+  }
+  return text;
+}
+
+std::string Exhausted(const std::string& field, const char* what, std::uint64_t count, std::size_t cap,
+                      const char* limit) {
+  return field + " holds " + std::to_string(count) + " " + what + ", more than the cap of " + std::to_string(cap) +
+         " per mesh (InputLimits::" + limit + "); simplify the mesh or raise the server's cap";
+}
+
+// The meshes every node references, with their node transforms, walked iteratively (the node
+// graph comes from the file).
+std::vector<std::pair<const aiMesh*, aiMatrix4x4>> PlacedMeshes(const aiScene& scene) {
+  std::vector<std::pair<const aiMesh*, aiMatrix4x4>> placed;
+  std::vector<std::pair<const aiNode*, aiMatrix4x4>> stack{{scene.mRootNode, scene.mRootNode->mTransformation}};
+  while (!stack.empty()) {
+    const auto [node, transform] = stack.back();
+    stack.pop_back();
+    for (unsigned m = 0; m < node->mNumMeshes; ++m) {
+      if (node->mMeshes[m] >= scene.mNumMeshes) continue;
+      const aiMesh* mesh = scene.mMeshes[node->mMeshes[m]];
+      if (mesh != nullptr) placed.emplace_back(mesh, transform);
+    }
+    // Children pushed in reverse so they are visited in order.
+    for (unsigned c = node->mNumChildren; c-- > 0;) {
+      if (node->mChildren[c] != nullptr) stack.emplace_back(node->mChildren[c], transform * node->mChildren[c]->mTransformation);
+    }
+  }
+  return placed;
+}
+
+std::shared_ptr<const TriangleMesh> TryRead(const std::string& bytes, const char* hint, const Eigen::Vector3d& scale,
+                                            const std::string& field, const InputLimits& limits, std::string* why) {
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFileFromMemory(
+      bytes.data(), bytes.size(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices, hint);
+  if (scene == nullptr || scene->mRootNode == nullptr) {
+    if (why->empty()) {
+      *why = ReplaceAll(ReplaceAll(importer.GetErrorString(), std::string(kAssimpMemoryName) + "." + hint, field),
+                        kAssimpMemoryName, field);
+    }
+    return nullptr;
+  }
+  // Sizes as assimp reports them, before anything is copied.
+  const auto placed = PlacedMeshes(*scene);
+  std::uint64_t faces = 0, vertices = 0;
+  for (const auto& [mesh, transform] : placed) {
+    faces += mesh->mNumFaces;
+    vertices += mesh->mNumVertices;
+  }
+  if (faces > limits.max_mesh_triangles) {
+    ThrowResourceExhausted(Exhausted(field, "triangles", faces, limits.max_mesh_triangles, "max_mesh_triangles"));
+  }
+  if (vertices > limits.max_mesh_vertices) {
+    ThrowResourceExhausted(Exhausted(field, "vertices", vertices, limits.max_mesh_vertices, "max_mesh_vertices"));
+  }
+
+  auto out = std::make_shared<TriangleMesh>();
+  out->vertices.reserve(vertices);
+  out->triangles.reserve(faces);
+  for (const auto& [mesh, transform] : placed) {
     const int base = static_cast<int>(out->vertices.size());
     for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
       const aiVector3D p = transform * mesh->mVertices[v];
@@ -27,57 +92,62 @@ void CollectNode(const aiScene& scene, const aiNode& node, const aiMatrix4x4& pa
     for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
       const aiFace& face = mesh->mFaces[f];
       if (face.mNumIndices != 3) continue;  // points and lines left by triangulation
-      out->triangles.emplace_back(base + static_cast<int>(face.mIndices[0]),
-                                  base + static_cast<int>(face.mIndices[1]),
+      for (int k = 0; k < 3; ++k) {
+        if (face.mIndices[k] >= mesh->mNumVertices) {
+          *why = "a face refers to vertex " + std::to_string(face.mIndices[k]) + " of a mesh with " +
+                 std::to_string(mesh->mNumVertices) + " vertices";
+          return nullptr;
+        }
+      }
+      out->triangles.emplace_back(base + static_cast<int>(face.mIndices[0]), base + static_cast<int>(face.mIndices[1]),
                                   base + static_cast<int>(face.mIndices[2]));
     }
   }
-  for (unsigned c = 0; c < node.mNumChildren; ++c) {
-    if (node.mChildren[c] != nullptr) CollectNode(scene, *node.mChildren[c], transform, scale, out);
-  }
-}
-
-std::shared_ptr<const TriangleMesh> TryRead(const std::string& bytes, const char* hint,
-                                            const Eigen::Vector3d& scale, std::string* why) {
-  Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFileFromMemory(
-      bytes.data(), bytes.size(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices, hint);
-  if (scene == nullptr || scene->mRootNode == nullptr) {
-    if (why->empty()) *why = importer.GetErrorString();
-    return nullptr;
-  }
-  auto mesh = std::make_shared<TriangleMesh>();
-  CollectNode(*scene, *scene->mRootNode, aiMatrix4x4(), scale, mesh.get());
-  if (mesh->triangles.empty()) {
+  if (out->triangles.empty()) {
     *why = "it holds no triangles";
     return nullptr;
   }
-  for (const Eigen::Vector3d& v : mesh->vertices) {
+  for (const Eigen::Vector3d& v : out->vertices) {
     if (!v.allFinite()) {
       *why = "it holds a vertex that is not finite";
       return nullptr;
     }
   }
-  return mesh;
+  return out;
 }
 
 }  // namespace
 
 std::shared_ptr<const TriangleMesh> ParseMesh(const std::string& bytes, const Eigen::Vector3d& scale,
-                                              const std::string& field) {
+                                              const std::string& field, const InputLimits& limits) {
   for (int i = 0; i < 3; ++i) {
     if (!std::isfinite(scale[i]) || scale[i] <= 0.0) {
       std::ostringstream os;
-      os << field << " scale[" << i << "] = " << scale[i] << " must be finite and > 0";
+      os << field << " scale[" << i << "] = " << FormatNumber(scale[i]) << " must be finite and > 0";
       ThrowInvalid(os.str());
     }
   }
   if (bytes.empty()) ThrowInvalid(field + " is empty (expected STL or OBJ file bytes)");
+  if (bytes.size() > limits.max_document_bytes) {
+    ThrowResourceExhausted(field + " holds " + std::to_string(bytes.size()) + " bytes, more than the cap of " +
+                           std::to_string(limits.max_document_bytes) +
+                           " bytes per document (InputLimits::max_document_bytes); send a smaller mesh or raise the server's cap");
+  }
+  // A binary STL says its triangle count in its header (bytes 80..83) and is exactly
+  // 84 + 50 · count bytes long: refuse a big one before assimp reads it.
+  if (bytes.size() >= 84) {
+    std::uint32_t count = 0;
+    std::memcpy(&count, bytes.data() + 80, sizeof(count));
+    if (84 + 50 * static_cast<std::uint64_t>(count) == bytes.size() && count > limits.max_mesh_triangles) {
+      ThrowResourceExhausted(Exhausted(field, "triangles", count, limits.max_mesh_triangles, "max_mesh_triangles"));
+    }
+  }
   std::string why;
   // Binary STL has no magic number, so try the formats we accept explicitly, STL first.
   for (const char* hint : {"stl", "obj"}) {
-    if (auto mesh = TryRead(bytes, hint, scale, &why)) return mesh;
-    if (why == "it holds no triangles" || why == "it holds a vertex that is not finite") break;
+    if (auto mesh = TryRead(bytes, hint, scale, field, limits, &why)) return mesh;
+    if (!why.empty() && why.rfind("it holds", 0) == 0) break;
+    if (why.rfind("a face refers", 0) == 0) break;
   }
   ThrowInvalid(field + " is not a readable STL or OBJ mesh" + (why.empty() ? "" : ": " + why));
 }

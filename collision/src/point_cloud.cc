@@ -76,8 +76,16 @@ std::string RangeRule(const OccupancyMap& map, const octomap::OcTree& tree) {
 
 }  // namespace
 
-Scene Scene::InsertPointCloud(const PointCloudInsertion& insertion, PointCloudInsertionStats* stats) const {
+Scene Scene::InsertPointCloud(const PointCloudInsertion& insertion, PointCloudInsertionStats* stats,
+                              const InputLimits& limits) const {
   const auto start = std::chrono::steady_clock::now();
+  const std::size_t values = insertion.points.size();
+  if (values / 3 > limits.max_cloud_points) {
+    ThrowResourceExhausted("points holds " + std::to_string(values / 3) + " points (" + std::to_string(values) +
+                           " values), more than the cap of " + std::to_string(limits.max_cloud_points) +
+                           " points per insertion (InputLimits::max_cloud_points); send the cloud in parts or "
+                           "downsample it, or raise the server's cap");
+  }
   Validate(insertion);
 
   // 1. Which map: the named one, the only one, or a new one.

@@ -58,7 +58,18 @@ bool ParseHeader(const std::string& bytes, std::size_t pos, Header* h, std::stri
     std::istringstream ls(line);
     std::string token;
     ls >> token;
+    // octomap reads the header token by token, across lines; a line with more than its key and
+    // value would be read differently there, so it is refused here.
+    const auto no_more = [&ls, &line, why]() {
+      std::string extra;
+      if (ls >> extra) {
+        *why = "its header line '" + line.substr(0, 40) + "' holds more than a key and its value";
+        return false;
+      }
+      return true;
+    };
     if (token == "data") {
+      if (!no_more()) return false;
       h->data_offset = pos;
       if (h->id.empty()) { *why = "its header has no 'id' line"; return false; }
       if (h->size < 0) { *why = "its header has no valid 'size' line"; return false; }
@@ -69,10 +80,13 @@ bool ParseHeader(const std::string& bytes, std::size_t pos, Header* h, std::stri
       return true;
     } else if (token == "id") {
       ls >> h->id;
+      if (!no_more()) return false;
     } else if (token == "size") {
       if (!(ls >> h->size) || h->size < 0) h->size = -1;
+      if (!no_more()) return false;
     } else if (token == "res") {
       if (!(ls >> h->res)) h->res = 0.0;
+      if (!no_more()) return false;
     } else {
       *why = "its header holds an unknown line '" + line.substr(0, 40) + "'";
       return false;
@@ -158,10 +172,15 @@ void Scene::AddObject(SceneObject object, const std::string& field) {
 }
 
 void Scene::AddOctoMap(const std::string& name, const std::string& bytes, const Eigen::Isometry3d& pose,
-                       const std::string& field) {
+                       const std::string& field, const InputLimits& limits) {
   CheckPose(pose, field);
   const auto fail = [&](const std::string& why) { ThrowInvalid(field + " " + why); };
   if (bytes.empty()) fail("is empty (expected the bytes of a .bt or .ot OctoMap file)");
+  if (bytes.size() > limits.max_document_bytes) {
+    ThrowResourceExhausted(field + " holds " + std::to_string(bytes.size()) + " bytes, more than the cap of " +
+                           std::to_string(limits.max_document_bytes) +
+                           " bytes per document (InputLimits::max_document_bytes); send a smaller map or raise the server's cap");
+  }
   const std::size_t eol = bytes.find('\n');
   std::string first = bytes.substr(0, eol == std::string::npos ? std::min<std::size_t>(bytes.size(), 64) : eol);
   if (!first.empty() && first.back() == '\r') first.pop_back();
@@ -191,6 +210,12 @@ void Scene::AddOctoMap(const std::string& name, const std::string& bytes, const 
          " node data ends early, goes deeper than 16 levels or holds a non-finite value");
   }
   if (leaves == 0) fail("holds an empty OctoMap (no leaves)");
+  // Every node costs memory once octomap reads it: the count, not the byte size, is the bound.
+  if (nodes > limits.max_octomap_nodes) {
+    ThrowResourceExhausted(field + " holds " + std::to_string(nodes) + " OcTree nodes, more than the cap of " +
+                           std::to_string(limits.max_octomap_nodes) +
+                           " (InputLimits::max_octomap_nodes); send a coarser or smaller map or raise the server's cap");
+  }
   if (nodes != static_cast<std::uint64_t>(h.size)) {
     fail("is corrupt: its header says " + std::to_string(h.size) + " nodes but its data holds " +
          std::to_string(nodes));

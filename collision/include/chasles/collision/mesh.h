@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include "chasles/robot/geometry.h"
+#include "chasles/robot/input_limits.h"
 
 namespace chasles {
 
@@ -16,7 +17,11 @@ namespace chasles {
 /// `field` names the input in error messages, e.g. `scene.meshes[1].data`.
 /// \throws Error(kInvalidArgument) when assimp cannot read the bytes, the mesh holds no
 ///         triangles, or a scale component is not finite and > 0.
+/// \throws Error(kResourceExhausted) when the bytes are more than `limits.max_document_bytes`,
+///         or the mesh holds more than `limits.max_mesh_triangles` triangles or
+///         `limits.max_mesh_vertices` vertices (checked from a binary STL's header before
+///         assimp reads it, and from assimp's counts before anything is copied).
 std::shared_ptr<const TriangleMesh> ParseMesh(const std::string& bytes, const Eigen::Vector3d& scale,
-                                              const std::string& field);
+                                              const std::string& field, const InputLimits& limits = {});
 
 }  // namespace chasles

@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include "chasles/robot/geometry.h"
+#include "chasles/robot/input_limits.h"
 
 namespace octomap {
 class OcTree;
@@ -70,10 +71,14 @@ class Scene {
   /// Adds a primitive or mesh. \throws Error(kInvalidArgument) naming `field` when a dimension
   /// is not finite and > 0 or the pose is not finite.
   void AddObject(SceneObject object, const std::string& field = "scene.object");
-  /// Parses `.bt` (binary) or `.ot` (full) OctoMap bytes, detected by their header.
-  /// \throws Error(kInvalidArgument) naming `field` when the bytes are not an OctoMap OcTree.
+  /// Parses `.bt` (binary) or `.ot` (full) OctoMap bytes, detected by their header. The node
+  /// stream is walked and counted before octomap reads it.
+  /// \throws Error(kInvalidArgument) naming `field` when the bytes are not an OctoMap OcTree
+  ///         (bad header, truncated or corrupt node data, a node count that differs from the header).
+  /// \throws Error(kResourceExhausted) when the bytes are more than `limits.max_document_bytes`
+  ///         or the tree holds more than `limits.max_octomap_nodes` nodes.
   void AddOctoMap(const std::string& name, const std::string& bytes, const Eigen::Isometry3d& pose,
-                  const std::string& field = "scene.octomaps");
+                  const std::string& field = "scene.octomaps", const InputLimits& limits = {});
   void AddOccupancyMap(OccupancyMap map);
 
   /// Lets robot link `link` touch `other` (a robot link, or an object or occupancy map of this
@@ -92,8 +97,10 @@ class Scene {
   /// \throws Error(kInvalidArgument) naming the field, index, value and rule when a value is
   ///         malformed or a point lies outside the map's key range, or when `octomap` is empty
   ///         and the scene has several maps; Error(kNotFound) listing the scene's maps when
-  ///         `octomap` names none of them.
-  Scene InsertPointCloud(const PointCloudInsertion& insertion, PointCloudInsertionStats* stats = nullptr) const;
+  ///         `octomap` names none of them; Error(kResourceExhausted) when the cloud holds more
+  ///         than `limits.max_cloud_points` points (checked first).
+  Scene InsertPointCloud(const PointCloudInsertion& insertion, PointCloudInsertionStats* stats = nullptr,
+                         const InputLimits& limits = {}) const;
 
   const std::vector<SceneObject>& objects() const { return objects_; }
   const std::vector<OccupancyMap>& occupancy_maps() const { return maps_; }
