@@ -401,7 +401,7 @@ std::string AccessControl::Describe() const {
   std::string text = options_.tls() ? (options_.mutual_tls() ? "TLS with client certificates (mutual TLS)" : "TLS")
                                     : "plaintext";
   if (tokens_) {
-    text += ", " + std::to_string(tokens_->size()) + " bearer tokens (" + std::to_string(tokens_->count(Permission::kPlan)) +
+    text += ", " + std::to_string(tokens_->size()) + (tokens_->size() == 1 ? " bearer token (" : " bearer tokens (") + std::to_string(tokens_->count(Permission::kPlan)) +
             " plan, " + std::to_string(tokens_->count(Permission::kCommit)) + " commit)";
     if (!options_.tls()) text += " accepted from loopback peers only";
   } else {
