@@ -344,7 +344,8 @@ MobileDescription MobileFromProto(const v1::MobileRobot& mobile, const std::stri
   return out;
 }
 
-std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, const std::string& field) {
+std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, const std::string& field,
+                                                 const InputLimits& limits) {
   if (robot.description_case() == v1::RobotModel::kMobile) {
     MobileDescription mobile = MobileFromProto(robot.mobile(), field + ".mobile");
     if (mobile.name.empty()) mobile.name = robot.name();
@@ -358,7 +359,7 @@ std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, co
     DhDescription dh = DhFromProto(robot.dh(), field + ".dh");
     if (dh.name.empty()) dh.name = robot.name();
     try {
-      return RobotFromDh(dh);
+      return RobotFromDh(dh, limits);
     } catch (const Error& e) {
       RethrowWithField(e, field + ".dh", "dh");
     }
@@ -367,7 +368,7 @@ std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, co
     PoeDescription poe = PoeFromProto(robot.poe(), field + ".poe");
     if (poe.name.empty()) poe.name = robot.name();
     try {
-      return RobotFromPoe(poe);
+      return RobotFromPoe(poe, limits);
     } catch (const Error& e) {
       RethrowWithField(e, field + ".poe", "poe");
     }
@@ -383,10 +384,10 @@ std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, co
   std::map<std::string, const std::string*> files;
   for (const auto& [name, bytes] : urdf.mesh_files()) files[name] = &bytes;
   for (const auto& [name, bytes] : files) {
-    meshes[name] = ParseMesh(*bytes, Eigen::Vector3d::Ones(), field + ".urdf.mesh_files['" + name + "']");
+    meshes[name] = ParseMesh(*bytes, Eigen::Vector3d::Ones(), field + ".urdf.mesh_files['" + name + "']", limits);
   }
   try {
-    return RobotModel::FromUrdf(urdf.urdf(), urdf.srdf(), meshes);
+    return RobotModel::FromUrdf(urdf.urdf(), urdf.srdf(), meshes, limits);
   } catch (const Error& e) {
     const std::string what = e.what();
     // Prefix the proto field unless the robot module already named it.
@@ -458,7 +459,7 @@ void IkResultToProto(const IkResult& result, const IkRequest& ik, const RobotMod
   response->set_seconds(result.seconds);
 }
 
-std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::string& field) {
+std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::string& field, const InputLimits& limits) {
   auto scene = std::make_shared<Scene>();
   ForEachPrimitive(proto, field,
                    [&scene](Shape shape, const std::string& f, const std::string& name, const char* kind, int i) {
@@ -478,7 +479,7 @@ std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::s
     if (mesh.data().empty()) ThrowInvalid(f + ".data is empty: it must hold STL or OBJ bytes");
     Shape shape;
     shape.type = ShapeType::kMesh;
-    shape.mesh = ParseMesh(mesh.data(), scale, f + ".data");
+    shape.mesh = ParseMesh(mesh.data(), scale, f + ".data", limits);
     shape.pose = PoseFromProto(mesh.pose(), f + ".pose");
     scene->AddObject({ObjectName(mesh.name(), "mesh", i), std::move(shape)}, f);
   }
@@ -487,7 +488,7 @@ std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::s
     const std::string f = Indexed(field + ".octomaps", i);
     if (map.data().empty()) ThrowInvalid(f + ".data is empty: it must hold .bt or .ot OcTree bytes");
     scene->AddOctoMap(ObjectName(map.name(), "octomap", i), map.data(), PoseFromProto(map.pose(), f + ".pose"),
-                      f + ".data");
+                      f + ".data", limits);
   }
   // Only empty names are rejected here: link1 and a link2 that names no object may be robot
   // links, which the CollisionChecker resolves against the robot the scene is used with.

@@ -12,6 +12,7 @@
 #include "chasles/collision/scene.h"
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/robot/descriptions.h"
+#include "chasles/robot/input_limits.h"
 #include "chasles/robot/inverse_kinematics.h"
 #include "chasles/robot/robot_model.h"
 #include "chasles/v1/chasles.pb.h"
@@ -28,8 +29,10 @@ Eigen::Isometry3d PoseFromProto(const v1::Pose& pose, const std::string& field);
 /// Parses a robot: URDF (every mesh file through ParseMesh, then RobotModel::FromUrdf), a DH
 /// table (RobotFromDh) or a PoE screw list (RobotFromPoe). Errors name the proto field, e.g.
 /// `robot.dh.joints[2].alpha = nan must be finite`, `robot.poe.joints[1].screw: ...`.
+/// `limits` caps the URDF/SRDF text, each mesh file and the robot's size (Error(kResourceExhausted)).
 std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot,
-                                                 const std::string& field = "robot");
+                                                 const std::string& field = "robot",
+                                                 const InputLimits& limits = {});
 
 /// DhRobot → DhDescription (numbers checked finite, shapes checked positive); `field` is the
 /// path of the DhRobot, e.g. "robot.dh". Limits and the table itself are checked by RobotFromDh.
@@ -51,7 +54,9 @@ void IkResultToProto(const IkResult& result, const IkRequest& ik, const RobotMod
                      v1::InverseKinematicsResponse* response);
 
 /// Builds a scene from primitives, meshes and OctoMaps. Unnamed objects are called e.g. `box[2]`.
-std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& scene, const std::string& field = "scene");
+/// `limits` caps each mesh and OctoMap (Error(kResourceExhausted)).
+std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& scene, const std::string& field = "scene",
+                                            const InputLimits& limits = {});
 
 /// A PoseGoal with the proto's defaults and ranges; `field` names it, e.g. "robots[1].pose_goal".
 PoseGoalSpec PoseGoalFromProto(const v1::PoseGoal& goal, const RobotModel& robot, const std::string& field);
