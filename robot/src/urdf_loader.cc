@@ -1,6 +1,7 @@
 // RobotModel::FromUrdf: URDF via urdfdom, SRDF via tinyxml.
 
 #include <cmath>
+#include <cstdlib>
 #include <mutex>
 #include <string>
 #include <unordered_map>
@@ -109,6 +110,36 @@ Shape ConvertGeometry(const urdf::Collision& collision, const std::string& where
   ThrowInvalid(where + " has an unknown geometry type");
 }
 
+/// urdfdom reads numbers with a stream that fails on "nan" and "inf" (and on overflow such as
+/// "1e400"), logs an error and keeps 0, so `<mass value="nan"/>` would load as a massless link.
+/// The mass and inertia attributes are read here first, as strtod reads them, and refused with
+/// the link, the attribute and the value when they are not finite.
+void CheckInertialNumbers(const TiXmlElement& robot) {
+  for (const TiXmlElement* link = robot.FirstChildElement("link"); link != nullptr;
+       link = link->NextSiblingElement("link")) {
+    const TiXmlElement* inertial = link->FirstChildElement("inertial");
+    if (inertial == nullptr) continue;
+    const char* name = link->Attribute("name");
+    const std::string where = std::string("urdf: link '") + (name ? name : "") + "' inertial";
+    const auto check = [&where](const TiXmlElement* element, const char* attribute, const std::string& what,
+                                const char* rule) {
+      const char* text = element == nullptr ? nullptr : element->Attribute(attribute);
+      if (text == nullptr) return;
+      char* end = nullptr;
+      const double value = std::strtod(text, &end);
+      if (end == text) return;  // not a number at all: urdfdom names it
+      while (*end == ' ' || *end == '\t' || *end == '\n' || *end == '\r') ++end;
+      if (*end != '\0') return;
+      if (!std::isfinite(value)) ThrowInvalid(where + " " + what + " = " + FormatNumber(value) + rule);
+    };
+    check(inertial->FirstChildElement("mass"), "value", "mass", " must be >= 0 and finite");
+    const TiXmlElement* inertia = inertial->FirstChildElement("inertia");
+    for (const char* component : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) {
+      check(inertia, component, std::string("inertia ") + component, " must be finite");
+    }
+  }
+}
+
 }  // namespace
 
 std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
@@ -140,6 +171,8 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
   TiXmlDocument urdf_doc;
   ParseXmlOrThrow(urdf_string, "urdf", &urdf_doc);
 
+  if (urdf_doc.RootElement() != nullptr) CheckInertialNumbers(*urdf_doc.RootElement());
+
   // 2. urdfdom builds the model; its own complaints go through console_bridge (a process-global
   //    handler, hence the lock).
   urdf::ModelInterfaceSharedPtr model;
@@ -155,7 +188,9 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
       model.reset();
     }
     console_bridge::restorePreviousOutputHandler();
-    if (!model) {
+    // urdfdom may log an error and still return a model with a default in place of what it
+    // could not read: an error either way.
+    if (!model || !collector.errors.empty()) {
       ThrowInvalid("urdf: " + (collector.errors.empty() ? std::string("urdfdom could not parse the model")
                                                         : collector.errors.front()));
     }

@@ -147,6 +147,13 @@ TEST(InputLimitsTest, MassAndInertiaMustBePhysical) {
   };
   const std::string unit = "ixx=\"1\" iyy=\"1\" izz=\"1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"";
   EXPECT_NO_THROW(RobotModel::FromUrdf(link("1", unit)));
+  // urdfdom logged these and loaded the link with mass 0 / inertia 0.
+  ExpectInvalid([&] { RobotModel::FromUrdf(link("nan", unit)); },
+                "urdf: link 'panda_link3' inertial mass = nan must be >= 0 and finite");
+  ExpectInvalid([&] { RobotModel::FromUrdf(link("1e400", unit)); },
+                "urdf: link 'panda_link3' inertial mass = inf must be >= 0 and finite");
+  ExpectInvalid([&] { RobotModel::FromUrdf(link("1", "ixx=\"1\" iyy=\"-inf\" izz=\"1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"")); },
+                "urdf: link 'panda_link3' inertial inertia iyy = -inf must be finite");
   ExpectInvalid([&] { RobotModel::FromUrdf(link("-1", unit)); },
                 "urdf: link 'panda_link3' inertial mass = -1 must be >= 0 and finite");
   ExpectInvalid([&] { RobotModel::FromUrdf(link("1", "ixx=\"1\" iyy=\"-2\" izz=\"1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"")); },
