@@ -235,19 +235,20 @@ class TokenTable {
     return grpc::Status::OK;
   }
 
-  /// The full check of one call of `rpc` (method name or gRPC path).
-  grpc::Status Check(std::string_view rpc, const std::string_view* authorization) const {
+  /// The full check of one call of `rpc` (method name or gRPC path); `*entry` is the caller's
+  /// entry when the token was known.
+  grpc::Status Check(std::string_view rpc, const std::string_view* authorization, const Entry** entry) const {
+    *entry = nullptr;
     const Permission needed = RequiredPermission(rpc);
     if (needed == Permission::kOpen) return grpc::Status::OK;
-    const Entry* entry = nullptr;
-    grpc::Status status = Authenticate(authorization, &entry);
+    grpc::Status status = Authenticate(authorization, entry);
     if (!status.ok()) return status;
-    if (needed == Permission::kCommit && entry->role != Permission::kCommit) {
+    if (needed == Permission::kCommit && (*entry)->role != Permission::kCommit) {
       std::string method(rpc);
       if (method.rfind(kPlanningService, 0) == 0) method = method.substr(kPlanningService.size());
       return grpc::Status(grpc::StatusCode::PERMISSION_DENIED,
-                          method + " needs a token with role 'commit'; the token of " + Quoted(entry->name) +
-                              " has role '" + RoleName(entry->role) + "'");
+                          method + " needs a token with role 'commit'; the token of " + Quoted((*entry)->name) +
+                              " has role '" + RoleName((*entry)->role) + "'");
     }
     return grpc::Status::OK;
   }
@@ -269,7 +270,8 @@ namespace {
 /// It adds nothing to the AuthContext: that context is shared by all calls of a connection.
 class TokenProcessor final : public grpc::AuthMetadataProcessor {
  public:
-  explicit TokenProcessor(std::shared_ptr<const TokenTable> tokens) : tokens_(std::move(tokens)) {}
+  TokenProcessor(std::shared_ptr<const TokenTable> tokens, std::function<void(const AccessRefusal&)> on_refusal)
+      : tokens_(std::move(tokens)), on_refusal_(std::move(on_refusal)) {}
 
   bool IsBlocking() const override { return false; }  // a hash and a few comparisons
 
@@ -285,11 +287,22 @@ class TokenProcessor final : public grpc::AuthMetadataProcessor {
         has_authorization = true;
       }
     }
-    return tokens_->Check(path, has_authorization ? &authorization : nullptr);
+    const TokenTable::Entry* entry = nullptr;
+    grpc::Status status = tokens_->Check(path, has_authorization ? &authorization : nullptr, &entry);
+    if (!status.ok() && on_refusal_) {
+      AccessRefusal refusal;
+      refusal.rpc = std::string(path);
+      refusal.code = status.error_code();
+      refusal.message = status.error_message();
+      if (entry != nullptr) refusal.name = entry->name;
+      on_refusal_(refusal);
+    }
+    return status;
   }
 
  private:
   std::shared_ptr<const TokenTable> tokens_;
+  std::function<void(const AccessRefusal&)> on_refusal_;
 };
 
 /// The call's `authorization` metadata, if sent.
@@ -330,7 +343,8 @@ Permission RequiredPermission(std::string_view rpc) {
   return Permission::kCommit;
 }
 
-AccessControl::AccessControl(const SecurityOptions& options) : options_(options) {
+AccessControl::AccessControl(const SecurityOptions& options, std::function<void(const AccessRefusal&)> on_refusal)
+    : options_(options), on_refusal_(std::move(on_refusal)) {
   ValidateTls(options_);
   if (options_.tokens()) tokens_ = TokenTable::Load(options_.tokens_file);
 }
@@ -358,7 +372,7 @@ std::shared_ptr<grpc::ServerCredentials> AccessControl::MakeServerCredentials() 
     return grpc::InsecureServerCredentials();
   }
   if (!credentials) throw std::runtime_error("gRPC refused to create the server credentials");
-  if (tokens_) credentials->SetAuthMetadataProcessor(std::make_shared<TokenProcessor>(tokens_));
+  if (tokens_) credentials->SetAuthMetadataProcessor(std::make_shared<TokenProcessor>(tokens_, on_refusal_));
   return credentials;
 }
 
@@ -394,7 +408,8 @@ grpc::Status AccessControl::Authorize(const grpc::ServerContextBase& context, st
   if (!tokens_) return grpc::Status::OK;
   std::string_view authorization;
   const bool sent = FindAuthorization(context, &authorization);
-  return tokens_->Check(rpc, sent ? &authorization : nullptr);
+  const TokenTable::Entry* entry = nullptr;
+  return tokens_->Check(rpc, sent ? &authorization : nullptr, &entry);
 }
 
 std::string AccessControl::Describe() const {

@@ -13,6 +13,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include <gmock/gmock.h>
 #include <grpcpp/generic/generic_stub.h>
@@ -407,13 +408,25 @@ class IdentityProbe final : public v1::Planning::CallbackService {
 };
 
 struct ProbeServer {
-  explicit ProbeServer(const SecurityOptions& options) : access(options), probe(access) {
+  explicit ProbeServer(const SecurityOptions& options)
+      : access(options,
+               [this](const AccessRefusal& refusal) {
+                 std::lock_guard<std::mutex> lock(refusals_mutex);
+                 refusals.push_back(refusal);
+               }),
+        probe(access) {
     grpc::ServerBuilder builder;
     builder.AddListeningPort("127.0.0.1:0", access.MakeServerCredentials(), &port);
     builder.RegisterService(&probe);
     server = builder.BuildAndStart();
   }
   ~ProbeServer() { server->Shutdown(); }
+  std::vector<AccessRefusal> Refusals() {
+    std::lock_guard<std::mutex> lock(refusals_mutex);
+    return refusals;
+  }
+  std::mutex refusals_mutex;
+  std::vector<AccessRefusal> refusals;
   AccessControl access;
   IdentityProbe probe;
   int port = 0;
@@ -451,6 +464,34 @@ TEST_F(SecurityTest, IdentityIsTheTokenNameElseTheCertificateElseThePeer) {
     const ClientIdentity identity = plain.probe.identity();
     EXPECT_THAT(identity.name, HasSubstr("127.0.0.1:"));
     EXPECT_FALSE(identity.authenticated);
+  }
+}
+
+TEST_F(SecurityTest, RefusedCallsAreReportedWithoutTheToken) {
+  SecurityOptions security = Tls();
+  security.tokens_file = Path("tokens.txt");
+  ProbeServer server(security);
+  const auto channel = TlsChannel(server.port);
+  EXPECT_EQ(ListPlanners(channel, "no-such-token-of-this-server").error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  {
+    grpc::ClientContext context;
+    Prepare(&context, kPlanToken);
+    v1::ReleaseResponse response;
+    EXPECT_EQ(v1::Planning::NewStub(channel)->Release(&context, v1::ReleaseRequest(), &response).error_code(),
+              grpc::StatusCode::PERMISSION_DENIED);
+  }
+  ASSERT_TRUE(ListPlanners(channel, kPlanToken).ok());
+  const std::vector<AccessRefusal> refusals = server.Refusals();
+  ASSERT_EQ(refusals.size(), 2u);
+  EXPECT_EQ(refusals[0].rpc, "/chasles.v1.Planning/ListPlanners");
+  EXPECT_EQ(refusals[0].code, grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(refusals[0].name, "");
+  EXPECT_EQ(refusals[1].rpc, "/chasles.v1.Planning/Release");
+  EXPECT_EQ(refusals[1].code, grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_EQ(refusals[1].name, "planner");
+  for (const AccessRefusal& refusal : refusals) {
+    EXPECT_THAT(refusal.message, ::testing::Not(HasSubstr("no-such-token")));
+    EXPECT_THAT(refusal.message, ::testing::Not(HasSubstr(kPlanToken)));
   }
 }
 

@@ -15,6 +15,7 @@
 /// credentials): plaintext tokens are for local use and testing.
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -59,6 +60,14 @@ struct ClientIdentity {
   bool authenticated = false;  ///< by a known token or a verified client certificate
 };
 
+/// A call the credentials refused before any handler ran (for the request log and metrics).
+struct AccessRefusal {
+  std::string rpc;           ///< the gRPC path, e.g. "/chasles.v1.Planning/CommitTrajectory"
+  grpc::StatusCode code{};   ///< UNAUTHENTICATED or PERMISSION_DENIED
+  std::string message;       ///< the message the client got (never contains a token)
+  std::string name;          ///< the token's name when the token was known, else ""
+};
+
 class TokenTable;  // the loaded tokens file (security.cc)
 
 /// Authentication and authorisation of one server, built from its SecurityOptions. Immutable
@@ -67,9 +76,11 @@ class TokenTable;  // the loaded tokens file (security.cc)
 /// second check of the same rule) and IdentifyClient() to know the caller.
 class AccessControl {
  public:
-  /// Validates the options and loads the tokens.
+  /// Validates the options and loads the tokens. `on_refusal`, when set, is called (on a gRPC
+  /// thread, possibly concurrently) for every call the credentials refuse.
   /// \throws Error(kInvalidArgument) as SecurityOptions::Validate.
-  explicit AccessControl(const SecurityOptions& options);
+  explicit AccessControl(const SecurityOptions& options,
+                         std::function<void(const AccessRefusal&)> on_refusal = nullptr);
   ~AccessControl();
 
   /// TLS (mutual when a client CA is set), else gRPC local credentials when tokens are on
@@ -93,6 +104,7 @@ class AccessControl {
 
  private:
   SecurityOptions options_;
+  std::function<void(const AccessRefusal&)> on_refusal_;
   std::shared_ptr<const TokenTable> tokens_;  // shared with the AuthMetadataProcessor; null without --tokens
 };
 
