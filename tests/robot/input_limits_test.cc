@@ -140,6 +140,22 @@ TEST(InputLimitsTest, LinksJointsAndDofsAreCountedBeforeParsing) {
   EXPECT_EQ(RobotModel::FromUrdf(Chain(513, "revolute"))->num_dofs(), 512);
 }
 
+// urdfdom joins links with owning pointers before it checks the tree: these leaked the parsed
+// model (found by fuzz_urdf under LeakSanitizer).
+TEST(InputLimitsTest, JointCyclesAreRefusedBeforeUrdfdomBuildsThem) {
+  const auto joint = [](const std::string& name, const std::string& parent, const std::string& child) {
+    return "<joint name=\"" + name + "\" type=\"fixed\"><parent link=\"" + parent + "\"/><child link=\"" + child +
+           "\"/></joint>";
+  };
+  const std::string links = "<link name=\"a\"/><link name=\"b\"/><link name=\"c\"/>";
+  ExpectInvalid([&] { RobotModel::FromUrdf(Urdf(links + joint("j", "b", "b"))); },
+                "urdf: joint 'j' parent = child = 'b'; a joint joins two different links");
+  ExpectInvalid([&] { RobotModel::FromUrdf(Urdf(links + joint("j1", "b", "c") + joint("j2", "c", "b"))); },
+                "urdf: joint 'j1' closes a cycle of joints through link 'c'; the links must form a tree");
+  ExpectInvalid([&] { RobotModel::FromUrdf(Urdf(links + joint("j1", "a", "c") + joint("j2", "b", "c"))); },
+                "urdf: joint 'j2' child = 'c' is already the child of joint 'j1'; a link has at most one parent joint");
+}
+
 TEST(InputLimitsTest, MassAndInertiaMustBePhysical) {
   const auto link = [](const std::string& mass, const std::string& inertia) {
     return Urdf("<link name=\"panda_link3\"><inertial><mass value=\"" + mass + "\"/><inertia " + inertia +
