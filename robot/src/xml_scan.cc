@@ -153,19 +153,20 @@ class Scanner {
     const std::size_t name_end = SkipName(i);
     const std::string_view name = s_.substr(i, name_end - i);
     std::string_view type;
+    Reach(depth_ + 1);  // tinyxml keeps an element whose tag never ends, at this depth
     i = name_end;
     while (i < s_.size()) {
       i = SkipSpace(i);
       if (At(i) == '/') {
         if (At(i + 1) == '>') {  // <name/>: an element one level down, with nothing inside
-          Reach(name, type, depth_ + 1);
+          Count(name, type, depth_ + 1);
           return i + 2;
         }
         return i + 1;  // tinyxml: error
       }
       if (At(i) == '>') {
         ++depth_;
-        Reach(name, type, depth_);
+        Count(name, type, depth_);
         return i + 1;
       }
       std::string_view attribute, value;
@@ -174,10 +175,13 @@ class Scanner {
     }
     return i;
   }
-  // An element at `depth`: the deepest so far? a link or joint of the root element?
-  void Reach(std::string_view name, std::string_view type, int depth) {
+  // An element starts at `depth`.
+  void Reach(int depth) {
     result_.max_depth = std::max(result_.max_depth, depth);
     if (depth > cap_) result_.depth_exceeded = true;
+  }
+  // A complete start tag at `depth`: a link or joint of the root element?
+  void Count(std::string_view name, std::string_view type, int depth) {
     if (depth != 2) return;
     if (name == "link") ++result_.links;
     if (name == "joint") {
