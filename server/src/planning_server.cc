@@ -543,6 +543,18 @@ class PlanningService final : public RawService {
         });
   }
 
+  /// A call the credentials refused before any handler ran (see AccessControl): one log line and
+  /// its metrics, like every other call; the client is the token's name when it was known.
+  void RecordRefusal(const AccessRefusal& refusal) const {
+    RequestRecord record;
+    record.rpc = refusal.rpc.substr(refusal.rpc.rfind('/') + 1);
+    record.client = refusal.name.empty() ? "-" : refusal.name;
+    record.status_code = static_cast<int>(refusal.code);
+    record.status_message = refusal.message;
+    services_.metrics->RequestStarted(record.rpc);
+    Record(record);
+  }
+
  private:
   enum class Where { kInline, kPool };
 
@@ -855,7 +867,10 @@ PlanningServer::PlanningServer(const ServerOptions& options) : impl_(std::make_u
   pool.max_queued_per_client = options.max_queued_per_client;
   pool.long_share = options.long_share;
   impl_->pool = std::make_unique<ThreadPool>(pool);
-  impl_->access = std::make_unique<AccessControl>(options.security);
+  // Calls the credentials refuse never reach a handler; they are logged and counted here.
+  impl_->access = std::make_unique<AccessControl>(options.security, [impl = impl_.get()](const AccessRefusal& refusal) {
+    if (impl->service) impl->service->RecordRefusal(refusal);
+  });
   ModelStore* store = impl_->store.get();
   ThreadPool* workers = impl_->pool.get();
   impl_->metrics = std::make_unique<ServerMetrics>(
