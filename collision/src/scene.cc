@@ -78,14 +78,15 @@ bool ParseHeader(const std::string& bytes, std::size_t pos, Header* h, std::stri
         return false;
       }
       return true;
-    } else if (token == "id") {
-      ls >> h->id;
-      if (!no_more()) return false;
-    } else if (token == "size") {
-      if (!(ls >> h->size) || h->size < 0) h->size = -1;
-      if (!no_more()) return false;
-    } else if (token == "res") {
-      if (!(ls >> h->res)) h->res = 0.0;
+    } else if (token == "id" || token == "size" || token == "res") {
+      // A value octomap's stream cannot read stops its header (it refuses the file): refused here.
+      const bool read = token == "id" ? static_cast<bool>(ls >> h->id)
+                        : token == "size" ? static_cast<bool>(ls >> h->size) && h->size >= 0
+                                          : static_cast<bool>(ls >> h->res);
+      if (!read) {
+        *why = "its header line '" + line.substr(0, 40) + "' has no valid value";
+        return false;
+      }
       if (!no_more()) return false;
     } else {
       *why = "its header holds an unknown line '" + line.substr(0, 40) + "'";
