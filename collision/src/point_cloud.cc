@@ -20,6 +20,10 @@ constexpr double kDefaultResolution = 0.05;   // [m] of a new map when the reque
 constexpr double kMinResolution = 0.001;      // [m]
 constexpr double kMaxResolution = 10.0;       // [m]
 constexpr double kHalfKeyRange = 32768.0;     // octomap::OcTree's tree_max_val (16 levels)
+// [m] longest ray: octomap cuts a ray at max_range in float arithmetic (its squared length
+// overflows above about 1.8e19 m, and the direction becomes NaN), so points beyond max_range
+// are still refused beyond this distance from the sensor.
+constexpr double kMaxRayLength = 1e9;
 
 const char* Axis(int a) { return a == 0 ? "x" : a == 1 ? "y" : "z"; }
 
@@ -140,6 +144,13 @@ Scene Scene::InsertPointCloud(const PointCloudInsertion& insertion, PointCloudIn
     const Eigen::Vector3d p = world_to_map * world;
     Eigen::Vector3d end = p;
     const double length = (p - origin).norm();
+    if (!(length <= kMaxRayLength)) {
+      ThrowInvalid("points[" + std::to_string(3 * i) + ".." + std::to_string(3 * i + 2) + "] (point " +
+                   std::to_string(i) + ") = (" + FormatNumber(world.x()) + ", " + FormatNumber(world.y()) + ", " +
+                   FormatNumber(world.z()) + ") lies " + FormatNumber((p - origin).stableNorm()) +
+                   " m from sensor_origin; rays must be at most " +
+                   FormatNumber(kMaxRayLength) + " m long");
+    }
     if (insertion.max_range > 0.0 && length > insertion.max_range) end = origin + (p - origin) * (insertion.max_range / length);
     if (!InKeyRange(*tree, end)) {
       ThrowInvalid("points[" + std::to_string(3 * i) + ".." + std::to_string(3 * i + 2) + "] (point " +

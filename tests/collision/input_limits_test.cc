@@ -148,5 +148,21 @@ TEST(InputLimitsCollision, PointCloudPointsAreCappedFirst) {
   EXPECT_EQ(stats.points_inserted, 3u);
 }
 
+// A point far beyond max_range passed (its cut end lies in the map) but reached octomap as a
+// float -inf, whose ray direction is NaN (UBSan: NaN converted to int in coordToKeyChecked;
+// found by fuzz_request).
+TEST(InputLimitsCollision, PointCloudRaysHaveABoundedLength) {
+  PointCloudInsertion insertion;
+  insertion.points = {-8.98846567431158e+307, 0.0, 0.0, 0.5, 0.0, 0.3};
+  insertion.max_range = 2.0;
+  ExpectError(ErrorCode::kInvalidArgument, [&] { Scene().InsertPointCloud(insertion); },
+              "points[0..2] (point 0) = (-8.98846567431158e+307, 0, 0) lies 8.98846567431158e+307 m from "
+              "sensor_origin; rays must be at most 1000000000 m long");
+  insertion.points = {-1e6, 0.0, 0.0, 0.5, 0.0, 0.3};  // far, but a real ray: cut at max_range
+  PointCloudInsertionStats stats;
+  Scene().InsertPointCloud(insertion, &stats);
+  EXPECT_EQ(stats.points_inserted, 2u);
+}
+
 }  // namespace
 }  // namespace chasles

@@ -50,6 +50,7 @@ struct PointCloudInsertion {
   /// Where the rays start, world frame [m]; finite.
   Eigen::Vector3d sensor_origin = Eigen::Vector3d::Zero();
   /// [m] rays are cut at this length (their end cells then stay unmarked); 0 = unlimited; >= 0.
+  /// Points beyond it are still refused when they lie more than 1e9 m from the sensor.
   double max_range = 0.0;
   /// [m] voxel size of a new map; 0 = 0.05; otherwise within [0.001, 10]. Ignored by existing maps.
   double resolution = 0.0;
