@@ -2,7 +2,7 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|coordination|benchmark|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
@@ -47,6 +47,7 @@
 #include "chasles/server/convert_multi.h"
 #include "chasles/server/planning_server.h"
 #include "chasles/v1/chasles.grpc.pb.h"
+#include "bench_hardening.h"
 
 namespace chasles {
 namespace {
@@ -73,7 +74,9 @@ struct Options {
   int runs = 5;         // coordination: seeds per scenario and method
   std::vector<std::string> scenarios = {"crossing_arms", "swap_bases", "corridor"};
   double team_budget = 30.0;  // coordination: time budget per request [s]
-  int bench_repeats = 5;      // benchmark: alternating repeats of each throughput measurement
+  int bench_repeats = 5;      // benchmark, fairness: alternating repeats of each measurement
+  double long_budget = 20.0;  // fairness: budget of the long rrt_star plans [s]
+  int uploads = 8;            // memory: distinct 50 MB STL uploads
 };
 
 std::string ReadFile(const std::string& path) {
@@ -1060,9 +1063,11 @@ int Main(int argc, char** argv) {
     else if (arg == "--scenarios") options.scenarios = Split(value());
     else if (arg == "--team-budget") options.team_budget = std::stod(value());
     else if (arg == "--bench-repeats") options.bench_repeats = std::stoi(value());
+    else if (arg == "--long-budget") options.long_budget = std::stod(value());
+    else if (arg == "--uploads") options.uploads = std::stoi(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|coordination|benchmark|all]\n"
+                   "usage: chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all]\n"
                    "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
@@ -1082,6 +1087,8 @@ int Main(int argc, char** argv) {
   if (options.section == "trajectory" || options.section == "all") BenchTrajectory(options);
   if (options.section == "coordination" || options.section == "all") BenchCoordination(options);
   if (options.section == "benchmark" || options.section == "all") BenchBenchmarkRpc(options);
+  if (options.section == "fairness" || options.section == "all") BenchFairness(options.bench_repeats, options.long_budget);
+  if (options.section == "memory" || options.section == "all") BenchMemory(options.uploads);
   return 0;
 }
 

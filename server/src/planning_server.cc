@@ -566,15 +566,10 @@ class PlanningService final : public RawService {
   };
 
   /// Who the caller is, for fair queueing and the log: the authenticated identity (token name or
-  /// client certificate) when there is one, else the peer's address without its port (so
-  /// opening more connections buys no larger share).
+  /// client certificate) when there is one, else the peer (address and port: one connection).
   std::string ClientOf(const grpc::CallbackServerContext& context) const {
     const ClientIdentity identity = access_->IdentifyClient(context);
-    if (identity.authenticated) return identity.name;
-    std::string peer = context.peer();
-    const std::size_t colon = peer.rfind(':');
-    if (colon != std::string::npos && colon > peer.find(':')) peer.resize(colon);
-    return peer;
+    return identity.authenticated ? identity.name : context.peer();
   }
 
   /// Parses the call, then runs `work(call)` inline (cheap calls) or on the pool under the fair

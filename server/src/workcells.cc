@@ -43,13 +43,18 @@ CommittedMotion MotionOf(const Reservation& reservation, double origin) {
   return motion;
 }
 
-WorkcellStore::WorkcellStore(Clock clock) : clock_(clock ? std::move(clock) : Clock(SystemNow)) {}
+WorkcellStore::WorkcellStore(Clock clock, WorkcellLimits limits)
+    : clock_(clock ? std::move(clock) : Clock(SystemNow)), limits_(limits) {}
 
 bool WorkcellStore::Create(const std::string& name) {
   if (!ValidWorkcellName(name)) {
     ThrowInvalid("name = '" + name + "' must be 1 to 64 characters of [A-Za-z0-9_.-]");
   }
   std::lock_guard<std::mutex> lock(mutex_);
+  if (cells_.count(name) == 0 && cells_.size() >= limits_.max_workcells) {
+    ThrowResourceExhausted("this server holds " + std::to_string(cells_.size()) +
+                           " workcells already, its cap; reuse one (workcells live as long as the server)");
+  }
   return cells_.emplace(name, std::make_unique<Cell>()).second;
 }
 
@@ -89,6 +94,14 @@ Reservation WorkcellStore::Commit(const std::string& workcell, Reservation reser
   Cell& cell = Find(workcell);
   std::lock_guard<std::mutex> lock(cell.mutex);
   DropExpired(cell, Now());
+  std::size_t pieces = reservation.trajectory.pieces().size();
+  for (const Reservation& other : cell.reservations) pieces += other.trajectory.pieces().size();
+  if (pieces > limits_.max_pieces_per_workcell) {
+    ThrowResourceExhausted("workcell '" + workcell + "' would hold " + std::to_string(pieces) +
+                           " trajectory pieces in its active reservations, more than the server's cap of " +
+                           std::to_string(limits_.max_pieces_per_workcell) +
+                           "; commit coarser trajectories or release finished ones");
+  }
   reservation.placement.name = reservation.robot_name;
   reservation.end_time = reservation.start_time + reservation.trajectory.duration();
   reservation.expires_at = reservation.end_time + hold;

@@ -16,13 +16,18 @@ enum class ErrorCode {
                         ///< (the message names the field, the size, the cap and what to change)
 };
 
+/// `text` with bytes below 0x20 and 0x7f written as `\xHH` (other bytes, UTF-8 included, kept).
+std::string EscapeControlCharacters(const std::string& text);
+
 /// Thrown for contract violations (never for expected outcomes such as "no path").
 /// `what()` is a complete human sentence, e.g.
 /// `start.positions[2] = nan must be finite`.
 class Error : public std::runtime_error {
  public:
+  /// Control characters in `message` (a client's names may carry NUL, ESC, newlines) are written
+  /// as `\xHH`, so what() — a C string — holds the whole message and prints safely.
   Error(ErrorCode code, const std::string& message)
-      : std::runtime_error(message), code_(code) {}
+      : std::runtime_error(EscapeControlCharacters(message)), code_(code) {}
   ErrorCode code() const { return code_; }
 
  private:

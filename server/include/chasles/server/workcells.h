@@ -27,16 +27,23 @@ struct Reservation {
   double expires_at = 0.0;  ///< end_time + hold: the robot occupies its final configuration until then
 };
 
+/// How much a WorkcellStore may hold (each committed trajectory piece costs about 1 KB).
+struct WorkcellLimits {
+  std::size_t max_workcells = 1024;
+  std::size_t max_pieces_per_workcell = 500000;  ///< pieces of the active reservations together
+};
+
 class WorkcellStore {
  public:
   /// The clock [s since the Unix epoch]; the default reads the system clock. Tests inject theirs.
   using Clock = std::function<double()>;
-  explicit WorkcellStore(Clock clock = {});
+  explicit WorkcellStore(Clock clock = {}, WorkcellLimits limits = {});
 
   double Now() const { return clock_(); }
 
   /// Creates the workcell; false when it existed already.
-  /// \throws Error(kInvalidArgument) for a name outside [A-Za-z0-9_.-]{1,64}.
+  /// \throws Error(kInvalidArgument) for a name outside [A-Za-z0-9_.-]{1,64};
+  ///         Error(kResourceExhausted) when max_workcells exist already.
   bool Create(const std::string& name);
 
   /// The reservations not yet expired (expired ones are dropped), in commit order.
@@ -47,7 +54,8 @@ class WorkcellStore {
   /// it against every active reservation of other robots (robot against robot, `padding` [m] around
   /// both, at ≤ 1 ms and ≤ 0.005 rad) and that the same robot's reservations do not overlap in time.
   /// \throws Error(kNotFound) for an unknown workcell; Error(kFailedPrecondition) naming the
-  ///         reservation, robots, links and time of a conflict.
+  ///         reservation, robots, links and time of a conflict; Error(kResourceExhausted) when the
+  ///         workcell's active reservations would hold more than max_pieces_per_workcell pieces.
   Reservation Commit(const std::string& workcell, Reservation reservation, double hold, double padding);
 
   /// Releases one reservation by id, or every reservation of `robot_name` when the id is empty.
@@ -68,6 +76,7 @@ class WorkcellStore {
   static void DropExpired(Cell& cell, double now);
 
   Clock clock_;
+  WorkcellLimits limits_;
   std::mutex mutex_;  ///< guards cells_ (the map, not the cells' contents)
   std::map<std::string, std::unique_ptr<Cell>> cells_;
 };
