@@ -24,6 +24,10 @@ constexpr double kHalfKeyRange = 32768.0;     // octomap::OcTree's tree_max_val 
 // overflows above about 1.8e19 m, and the direction becomes NaN), so points beyond max_range
 // are still refused beyond this distance from the sensor.
 constexpr double kMaxRayLength = 1e9;
+// [cells] a ray may cross: octomap's KeyRay holds 100000 keys and, without NDEBUG, only asserts
+// before writing past them (a heap overflow in release builds). Each step of its voxel walk
+// moves one cell along one axis, so |Δkey|₁ + 1 keys at most, plus a margin for rounding.
+constexpr double kMaxRayCells = 99000.0;
 
 const char* Axis(int a) { return a == 0 ? "x" : a == 1 ? "y" : "z"; }
 
@@ -156,6 +160,15 @@ Scene Scene::InsertPointCloud(const PointCloudInsertion& insertion, PointCloudIn
       ThrowInvalid("points[" + std::to_string(3 * i) + ".." + std::to_string(3 * i + 2) + "] (point " +
                    std::to_string(i) + ") = (" + FormatNumber(world.x()) + ", " + FormatNumber(world.y()) + ", " +
                    FormatNumber(world.z()) + ")" + (end == p ? " " : " cut at max_range ") + RangeRule(map, *tree));
+    }
+    const double cells = ((end - origin).cwiseAbs() / tree->getResolution()).sum() + 3.0;
+    if (!(cells <= kMaxRayCells)) {
+      ThrowInvalid("points[" + std::to_string(3 * i) + ".." + std::to_string(3 * i + 2) + "] (point " +
+                   std::to_string(i) + ") = (" + FormatNumber(world.x()) + ", " + FormatNumber(world.y()) + ", " +
+                   FormatNumber(world.z()) + ")" + (end == p ? "" : " cut at max_range") + " is a ray across about " +
+                   std::to_string(static_cast<long long>(cells)) + " cells of map '" + map.name + "' (resolution " +
+                   FormatNumber(tree->getResolution()) + " m); a ray may cross at most " +
+                   FormatNumber(kMaxRayCells) + " cells (octomap's ray buffer): use a shorter max_range or a coarser map");
     }
     cloud.push_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
   }

@@ -158,6 +158,18 @@ TEST(InputLimitsCollision, PointCloudRaysHaveABoundedLength) {
   ExpectError(ErrorCode::kInvalidArgument, [&] { Scene().InsertPointCloud(insertion); },
               "points[0..2] (point 0) = (-8.98846567431158e+307, 0, 0) lies 8.98846567431158e+307 m from "
               "sensor_origin; rays must be at most 1000000000 m long");
+  // A diagonal ray across the whole key range of a 5 cm map: about 3 · 40000 cells, more than
+  // octomap's ray buffer of 100000 keys (an assertion in octomap, a heap overflow without it;
+  // found by fuzz_request).
+  insertion.points = {1500.0, 1500.0, 1500.0};
+  insertion.sensor_origin = Eigen::Vector3d(-500.0, -500.0, -500.0);
+  insertion.max_range = 0.0;
+  ExpectError(ErrorCode::kInvalidArgument, [&] { Scene().InsertPointCloud(insertion); },
+              "points[0..2] (point 0) = (1500, 1500, 1500) is a ray across about 120003 cells of map 'points' "
+              "(resolution 0.05 m); a ray may cross at most 99000 cells (octomap's ray buffer): use a shorter "
+              "max_range or a coarser map");
+  insertion.sensor_origin = Eigen::Vector3d::Zero();
+  insertion.max_range = 2.0;
   insertion.points = {-1e6, 0.0, 0.0, 0.5, 0.0, 0.3};  // far, but a real ray: cut at max_range
   PointCloudInsertionStats stats;
   Scene().InsertPointCloud(insertion, &stats);
