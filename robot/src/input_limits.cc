@@ -23,6 +23,7 @@ void InputLimits::Validate() const {
   RequirePositive(max_dofs, "max_dofs");
   RequirePositive(max_mesh_triangles, "max_mesh_triangles");
   RequirePositive(max_mesh_vertices, "max_mesh_vertices");
+  RequirePositive(max_mesh_files, "max_mesh_files");
   RequirePositive(max_octomap_nodes, "max_octomap_nodes");
   RequirePositive(max_cloud_points, "max_cloud_points");
 }

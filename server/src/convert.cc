@@ -193,6 +193,15 @@ std::vector<std::pair<std::string, std::string>> PairsFromProto(
 }
 
 /// Re-throws a robot-module error with the proto path: "dh.joints[2]…" → "robot.dh.joints[2]…".
+/// Every mesh file costs a parse, however small it is.
+void CheckMeshFileCount(std::size_t count, const std::string& field, const InputLimits& limits) {
+  if (count > limits.max_mesh_files) {
+    ThrowResourceExhausted(field + " holds " + std::to_string(count) + " mesh files, more than the cap of " +
+                           std::to_string(limits.max_mesh_files) +
+                           " (InputLimits::max_mesh_files); merge meshes or raise the server's cap");
+  }
+}
+
 [[noreturn]] void RethrowWithField(const Error& e, const std::string& field, const std::string& kind) {
   const std::string what = e.what();
   if (what.rfind(field, 0) == 0) throw e;
@@ -380,6 +389,7 @@ std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, co
   const v1::UrdfRobot& urdf = robot.urdf();
   if (urdf.urdf().empty()) ThrowInvalid(field + ".urdf.urdf is empty: it must hold the URDF XML text");
   std::map<std::string, std::shared_ptr<const TriangleMesh>> meshes;
+  CheckMeshFileCount(static_cast<std::size_t>(urdf.mesh_files_size()), field + ".urdf.mesh_files", limits);
   // Sorted iteration keeps error messages deterministic.
   std::map<std::string, const std::string*> files;
   for (const auto& [name, bytes] : urdf.mesh_files()) files[name] = &bytes;
@@ -465,6 +475,7 @@ std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::s
                    [&scene](Shape shape, const std::string& f, const std::string& name, const char* kind, int i) {
                      scene->AddObject({ObjectName(name, kind, i), std::move(shape)}, f);
                    });
+  CheckMeshFileCount(static_cast<std::size_t>(proto.meshes_size()), field + ".meshes", limits);
   for (int i = 0; i < proto.meshes_size(); ++i) {
     const v1::Mesh& mesh = proto.meshes(i);
     const std::string f = Indexed(field + ".meshes", i);

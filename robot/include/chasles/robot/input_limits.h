@@ -27,6 +27,10 @@ struct InputLimits {
   /// [vertices] of one mesh file, as the file holds them (an STL repeats each vertex per
   /// triangle). Default 6,000,000 (3 per triangle of max_mesh_triangles).
   std::size_t max_mesh_vertices = 6'000'000;
+  /// [files] of mesh files in one robot (UrdfRobot.mesh_files) or one scene (Scene.meshes).
+  /// Each costs a parse even when tiny (assimp's OBJ reader sets up a 16 MB buffer per file,
+  /// about 7 ms). Default 1000.
+  std::size_t max_mesh_files = 1000;
   /// [nodes] of one OctoMap OcTree file (inner nodes and leaves; a node costs about 30 bytes
   /// once read). Default 10,000,000.
   std::size_t max_octomap_nodes = 10'000'000;
