@@ -3,6 +3,7 @@
 // makes of them), runs.csv, results.json and a summary table.
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -53,7 +54,8 @@ const char kBenchUsage[] =
     "    - moveit: DIR            every sceneNNNN.yaml / requestNNNN.yaml pair in DIR\n"
     "    - moveit_scene: S.yaml   one MoveIt scene + request pair             [name: N]\n"
     "      moveit_request: R.yaml\n"
-    "      (moveit entries may add robot: F.urdf and srdf: F.srdf; default: the server's Panda)\n"
+    "      (moveit entries may add robot: F.urdf and srdf: F.srdf, read for the joint order and\n"
+    "       embedded in every request; default: the server's Panda)\n"
     "  configs:\n"
     "    - planner: rrt_connect   planner id (chasles planners lists them)    [name: N]\n"
     "      parameters: {range: 0.5}\n"
@@ -114,13 +116,23 @@ v1::ParameterValue ParameterFromYaml(const YAML::Node& node, const std::string& 
   return value;
 }
 
+/// The robot of a moveit entry: robot: F.urdf (and srdf: F.srdf), else the server's default.
 moveit::RobotInfo MoveItRobot(const YAML::Node& entry, const fs::path& base, const std::string& file,
                               const std::string& key) {
-  if (!entry["robot"]) return moveit::DefaultRobot();
+  if (!entry["robot"]) {
+    if (entry["srdf"]) Fail(file, key + ".srdf", "needs robot: F.urdf (the SRDF belongs to a URDF)");
+    return moveit::DefaultRobot();
+  }
   const fs::path urdf = base / Scalar<std::string>(entry["robot"], file, key + ".robot", "a file name");
   std::string srdf;
   if (entry["srdf"]) srdf = ReadFile(base / Scalar<std::string>(entry["srdf"], file, key + ".srdf", "a file name"), "SRDF");
   return moveit::RobotFromUrdf(ReadFile(urdf, "URDF"), srdf);
+}
+
+/// A request imported for `robot`: a robot given with robot: is embedded in it (the server
+/// would otherwise plan for its default Panda); the default robot is left to the server.
+void SetMoveItRobot(const YAML::Node& entry, const moveit::RobotInfo& robot, v1::PlanRequest* request) {
+  if (entry["robot"]) *request->mutable_robot() = robot.model;
 }
 
 struct BenchConfig {
@@ -168,6 +180,21 @@ BenchConfig LoadConfig(const std::string& path) {
     const std::string key = "problems[" + std::to_string(i) + "]";
     if (!entry.IsMap()) Fail(file, key, "must be a map (request:, moveit: or moveit_scene: + moveit_request:)");
     const std::string name = entry["name"] ? Scalar<std::string>(entry["name"], file, key + ".name", "a name") : "";
+    if (!entry["request"] && !entry["moveit"] && !(entry["moveit_scene"] && entry["moveit_request"])) {
+      Fail(file, key, "needs request: FILE.json, moveit: DIR, or moveit_scene: + moveit_request:");
+    }
+    for (const auto& field : entry) {
+      static const char* const kProblemKeys[] = {"name", "request", "moveit", "moveit_scene", "moveit_request", "robot", "srdf"};
+      const std::string field_name = field.first.as<std::string>();
+      if (std::find(std::begin(kProblemKeys), std::end(kProblemKeys), field_name) == std::end(kProblemKeys)) {
+        Fail(file, key + "." + field_name,
+             "is not a known key (name, request, moveit, moveit_scene, moveit_request, robot, srdf)");
+      }
+    }
+    if (entry["request"] && (entry["robot"] || entry["srdf"])) {
+      Fail(file, key + (entry["robot"] ? ".robot" : ".srdf"),
+           "belongs to moveit entries (a request: FILE.json names its robot itself)");
+    }
     try {
       if (entry["request"]) {
         const fs::path json = base / Scalar<std::string>(entry["request"], file, key + ".request", "a file name");
@@ -180,21 +207,23 @@ BenchConfig LoadConfig(const std::string& path) {
         problem->set_name(name.empty() ? json.stem().string() : name);
       } else if (entry["moveit"]) {
         const fs::path directory = base / Scalar<std::string>(entry["moveit"], file, key + ".moveit", "a directory");
-        for (moveit::MoveItProblem& imported : moveit::ImportProblemDirectory(directory.string(), MoveItRobot(entry, base, file, key))) {
+        const moveit::RobotInfo robot = MoveItRobot(entry, base, file, key);
+        for (moveit::MoveItProblem& imported : moveit::ImportProblemDirectory(directory.string(), robot)) {
           v1::BenchmarkProblem* problem = request.add_problems();
           problem->set_name(name.empty() ? imported.name : name + "/" + imported.name);
           *problem->mutable_request() = std::move(imported.request);
+          SetMoveItRobot(entry, robot, problem->mutable_request());
         }
-      } else if (entry["moveit_scene"] && entry["moveit_request"]) {
+      } else {  // moveit_scene + moveit_request
         const fs::path scene = base / Scalar<std::string>(entry["moveit_scene"], file, key + ".moveit_scene", "a file name");
         const fs::path motion = base / Scalar<std::string>(entry["moveit_request"], file, key + ".moveit_request", "a file name");
+        const moveit::RobotInfo robot = MoveItRobot(entry, base, file, key);
         v1::BenchmarkProblem* problem = request.add_problems();
-        *problem->mutable_request() = moveit::ImportMotionPlanRequest(
-            ReadFile(scene, "MoveIt scene"), ReadFile(motion, "MoveIt request"), MoveItRobot(entry, base, file, key),
-            scene.filename().string(), motion.filename().string());
+        *problem->mutable_request() =
+            moveit::ImportMotionPlanRequest(ReadFile(scene, "MoveIt scene"), ReadFile(motion, "MoveIt request"), robot,
+                                            scene.filename().string(), motion.filename().string());
+        SetMoveItRobot(entry, robot, problem->mutable_request());
         problem->set_name(name.empty() ? scene.stem().string() : name);
-      } else {
-        Fail(file, key, "needs request: FILE.json, moveit: DIR, or moveit_scene: + moveit_request:");
       }
     } catch (const std::exception& e) {
       // Importer errors name the MoveIt file and key; say which problem entry it was.

@@ -116,6 +116,12 @@ TEST_F(BenchCli, ConfigurationErrorsNameFileAndKey) {
       {"problems:\n  - request: /no/such.json\nconfigs:\n  - planner: rrt\n", "cannot read request '/no/such.json'"},
       {"configs:\n  - planner: rrt\n", "bad.yaml: problems must be a non-empty list"},
       {"runs: -2\nproblems:\n  - request: TABLE\nconfigs:\n  - planner: rrt\n", "bad.yaml: runs = '-2' must be a whole number"},
+      {"problems:\n  - moveit: d\n    urdf: r.urdf\nconfigs:\n  - planner: rrt\n",
+       "bad.yaml: problems[0].urdf is not a known key (name, request, moveit, moveit_scene, moveit_request, robot, srdf)"},
+      {"problems:\n  - moveit: d\n    srdf: r.srdf\nconfigs:\n  - planner: rrt\n",
+       "bad.yaml: problems[0].srdf needs robot: F.urdf"},
+      {"problems:\n  - request: TABLE\n    robot: r.urdf\nconfigs:\n  - planner: rrt\n",
+       "bad.yaml: problems[0].robot belongs to moveit entries"},
   };
   for (const auto& c : cases) {
     std::string yaml = c.yaml;
@@ -125,6 +131,61 @@ TEST_F(BenchCli, ConfigurationErrorsNameFileAndKey) {
     EXPECT_EQ(result.exit_code, 2) << yaml << "\n" << result.output;
     EXPECT_NE(result.output.find(c.expected), std::string::npos) << yaml << "\n" << result.output;
   }
+}
+
+// A MoveIt directory for a robot other than the server's default Panda: the planar 2R arm of
+// examples/robots/ (joints joint1, joint2), a post in the way of the straight line. The bench
+// configuration names the robot with robot: / srdf:, so every run plans for the 2R arm; planning
+// for the default Panda instead (7 joints, 2 positions given) solves none.
+TEST_F(BenchCli, MoveItDirectoryPlansForTheConfiguredRobot) {
+  LoopbackServer server(2);
+  fs::create_directories(dir_ / "set");
+  const std::string scene =
+      "name: post\n"
+      "world:\n"
+      "  collision_objects:\n"
+      "    - id: post\n"
+      "      header: {frame_id: base_link}\n"
+      "      primitives: [{type: box, dimensions: [0.2, 0.2, 0.4]}]\n"
+      "      primitive_poses: [{position: [1.0, 1.0, 0.2], orientation: [0, 0, 0, 1]}]\n";
+  const std::string request =
+      "group_name: arm\n"
+      "start_state:\n  joint_state: {name: [joint1, joint2], position: [0.0, 0.0]}\n"
+      "goal_constraints:\n"
+      "  - joint_constraints:\n"
+      "      - {joint_name: joint1, position: 1.5708}\n"
+      "      - {joint_name: joint2, position: 0.0}\n"
+      "allowed_planning_time: 2\n";
+  Write("set/scene0001.yaml", scene);
+  Write("set/request0001.yaml", request);
+  Write("set/scene0002.yaml", scene);
+  Write("set/request0002.yaml", request);
+  const fs::path config = Write("planar_moveit.yaml",
+                                "runs: 2\n"
+                                "run_budget: 2\n"
+                                "problems:\n"
+                                "  - moveit: set\n"
+                                "    robot: " + ExamplePath("robots/planar_2r.urdf") + "\n"
+                                "    srdf: " + ExamplePath("robots/planar_2r.srdf") + "\n"
+                                "  - moveit_scene: set/scene0001.yaml\n"
+                                "    moveit_request: set/request0001.yaml\n"
+                                "    name: pair\n"
+                                "    robot: " + ExamplePath("robots/planar_2r.urdf") + "\n"
+                                "configs:\n"
+                                "  - planner: rrt_connect\n");
+  const fs::path out = dir_ / "out";
+  const CliResult result =
+      RunCli("--server " + server.address() + " bench '" + config.string() + "' --out '" + out.string() +
+                 "' --quiet --no-db",
+             dir_ / "log.txt");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("6 of 6 runs finished"), std::string::npos) << result.output;
+  // Every run of every problem (scene0001, scene0002, pair) solved.
+  const std::string csv = ReadText((out / "runs.csv").string());
+  EXPECT_EQ(Lines(csv), 7u) << csv;
+  std::size_t solved = 0;
+  for (std::size_t at = csv.find(",SUCCESS,1,"); at != std::string::npos; at = csv.find(",SUCCESS,1,", at + 1)) ++solved;
+  EXPECT_EQ(solved, 6u) << csv;
 }
 
 TEST_F(BenchCli, InterruptStopsAndKeepsTheFinishedRuns) {
