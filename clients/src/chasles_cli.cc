@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,7 @@
 #include "chasles/v1/chasles.grpc.pb.h"
 #include "commands.h"
 #include "connection.h"
+#include "plan_overrides.h"
 #include "trajectory_csv.h"
 
 namespace {
@@ -39,12 +41,14 @@ const char kUsage[] =
     "Commands:\n"
     "  health                          ask the server's gRPC health service (exit 0 when SERVING)\n"
     "  planners                        list planners with their parameters, defaults and ranges\n"
-    "  plan REQUEST.json [--out F] [--method M]\n"
+    "  plan REQUEST.json [--out F] [--method M] [--planner ID] [--budget S] [--seed N]\n"
+    "       [--sample-period S]\n"
     "                                  send a chasles.v1.PlanRequest (protobuf JSON); print a summary;\n"
     "                                  --out F.json writes the response, --out F.csv the trajectory\n"
     "                                  (columns t, q_<joint>..., qd_<joint>..., qdd_<joint>...);\n"
     "                                  --method topp|collocation|spline|none sets the post-processing;\n"
-    "                                  exit 0 only when a trajectory came back\n"
+    "                                  --planner, --budget, --seed, --sample-period override the\n"
+    "                                  request's (see below); exit 0 only when a trajectory came back\n"
     "  optimize REQUEST.json [--out F] [--method M]\n"
     "                                  send a chasles.v1.OptimizeRequest (protobuf JSON: your own path\n"
     "                                  or timed trajectory); print the optimised trajectory's quality;\n"
@@ -92,9 +96,14 @@ const char kUsage[] =
     "                                  runs.csv and results.json into DIR and prints a summary table;\n"
     "                                  Ctrl-C stops it and keeps the finished runs (see docs/benchmarks.md)\n"
     "  import-moveit SCENE.yaml REQUEST.yaml [--robot F.urdf [--srdf F.srdf]] [--out F.json]\n"
+    "                [--planner ID] [--budget S] [--seed N] [--sample-period S]\n"
     "                                  convert a MoveIt PlanningScene and MotionPlanRequest (YAML) into a\n"
     "                                  chasles.v1.PlanRequest and print it as JSON (robot joint order from\n"
-    "                                  the URDF; default: the server's default robot, a Panda)\n"
+    "                                  the URDF; default: the server's default robot, a Panda); the\n"
+    "                                  override flags set the request's fields as for plan\n"
+    "\n"
+    "Request overrides (plan, import-moveit):\n"
+    "%s"
     "\n"
     "Options (before COMMAND or among its arguments):\n"
     "%s"
@@ -128,6 +137,7 @@ struct Options {
   std::string start_time;
   std::string hold;
   std::string reservation;
+  chasles::cli::PlanOverrides overrides;  // plan: --planner, --budget, --seed, --sample-period
   std::vector<std::string> positional;
 };
 
@@ -369,6 +379,7 @@ int Plan(const Options& options) {
   const std::string& path = options.positional[1];
   v1::PlanRequest request = ParseJsonFileOrExit<v1::PlanRequest>(path);
   if (!options.method.empty()) request.mutable_trajectory()->set_post_processing(MethodOrExit(options.method));
+  chasles::cli::ApplyPlanOverrides(options.overrides, &request);
 
   auto stub = v1::Planning::NewStub(MakeChannel(options));
   grpc::ClientContext context;
@@ -841,7 +852,7 @@ int main(int argc, char** argv) {
       return argv[++i];
     };
     if (arg == "--help" || arg == "-h") {
-      std::printf(kUsage, chasles::cli::kConnectionUsage);
+      std::printf(kUsage, chasles::cli::kPlanOverridesUsage, chasles::cli::kConnectionUsage);
       return kExitOk;
     } else if (chasles::cli::ParseConnectionFlag(argc, argv, &i, &options.connection)) {
       continue;
@@ -894,6 +905,13 @@ int main(int argc, char** argv) {
       options.hold = value();
     } else if (arg == "--reservation") {
       options.reservation = value();
+    } else if (chasles::cli::IsPlanOverrideFlag(arg)) {
+      const std::string text = value();
+      try {
+        chasles::cli::SetPlanOverride(arg, text, &options.overrides);
+      } catch (const std::invalid_argument& e) {
+        UsageError(e.what());
+      }
     } else if (arg.size() > 1 && arg[0] == '-') {
       UsageError("unknown option '" + arg + "'");
     } else {
@@ -907,6 +925,9 @@ int main(int argc, char** argv) {
     return command == "health" ? Health(options) : Planners(options);
   }
   if (command == "plan") return Plan(options);
+  if (!options.overrides.empty()) {
+    UsageError("--planner, --budget, --seed and --sample-period belong to plan and import-moveit, not " + command);
+  }
   if (command == "optimize") return Optimize(options);
   if (command == "ik") return InverseKinematics(options);
   if (command == "upload-robot") return UploadRobot(options);

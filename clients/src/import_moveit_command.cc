@@ -10,6 +10,7 @@
 
 #include "commands.h"
 #include "moveit_import.h"
+#include "plan_overrides.h"
 
 namespace chasles::cli {
 namespace {
@@ -18,17 +19,23 @@ constexpr int kOk = 0;
 constexpr int kConversionFailed = 1;
 constexpr int kUsage = 2;
 
-constexpr const char* kHelp =
+constexpr const char* kHelpHead =
     "usage: chasles import-moveit SCENE.yaml REQUEST.yaml [--robot F.urdf [--srdf F.srdf]] [--out F.json]\n"
+    "                             [--planner ID] [--budget S] [--seed N] [--sample-period S]\n"
     "  Converts a MoveIt PlanningScene and MotionPlanRequest (YAML, e.g. a MotionBenchMaker pair) into a\n"
     "  chasles.v1.PlanRequest and prints it as protobuf JSON (or writes it to --out F.json). No server needed.\n"
     "  --robot F.urdf  read joint and link names from this URDF and embed it (and --srdf) in the request;\n"
     "                  default: the server's default robot (a Panda), not embedded\n"
     "  --srdf F.srdf   its SRDF (allowed collisions)\n"
-    "  --out F.json    write the JSON to F.json instead of printing it\n";
+    "  --out F.json    write the JSON to F.json instead of printing it\n"
+    "  The request's planner is left unset (the server's default, rrt_connect) and its budget is the\n"
+    "  MoveIt request's allowed_planning_time; these set them, and seed and sample period, instead:\n";
+
+void PrintHelp(std::ostream& out) { out << kHelpHead << kPlanOverridesUsage; }
 
 int Usage(const std::string& message) {
-  std::cerr << "chasles: import-moveit: " << message << "\n" << kHelp;
+  std::cerr << "chasles: import-moveit: " << message << "\n";
+  PrintHelp(std::cerr);
   return kUsage;
 }
 
@@ -49,15 +56,23 @@ bool ReadFile(const std::string& path, const char* what, std::string* text) {
 int ImportMoveItCommand(const std::vector<std::string>& args) {
   std::vector<std::string> positional;
   std::string robot_file, srdf_file, out;
+  PlanOverrides overrides;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& arg = args[i];
     if (arg == "--help" || arg == "-h") {
-      std::cout << kHelp;
+      PrintHelp(std::cout);
       return kOk;
     }
     if (arg == "--robot" || arg == "--srdf" || arg == "--out") {
       if (i + 1 >= args.size()) return Usage(arg + " needs a value");
       (arg == "--robot" ? robot_file : arg == "--srdf" ? srdf_file : out) = args[++i];
+    } else if (IsPlanOverrideFlag(arg)) {
+      if (i + 1 >= args.size()) return Usage(arg + " needs a value");
+      try {
+        SetPlanOverride(arg, args[++i], &overrides);
+      } catch (const std::invalid_argument& e) {
+        return Usage(e.what());
+      }
     } else if (arg.size() > 1 && arg[0] == '-') {
       return Usage("unknown option '" + arg + "'");
     } else {
@@ -91,6 +106,7 @@ int ImportMoveItCommand(const std::vector<std::string>& args) {
     return kConversionFailed;
   }
   if (!robot_file.empty()) *request.mutable_robot() = robot.model;  // self-contained
+  ApplyPlanOverrides(overrides, &request);
 
   google::protobuf::util::JsonPrintOptions print;
   print.add_whitespace = true;

@@ -655,6 +655,53 @@ TEST(MoveItCli, EmbedsTheRobotAndWritesOut) {
   EXPECT_EQ(parsed.start().positions_size(), 7);
 }
 
+TEST(MoveItCli, OverridesPlannerBudgetSeedAndSamplePeriod) {
+  const std::string scene = ExamplesDir() + "/scene0001.yaml";
+  const std::string request = ExamplesDir() + "/request0001.yaml";
+  // Without flags: no planner (the server's default), the budget from allowed_planning_time (5).
+  const CommandResult plain = RunCli(scene + " " + request);
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  v1::PlanRequest unchanged;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(plain.out, &unchanged).ok());
+  EXPECT_FALSE(unchanged.has_planner());
+  EXPECT_EQ(unchanged.time_budget(), 5.0);
+
+  const CommandResult result =
+      RunCli(scene + " " + request + " --planner rrt_star --budget 0.75 --seed 42 --sample-period 0.02");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  v1::PlanRequest parsed;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(result.out, &parsed).ok()) << result.out;
+  EXPECT_EQ(parsed.planner().planner_id(), "rrt_star");
+  EXPECT_EQ(parsed.time_budget(), 0.75);
+  EXPECT_EQ(parsed.seed(), 42u);
+  EXPECT_EQ(parsed.trajectory().sample_period(), 0.02);
+  // Everything else is as imported.
+  v1::PlanRequest rest = parsed;
+  rest.clear_planner();
+  rest.set_time_budget(unchanged.time_budget());
+  rest.clear_seed();
+  rest.clear_trajectory();
+  EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(rest, unchanged));
+
+  // Bad values: exit 2, the flag, the value and the rule on stderr, nothing on stdout.
+  const struct {
+    const char* flags;
+    const char* expected;
+  } cases[] = {
+      {"--budget -1", "--budget '-1' must be a number of seconds in (0, 600]"},
+      {"--seed x", "--seed 'x' must be a whole number"},
+      {"--sample-period 0", "--sample-period '0' must be a number of seconds in [0.0001, 1]"},
+      {"--planner 'rrt connect'", "--planner 'rrt connect' must be a planner id without spaces"},
+      {"--budget", "--budget needs a value"},
+  };
+  for (const auto& c : cases) {
+    const CommandResult bad = RunCli(scene + " " + request + " " + c.flags);
+    EXPECT_EQ(bad.exit_code, 2) << c.flags;
+    EXPECT_NE(bad.err.find(c.expected), std::string::npos) << c.flags << "\n" << bad.err;
+    EXPECT_TRUE(bad.out.empty()) << c.flags;
+  }
+}
+
 TEST(MoveItCli, ExitCodes) {
   // 1: the YAML does not convert, with the named error.
   const CommandResult bad = RunCli(DataPath("malformed.yaml") + " " + DataPath("request_full.yaml"));

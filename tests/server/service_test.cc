@@ -296,6 +296,101 @@ TEST(Cli, HealthPlannersPlanAndUploads) {
   EXPECT_NE(down.exit_code, 0) << down.output;
 }
 
+/// The samples of two trajectories agree (times and positions; JSON round-trips doubles).
+void ExpectSameTrajectory(const v1::JointTrajectory& a, const v1::JointTrajectory& b) {
+  ASSERT_EQ(a.points_size(), b.points_size());
+  for (int i = 0; i < a.points_size(); ++i) {
+    ASSERT_NEAR(a.points(i).time_from_start(), b.points(i).time_from_start(), 1e-12) << "sample " << i;
+    ASSERT_EQ(a.points(i).positions_size(), b.points(i).positions_size());
+    for (int j = 0; j < a.points(i).positions_size(); ++j) {
+      ASSERT_NEAR(a.points(i).positions(j), b.points(i).positions(j), 1e-12) << "sample " << i << " joint " << j;
+    }
+  }
+}
+
+// plan --planner/--budget/--seed/--sample-period replace the JSON's planner.plannerId, timeBudget
+// (3 s in planar_2r_posts.json), seed (7) and trajectory.samplePeriod.
+TEST(Cli, PlanOverridesPlannerBudgetSeedAndSamplePeriod) {
+  ServerOptions options = LoopbackServer::QuietOptions(2);
+  options.max_budget = 1.0;  // planar_2r_posts.json asks for 3 s: it plans only with --budget <= 1
+  LoopbackServer server(options);
+  const std::string at = "--server " + server.address() + " ";
+  const std::string file = ExamplePath("requests/planar_2r_posts.json");
+
+  // --budget sets time_budget: the file's 3 s and --budget 2 exceed the server's maximum.
+  CommandResult as_written = RunCli(at + "plan " + file);
+  EXPECT_EQ(as_written.exit_code, 1) << as_written.output;
+  EXPECT_NE(as_written.output.find("time_budget = 3 s exceeds"), std::string::npos) << as_written.output;
+  CommandResult too_long = RunCli(at + "plan " + file + " --budget 2");
+  EXPECT_EQ(too_long.exit_code, 1) << too_long.output;
+  EXPECT_NE(too_long.output.find("time_budget = 2 s exceeds"), std::string::npos) << too_long.output;
+
+  // --planner sets planner.planner_id: an unknown id is the server's NOT_FOUND naming it.
+  CommandResult unknown = RunCli(at + "plan " + file + " --budget 0.8 --planner no_such_planner");
+  EXPECT_EQ(unknown.exit_code, 1) << unknown.output;
+  EXPECT_NE(unknown.output.find("NOT_FOUND"), std::string::npos) << unknown.output;
+  EXPECT_NE(unknown.output.find("no_such_planner"), std::string::npos) << unknown.output;
+
+  // All four: the trajectory is the server's for the request with those fields.
+  const std::string json = ::testing::TempDir() + "/chasles_cli_overrides_" + std::to_string(::getpid()) + ".json";
+  CommandResult planned =
+      RunCli(at + "plan " + file + " --planner rrt --budget 0.8 --seed 3 --sample-period 0.05 --out " + json);
+  ASSERT_EQ(planned.exit_code, 0) << planned.output;
+  v1::PlanResponse written;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(ReadText(json), &written).ok());
+  std::remove(json.c_str());
+  ASSERT_GE(written.trajectory().points_size(), 3);
+  EXPECT_NEAR(written.trajectory().points(1).time_from_start() - written.trajectory().points(0).time_from_start(),
+              0.05, 1e-9);
+  v1::PlanRequest expected = LoadRequest("planar_2r_posts");
+  expected.mutable_planner()->set_planner_id("rrt");
+  expected.set_time_budget(0.8);
+  expected.set_seed(3);
+  expected.mutable_trajectory()->set_sample_period(0.05);
+  v1::PlanResponse direct;
+  ASSERT_TRUE(server.Plan(expected, &direct).ok());
+  ASSERT_EQ(direct.outcome(), v1::SUCCESS) << direct.message();
+  ExpectSameTrajectory(written.trajectory(), direct.trajectory());
+  // The seed made the difference: the file's seed 7 gives another path.
+  expected.set_seed(7);
+  v1::PlanResponse seven;
+  ASSERT_TRUE(server.Plan(expected, &seven).ok());
+  ASSERT_EQ(seven.outcome(), v1::SUCCESS) << seven.message();
+  EXPECT_NE(seven.statistics().path_length(), written.statistics().path_length());
+}
+
+// A bad value is a usage error (exit 2) naming the flag, the value and the rule, before any RPC.
+TEST(Cli, PlanOverrideValuesAreValidated) {
+  const std::string file = ExamplePath("requests/panda_table.json");
+  const struct {
+    const char* flags;
+    const char* expected;
+  } cases[] = {
+      {"--budget 0", "--budget '0' must be a number of seconds in (0, 600]"},
+      {"--budget 601", "--budget '601' must be a number of seconds in (0, 600]"},
+      {"--budget soon", "--budget 'soon' must be a number of seconds in (0, 600]"},
+      {"--budget nan", "--budget 'nan' must be a number of seconds in (0, 600]"},
+      {"--seed -1", "--seed '-1' must be a whole number in [0, 18446744073709551615]"},
+      {"--seed 1.5", "--seed '1.5' must be a whole number"},
+      {"--seed 18446744073709551616", "--seed '18446744073709551616' must be a whole number"},
+      {"--sample-period 0.00001", "--sample-period '0.00001' must be a number of seconds in [0.0001, 1]"},
+      {"--sample-period 2", "--sample-period '2' must be a number of seconds in [0.0001, 1]"},
+      {"--planner ''", "--planner '' must be a planner id"},
+      {"--seed", "--seed needs a value"},
+  };
+  for (const auto& c : cases) {
+    // Nothing listens on port 1: a usage error must come before any call.
+    CommandResult result = RunCli("--server 127.0.0.1:1 plan " + file + " " + c.flags);
+    EXPECT_EQ(result.exit_code, 2) << c.flags << "\n" << result.output;
+    EXPECT_NE(result.output.find(c.expected), std::string::npos) << c.flags << "\n" << result.output;
+  }
+  // The flags belong to plan (and import-moveit), not to other commands.
+  CommandResult elsewhere = RunCli("--server 127.0.0.1:1 optimize " + file + " --seed 3");
+  EXPECT_EQ(elsewhere.exit_code, 2) << elsewhere.output;
+  EXPECT_NE(elsewhere.output.find("belong to plan and import-moveit, not optimize"), std::string::npos)
+      << elsewhere.output;
+}
+
 TEST(Cli, IkPoseGoalAndDhPoeUploads) {
   LoopbackServer server;
   const std::string at = "--server " + server.address() + " ";

@@ -1,0 +1,38 @@
+#pragma once
+/// \file
+/// Command-line overrides of a chasles.v1.PlanRequest's planner, budget, seed and sample period,
+/// shared by `chasles plan` and `chasles import-moveit` (users need not edit the JSON).
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "chasles/v1/chasles.pb.h"
+
+namespace chasles::cli {
+
+/// Each set field replaces the request's; unset fields leave it alone.
+struct PlanOverrides {
+  std::optional<std::string> planner_id;  ///< --planner ID -> planner.planner_id (non-empty)
+  std::optional<double> time_budget;      ///< --budget S -> time_budget [s], in (0, 600]
+  std::optional<std::uint64_t> seed;      ///< --seed N -> seed, a whole number >= 0 (0 = seed 1)
+  std::optional<double> sample_period;    ///< --sample-period S -> trajectory.sample_period [s], in [1e-4, 1]
+
+  bool empty() const { return !planner_id && !time_budget && !seed && !sample_period; }
+};
+
+/// The usage lines of the four flags.
+extern const char kPlanOverridesUsage[];
+
+/// True for --planner, --budget, --seed and --sample-period.
+bool IsPlanOverrideFlag(const std::string& flag);
+
+/// Stores `value` of `flag` (one IsPlanOverrideFlag accepts) in `overrides`.
+/// \throws std::invalid_argument naming the flag, the value and the rule, e.g.
+///   `--budget '0' must be a number of seconds in (0, 600]`.
+void SetPlanOverride(const std::string& flag, const std::string& value, PlanOverrides* overrides);
+
+/// Writes the set overrides into `request`.
+void ApplyPlanOverrides(const PlanOverrides& overrides, v1::PlanRequest* request);
+
+}  // namespace chasles::cli
