@@ -431,8 +431,9 @@ bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eig
     if (counters != nullptr) ++counters->state_checks;
     q = a + s * delta;
     ComputeFk(q, &frames[0]);
-    PlaceLinkBounds(&frames[0], &lb[0], &placed[0]);
-    const auto place = [&](std::size_t li) { PlaceLinkSpheres(&frames[0], li, &w[0], &placed[0]); };
+    // data(), not &v[0]: a robot without collision spheres (nl = ns = 0) has empty vectors.
+    PlaceLinkBounds(&frames[0], lb.data(), placed.data());
+    const auto place = [&](std::size_t li) { PlaceLinkSpheres(&frames[0], li, w.data(), placed.data()); };
     double step = 1.0 - s;
     // Scene primitives: exact clearances; a link whose bounding sphere is clear by more than
     // step·(its fastest sphere's bound) cannot shorten the step.
