@@ -395,6 +395,10 @@ ParameterSpec IterationsParam() {
 class OmplPlanner : public Planner {
  public:
   OmplPlanner(Kind kind, PlannerSpec spec) : kind_(kind), spec_(std::move(spec)) {}
+  // OMPL 1.5.2's ~LazyPRM() is defaulted and frees none of its roadmap's states (fixed upstream
+  // by ompl/ompl#909 for issue #833): without clear() first, every lazy_prm_star solve leaked its
+  // roadmap. Clear() frees the states of any planner.
+  ~OmplPlanner() override { Clear(); }
 
   const PlannerSpec& spec() const override { return spec_; }
 
