@@ -3,6 +3,8 @@
 // baseline measured in the same run.
 #include "bench_hardening.h"
 
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -10,9 +12,11 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <future>
 #include <memory>
 #include <string>
+#include <utility>
 #include <thread>
 #include <vector>
 
@@ -93,13 +97,6 @@ double ShortPlanLatency(const Loopback& server, int long_calls, double long_budg
   return latency;
 }
 
-/// Resident set size [MiB].
-double ResidentMiB() {
-  std::ifstream statm("/proc/self/statm");
-  double pages = 0, resident = 0;
-  statm >> pages >> resident;
-  return resident * static_cast<double>(sysconf(_SC_PAGESIZE)) / 1048576.0;
-}
 
 /// A binary STL of `triangles` distinct slivers (content differs by `salt`).
 std::string BinaryStl(int triangles, int salt) {
@@ -115,6 +112,84 @@ std::string BinaryStl(int triangles, int salt) {
     bytes.append(2, '\0');
   }
   return bytes;
+}
+
+/// A chasles-server process started with `flags` on a free loopback port; its RSS is the
+/// server's alone (the client's buffers are in this process).
+class ServerProcess {
+ public:
+  explicit ServerProcess(const std::vector<std::string>& flags) {
+    char self[4096] = {0};
+    const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+    std::string binary = std::string(self, n > 0 ? static_cast<std::size_t>(n) : 0);
+    binary = binary.substr(0, binary.rfind('/') + 1) + "chasles-server";
+    char log_name[] = "/tmp/chasles-bench-server-XXXXXX";
+    const int log = mkstemp(log_name);
+    log_ = log_name;
+    pid_ = fork();
+    if (pid_ == 0) {
+      dup2(log, 2);
+      std::vector<std::string> args = {binary, "--listen", "127.0.0.1:0", "--threads", "2"};
+      args.insert(args.end(), flags.begin(), flags.end());
+      std::vector<char*> argv;
+      for (auto& a : args) argv.push_back(a.data());
+      argv.push_back(nullptr);
+      execv(binary.c_str(), argv.data());
+      _exit(127);
+    }
+    close(log);
+    for (int k = 0; k < 600 && port_ == 0; ++k) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      std::ifstream in(log_);
+      const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      const std::size_t at = text.find("(port ");
+      if (at != std::string::npos) port_ = std::atoi(text.c_str() + at + 6);
+    }
+  }
+  ~ServerProcess() {
+    kill(pid_, SIGTERM);
+    waitpid(pid_, nullptr, 0);
+    std::remove(log_.c_str());
+  }
+  std::unique_ptr<v1::Planning::Stub> Connect() const {
+    grpc::ChannelArguments arguments;
+    arguments.SetMaxReceiveMessageSize(64 << 20);
+    return v1::Planning::NewStub(grpc::CreateCustomChannel("127.0.0.1:" + std::to_string(port_),
+                                                           grpc::InsecureChannelCredentials(), arguments));
+  }
+  /// The server's resident set size [MiB].
+  double ResidentMiB() const {
+    std::ifstream statm("/proc/" + std::to_string(pid_) + "/statm");
+    double pages = 0, resident = 0;
+    statm >> pages >> resident;
+    return resident * static_cast<double>(sysconf(_SC_PAGESIZE)) / 1048576.0;
+  }
+  bool ok() const { return port_ != 0; }
+
+ private:
+  pid_t pid_ = -1;
+  int port_ = 0;
+  std::string log_;
+};
+
+/// The server's RSS growth [MiB] over `uploads` distinct 50 MB STL uploads with `--cache-mb`.
+double UploadGrowth(int uploads, const std::string& cache_mb) {
+  ServerProcess server({"--quiet", "--cache-mb", cache_mb});
+  if (!server.ok()) return -1.0;
+  auto client = server.Connect();
+  const double before = server.ResidentMiB();
+  for (int k = 0; k < uploads; ++k) {
+    v1::UploadSceneRequest request;
+    v1::Mesh* mesh = request.mutable_scene()->add_meshes();
+    mesh->set_name("part");
+    mesh->set_data(BinaryStl(1000000, k));
+    grpc::ClientContext context;
+    v1::UploadSceneResponse response;
+    const grpc::Status status = client->UploadScene(&context, request, &response);
+    if (!status.ok()) std::fprintf(stderr, "memory: upload %d: %s\n", k, status.error_message().c_str());
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the last call's OnDone has run
+  return server.ResidentMiB() - before;
 }
 
 }  // namespace
@@ -146,66 +221,53 @@ void BenchFairness(int repeats, double long_budget) {
 }
 
 void BenchMemory(int uploads) {
-  std::printf("\n== memory: RSS of a server process (MiB) ==\n");
-  ServerOptions options;
-  options.threads = 2;
-  options.cache_mb = 256;
-  Loopback server(options);
+  std::printf("\n== memory: RSS of a chasles-server process (MiB), measured from /proc/PID/statm ==\n");
+  const double unbounded = UploadGrowth(uploads, "1048576");
+  const double bounded = UploadGrowth(uploads, "256");
+  std::printf("%-72s %10s\n", ("RSS growth over " + std::to_string(uploads) + " distinct 50 MB STL uploads").c_str(), "MiB");
+  std::printf("%-72s %10.0f\n", "  --cache-mb 1048576 (no bound in practice, as the entry-count cache was)", unbounded);
+  std::printf("%-72s %10.0f  (ratio %.2f)\n", "  --cache-mb 256 (default)", bounded, bounded / unbounded);
+
+  ServerProcess server({"--quiet"});
   auto client = server.Connect();
-  // Warm up: one plan, so libraries and pools are loaded before the baseline.
   {
     grpc::ClientContext context;
     v1::PlanResponse response;
-    client->Plan(&context, TablePlan("rrt_connect", 1.0), &response);
+    client->Plan(&context, TablePlan("rrt_connect", 1.0), &response);  // libraries and pools loaded
   }
-  const double baseline = ResidentMiB();
-  std::printf("%-64s %10.0f\n", "after one plan (baseline)", baseline);
-
-  // 1. Distinct ~50 MB STL uploads into a 256 MiB cache.
-  for (int k = 0; k < uploads; ++k) {
-    v1::UploadSceneRequest request;
-    v1::Mesh* mesh = request.mutable_scene()->add_meshes();
-    mesh->set_name("part");
-    mesh->set_data(BinaryStl(1000000, k));
-    grpc::ClientContext context;
-    v1::UploadSceneResponse response;
-    const grpc::Status status = client->UploadScene(&context, request, &response);
-    if (!status.ok()) std::fprintf(stderr, "memory: upload %d: %s\n", k, status.error_message().c_str());
-  }
-  const double after_uploads = ResidentMiB();
-  std::printf("%-64s %10.0f  (%+.0f)\n", ("after " + std::to_string(uploads) + " distinct 50 MB STL uploads, --cache-mb 256").c_str(),
-              after_uploads, after_uploads - baseline);
-
-  // 2. A large reply: a slow trajectory sampled finely (just under the reply cap), then RSS.
-  {
+  // A large reply: a slow trajectory sampled finely (under the reply cap), three times.
+  for (int k = 0; k < 3; ++k) {
     v1::PlanRequest request = TablePlan("rrt_connect", 1.0);
+    request.set_seed(k + 1);
     for (int i = 0; i < 7; ++i) request.mutable_trajectory()->add_max_velocity(0.05);
-    request.mutable_trajectory()->set_sample_period(2e-4);
-    const double before = ResidentMiB();
+    request.mutable_trajectory()->set_sample_period(1e-4);
+    const double before = server.ResidentMiB();
     grpc::Status status;
     std::size_t bytes = 0;
     {
       grpc::ClientContext context;
-      v1::PlanResponse response;  // freed (with the client's copy of the reply) before measuring
+      v1::PlanResponse response;
       status = client->Plan(&context, request, &response);
       bytes = response.ByteSizeLong();
     }
-    const double after = ResidentMiB();
-    std::printf("%-64s %10.0f  (%s, %zu MB reply; before %.0f, %+.1f %%)\n", "after a large-reply plan", after,
-                status.ok() ? "OK" : status.error_message().c_str(), bytes >> 20, before, 100.0 * (after - before) / before);
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    const double after = server.ResidentMiB();
+    std::printf("%-72s %10.0f  (%s, %zu MB reply; before %.0f, %+.1f %%)\n", "after a large-reply plan", after,
+                status.ok() ? "OK" : status.error_message().c_str(), bytes >> 20, before,
+                100.0 * (after - before) / before);
   }
-  // 3. The 200-byte request that took 4.4 GB before: refused before any sampling.
+  // The 200-byte request that took 4.4 GB before: refused before any sampling.
   {
     v1::PlanRequest request = TablePlan("rrt_connect", 1.0);
     for (int i = 0; i < 7; ++i) request.mutable_trajectory()->add_max_velocity(0.002);
     request.mutable_trajectory()->set_sample_period(1e-4);
-    const double before = ResidentMiB();
+    const double before = server.ResidentMiB();
     grpc::ClientContext context;
     v1::PlanResponse response;
     const auto start = Clock::now();
     const grpc::Status status = client->Plan(&context, request, &response);
-    std::printf("%-64s %10.0f  (code %d in %.3f s; before %.0f)\n", "after the 0.002 rad/s, 1e-4 s sample request",
-                ResidentMiB(), static_cast<int>(status.error_code()), SecondsSince(start), before);
+    std::printf("%-72s %10.0f  (code %d in %.3f s; before %.0f)\n", "after the 0.002 rad/s, 1e-4 s sample request",
+                server.ResidentMiB(), static_cast<int>(status.error_code()), SecondsSince(start), before);
   }
   std::fflush(stdout);
 }

@@ -18,6 +18,8 @@
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/geometric/PathGeometric.h>
 
+#include <grpcpp/impl/codegen/proto_utils.h>
+
 #include "chasles/optimizers/shortcut.h"
 #include "chasles/robot/error.h"
 #include "chasles/server/benchmark_report.h"
@@ -76,7 +78,7 @@ std::string ParameterText(const v1::ParameterValue& value) {
 }  // namespace
 
 /// One Benchmark call: the reactor, its runs and its write queue.
-class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkResponse> {
+class BenchmarkCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
  public:
   BenchmarkCall(const BenchmarkServices& services, BenchmarkRegistry* registry, const v1::BenchmarkRequest* request,
                 std::string request_id, Clock::time_point deadline)
@@ -117,7 +119,7 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkRespons
   }
 
   void OnWriteDone(bool ok) override {
-    const v1::BenchmarkResponse* next = nullptr;
+    const grpc::ByteBuffer* next = nullptr;
     bool finish = false;
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -166,7 +168,7 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkRespons
         " configs=" + std::to_string(config_names_.size()) + " runs=" + std::to_string(runs_) +
         " total=" + std::to_string(total_) + " parallelism=" + std::to_string(parallelism_) + " started");
     std::vector<std::pair<std::uint32_t, std::uint32_t>> launch;  // (index, slot)
-    const v1::BenchmarkResponse* write = nullptr;
+    const grpc::ByteBuffer* write = nullptr;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       write = Enqueue(ProgressMessage());
@@ -376,7 +378,7 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkRespons
 
     std::uint32_t next = 0;
     bool launch = false, complete = false;
-    const v1::BenchmarkResponse* write = nullptr;
+    const grpc::ByteBuffer* write = nullptr;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       --running_;
@@ -429,16 +431,20 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkRespons
   /// Queues a message. Caller holds mutex_. Returns the message the caller must pass to
   /// StartWrite after releasing mutex_ (the writer was idle), else null. (A write may complete
   /// inline in StartWrite, and OnWriteDone takes mutex_.)
-  [[nodiscard]] const v1::BenchmarkResponse* Enqueue(v1::BenchmarkResponse message) {
+  [[nodiscard]] const grpc::ByteBuffer* Enqueue(const v1::BenchmarkResponse& message) {
     if (client_gone_) return nullptr;
     last_message_ = Clock::now();
-    queue_.push_back(std::move(message));
+    // Serialised here: the stream carries raw bytes (the call's request is parsed by the service).
+    grpc::ByteBuffer bytes;
+    bool own = false;
+    grpc::SerializationTraits<v1::BenchmarkResponse>::Serialize(message, &bytes, &own);
+    queue_.push_back(std::move(bytes));
     if (writing_) return nullptr;
     writing_ = true;
     return &queue_.front();
   }
 
-  void Write(const v1::BenchmarkResponse* message) {
+  void Write(const grpc::ByteBuffer* message) {
     if (message) StartWrite(message);
   }
 
@@ -450,7 +456,7 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkRespons
       ticker_wake_.wait_until(lock, last_message_ + interval);
       if (ticker_stop_) break;
       if (Clock::now() - last_message_ >= interval && !client_gone_) {
-        const v1::BenchmarkResponse* write = Enqueue(ProgressMessage());
+        const grpc::ByteBuffer* write = Enqueue(ProgressMessage());
         lock.unlock();
         Write(write);
         lock.lock();
@@ -470,7 +476,7 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkRespons
 
     grpc::Status status;
     bool finish = false;
-    const v1::BenchmarkResponse* write = nullptr;
+    const grpc::ByteBuffer* write = nullptr;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (client_gone_) {
@@ -560,7 +566,7 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<v1::BenchmarkRespons
   std::vector<v1::BenchmarkRun> finished_;
   bool stopping_ = false, stopped_by_request_ = false, client_gone_ = false, deadline_exceeded_ = false,
        queue_full_ = false;
-  std::deque<v1::BenchmarkResponse> queue_;  // front is being written when writing_
+  std::deque<grpc::ByteBuffer> queue_;  // serialised messages; front is being written when writing_
   bool writing_ = false;
   Clock::time_point last_message_ = Clock::now();
   std::optional<grpc::Status> final_status_;
@@ -596,7 +602,7 @@ bool BenchmarkRegistry::Stop(const std::string& id) {
   return true;
 }
 
-grpc::ServerWriteReactor<v1::BenchmarkResponse>* StartBenchmark(const BenchmarkServices& services,
+grpc::ServerWriteReactor<grpc::ByteBuffer>* StartBenchmark(const BenchmarkServices& services,
                                                                  BenchmarkRegistry* registry,
                                                                  const v1::BenchmarkRequest* request,
                                                                  const std::string& request_id,

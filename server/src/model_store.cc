@@ -1,5 +1,7 @@
 #include "chasles/server/model_store.h"
 
+#include <malloc.h>
+
 #include <algorithm>
 
 #include "chasles/robot/error.h"
@@ -9,13 +11,23 @@
 namespace chasles {
 namespace {
 
-/// Runs `make` and returns its result with the bytes it left allocated (operator new on this
-/// thread), at least `message_bytes`.
+/// Bytes malloc holds for the whole process (heap blocks in use plus mmapped blocks).
+std::int64_t MallocBytesInUse() {
+  const struct mallinfo2 info = mallinfo2();
+  return static_cast<std::int64_t>(info.uordblks) + static_cast<std::int64_t>(info.hblkhd);
+}
+
+/// Runs `make` and returns its result with an estimate of the bytes it left allocated: the larger
+/// of this thread's operator-new bytes (exact, but blind to malloc: Eigen's aligned buffers in
+/// FCL's BVHs, C libraries) and the process's malloc growth over the call (sees everything, but
+/// other threads' traffic too), and at least `message_bytes`.
 template <typename Make>
 auto Measured(std::size_t message_bytes, std::uint64_t* bytes, Make make) {
+  const std::int64_t malloc_before = MallocBytesInUse();
   HeapScope scope;
   auto value = make();
-  *bytes = std::max<std::uint64_t>(message_bytes, static_cast<std::uint64_t>(std::max<std::int64_t>(0, scope.live_bytes())));
+  const std::int64_t grown = std::max(scope.live_bytes(), MallocBytesInUse() - malloc_before);
+  *bytes = std::max<std::uint64_t>(message_bytes, static_cast<std::uint64_t>(std::max<std::int64_t>(0, grown)));
   return value;
 }
 

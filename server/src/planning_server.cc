@@ -131,6 +131,7 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
   /// Parses the request bytes. False (and the call finished with INVALID_ARGUMENT) when they
   /// are not a `Request`.
   bool Parse(const grpc::ByteBuffer* bytes) {
+    request_bytes_ = bytes->Length();
     grpc::ByteBuffer copy(*bytes);
     grpc::ProtoBufferReader reader(&copy);
     if (request.ParseFromZeroCopyStream(&reader)) return true;
@@ -158,7 +159,15 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
     cancelled_ = true;
     if (termination_) termination_->Cancel();
   }
-  void OnDone() override { delete this; }
+  /// The call's buffers (request, response, gRPC's) are freed here, after the answer left; a call
+  /// that held much gives the free heap back to the system then, so RSS returns to its level.
+  void OnDone() override {
+    const bool large = record.peak_heap_bytes > kTrimAboveBytes || request_bytes_ > kTrimAboveBytes;
+    delete this;
+    if (large) ReleaseFreeHeapMemory();
+  }
+  /// Calls whose peak heap or request exceeds this are followed by giving free memory back.
+  static constexpr std::uint64_t kTrimAboveBytes = 16ull << 20;
 
   /// Serialises the response (when OK), records and logs the call, and finishes it. Called once.
   void Complete(grpc::Status status) {
@@ -185,6 +194,7 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
 
  private:
   grpc::ByteBuffer* const reply_;
+  std::size_t request_bytes_ = 0;
   std::function<void(const RequestRecord&)> on_done_;
   mutable std::mutex mutex_;
   bool cancelled_ = false;
@@ -206,7 +216,7 @@ using RawService = v1::Planning::WithRawCallbackMethod_Plan<v1::Planning::WithRa
         v1::Planning::WithRawCallbackMethod_UpdateScene<v1::Planning::WithRawCallbackMethod_InverseKinematics<
             v1::Planning::WithRawCallbackMethod_Optimize<v1::Planning::WithRawCallbackMethod_Coordinate<
                 v1::Planning::WithRawCallbackMethod_CreateWorkcell<v1::Planning::WithRawCallbackMethod_CommitTrajectory<
-                    v1::Planning::WithRawCallbackMethod_Release<v1::Planning::WithCallbackMethod_Benchmark<
+                    v1::Planning::WithRawCallbackMethod_Release<v1::Planning::WithRawCallbackMethod_Benchmark<
                         v1::Planning::WithRawCallbackMethod_StopBenchmark<v1::Planning::Service>>>>>>>>>>>>>;
 
 /// The service's collaborators and its share of the server options.
@@ -498,31 +508,43 @@ class PlanningService final : public RawService {
         });
   }
 
-  grpc::ServerWriteReactor<v1::BenchmarkResponse>* Benchmark(grpc::CallbackServerContext* context,
-                                                             const v1::BenchmarkRequest* request) override {
-    if (grpc::Status refused = access_->Authorize(*context, "Benchmark"); !refused.ok()) return new RefusedWriter(refused);
-    const std::string request_id = RequestId(request->request_id(), "bench");
+  grpc::ServerWriteReactor<grpc::ByteBuffer>* Benchmark(grpc::CallbackServerContext* context,
+                                                        const grpc::ByteBuffer* in) override {
+    if (grpc::Status refused = access_->Authorize(*context, "Benchmark"); !refused.ok()) {
+      return RefuseStream(*context, refused);
+    }
+    v1::BenchmarkRequest request;
+    {
+      grpc::ByteBuffer copy(*in);
+      grpc::ProtoBufferReader reader(&copy);
+      if (!request.ParseFromZeroCopyStream(&reader)) {
+        return RefuseStream(*context, grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                                                   "the request is not a valid chasles.v1.BenchmarkRequest message (" +
+                                                       std::to_string(in->Length()) +
+                                                       " bytes that do not parse as protobuf wire format of that "
+                                                       "type); check that the client and server use the same "
+                                                       "chasles.v1 proto"));
+      }
+    }
+    const double run_budget = Defaulted(request.run_budget(), 5.0);
+    if (const grpc::Status refused = CheckBudgets({{"run_budget", run_budget}}); !refused.ok()) {
+      return RefuseStream(*context, refused);
+    }
+    const std::string request_id = RequestId(request.request_id(), "bench");
     BenchmarkServices services;
     services.registry = &registry_;
     services.pipeline = &pipeline_;
     services.store = store_;
     services.pool = pool_;
     services.ticket.client = ClientOf(*context);
-    services.ticket.long_running = Defaulted(request->run_budget(), 5.0) > options_.long_budget;
+    services.ticket.long_running = run_budget > options_.long_budget;
     if (options_.log_requests) {
       const std::size_t cap = options_.log_field_max;
       services.log = [cap](const std::string& line) {
         std::fprintf(stderr, "chasles-server: %s\n", EscapeForLog(line, 8 * cap).c_str());
       };
     }
-    const double run_budget = Defaulted(request->run_budget(), 5.0);
-    if (run_budget > options_.max_budget) {
-      auto* refused = new RefusedWriter(grpc::Status(
-          grpc::StatusCode::INVALID_ARGUMENT, "run_budget = " + FormatNumber(run_budget) + " s exceeds this server's maximum budget of " +
-                                                  FormatNumber(options_.max_budget) + " s (--max-budget)"));
-      return refused;
-    }
-    return StartBenchmark(services, &benchmarks_, request, request_id, SteadyDeadline(*context));
+    return StartBenchmark(services, &benchmarks_, &request, request_id, SteadyDeadline(*context));
   }
 
   grpc::ServerUnaryReactor* StopBenchmark(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
@@ -559,11 +581,24 @@ class PlanningService final : public RawService {
   enum class Where { kInline, kPool };
 
   /// A write reactor that only answers an error (a Benchmark refused before it starts).
-  class RefusedWriter final : public grpc::ServerWriteReactor<v1::BenchmarkResponse> {
+  class RefusedWriter final : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
    public:
     explicit RefusedWriter(const grpc::Status& status) { Finish(status); }
     void OnDone() override { delete this; }
   };
+
+  /// Answers a Benchmark stream with `status` before it starts, and records it.
+  grpc::ServerWriteReactor<grpc::ByteBuffer>* RefuseStream(const grpc::CallbackServerContext& context,
+                                                           const grpc::Status& status) {
+    RequestRecord record;
+    record.rpc = "Benchmark";
+    record.client = ClientOf(context);
+    record.status_code = static_cast<int>(status.error_code());
+    record.status_message = StatusMessage(status.error_message());
+    services_.metrics->RequestStarted(record.rpc);
+    Record(record);
+    return new RefusedWriter(grpc::Status(status.error_code(), record.status_message));
+  }
 
   /// Who the caller is, for fair queueing and the log: the authenticated identity (token name or
   /// client certificate) when there is one, else the peer (address and port: one connection).
@@ -619,9 +654,7 @@ class PlanningService final : public RawService {
         peak = heap.peak_bytes();
       }
       call->record.peak_heap_bytes = peak;
-      call->Complete(status);
-      // A large call leaves free blocks behind in malloc's arenas: give them back to the system.
-      if (peak > kTrimAboveBytes) ReleaseFreeHeapMemory();
+      call->Complete(status);  // OnDone gives a large call's free heap back to the system
     };
     if (where == Where::kInline) {
       job();
@@ -787,8 +820,6 @@ class PlanningService final : public RawService {
     return buffer;
   }
 
-  /// Calls whose peak heap exceeds this are followed by giving free memory back to the system.
-  static constexpr std::uint64_t kTrimAboveBytes = 32ull << 20;
 
   const ServiceContext services_;
   const PlannerRegistry& registry_;

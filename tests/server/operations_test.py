@@ -181,6 +181,35 @@ class ReflectionTest(unittest.TestCase):
         self.assertIn("rrt_connect", ids)
 
 
+class MalformedMessageTest(unittest.TestCase):
+    """Bytes that are not the method's message: INVALID_ARGUMENT naming the type, streams too."""
+
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.server = Server("--quiet")
+
+    @classmethod
+    def tearDownClass(cls) -> None:
+        cls.server.channel.close()
+        cls.server.stop()
+
+    def test_benchmark_stream(self) -> None:
+        call = self.server.channel.unary_stream("/chasles.v1.Planning/Benchmark")
+        with self.assertRaises(grpc.RpcError) as refused:
+            list(call(b"\xff\xff\xff\xff\x0f not a protobuf", timeout=30))
+        self.assertEqual(refused.exception.code(), grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertIn("is not a valid chasles.v1.BenchmarkRequest message", refused.exception.details())
+
+    def test_unary_and_then_served(self) -> None:
+        call = self.server.channel.unary_unary("/chasles.v1.Planning/Optimize")
+        with self.assertRaises(grpc.RpcError) as refused:
+            call(b"\x0a\xff\xff", timeout=30)
+        self.assertEqual(refused.exception.code(), grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertIn("is not a valid chasles.v1.OptimizeRequest message (3 bytes", refused.exception.details())
+        stub = chasles_pb2_grpc.PlanningStub(self.server.channel)
+        self.assertEqual(stub.Plan(_plan_request("after"), timeout=60).outcome, chasles_pb2.SUCCESS)
+
+
 def _plan_request(request_id: str, planner: str = "rrt_connect") -> chasles_pb2.PlanRequest:
     request = chasles_pb2.PlanRequest()
     request.start.positions.extend(EXAMPLE["start"]["positions"])

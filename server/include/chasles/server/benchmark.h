@@ -64,7 +64,7 @@ v1::PlanRequest BenchmarkRunRequest(const v1::PlanRequest& problem, const v1::Be
 
 /// Starts a Benchmark call; `request_id` is the request's or a generated one; `deadline` is the
 /// call's gRPC deadline on the steady clock.
-grpc::ServerWriteReactor<v1::BenchmarkResponse>* StartBenchmark(const BenchmarkServices& services,
+grpc::ServerWriteReactor<grpc::ByteBuffer>* StartBenchmark(const BenchmarkServices& services,
                                                                  BenchmarkRegistry* registry,
                                                                  const v1::BenchmarkRequest* request,
                                                                  const std::string& request_id,

@@ -30,8 +30,9 @@ class ModelStore {
   /// Parses the default robot and scene (used when a request names none); they are never
   /// evicted. \throws Error when either does not parse.
   /// `cache_bytes` bounds the estimated bytes of every cached robot, scene and checker together
-  /// (the defaults are outside it). An entry's estimate is the larger of its message size and
-  /// the operator-new bytes its parsing/construction left allocated.
+  /// (the defaults are outside it). An entry's estimate is the largest of its message size, the
+  /// operator-new bytes its parsing/construction left allocated on this thread, and the process's
+  /// malloc growth over that construction.
   /// `limits` caps every robot and scene parsed here (documents, links, DOF, meshes, maps).
   ModelStore(const v1::RobotModel& default_robot, const v1::Scene& default_scene,
              std::uint64_t cache_bytes = 256ull << 20, const InputLimits& limits = {});
