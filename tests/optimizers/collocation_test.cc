@@ -22,6 +22,7 @@
 #include "chasles/optimizers/verification.h"
 #include "chasles/robot/dynamics.h"
 #include "chasles/robot/error.h"
+#include "../budget_scale.h"
 #include "planar_fixture.h"
 #include "test_util.h"
 
@@ -29,6 +30,13 @@ namespace chasles {
 namespace {
 
 using ::testing::HasSubstr;
+
+/// Default options; the time budget (5 s) is scaled under the sanitizers (budget_scale.h).
+CollocationOptions TestOptions() {
+  CollocationOptions options;
+  options.time_budget = test::Budget(options.time_budget);
+  return options;
+}
 
 /// Exact minimum time of the straight rest-to-rest segment a→b.
 double StraightMinimumTime(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const KinematicLimits& limits) {
@@ -122,7 +130,7 @@ TEST(Collocation, RestToRestStraightSegmentsNearMinimumTime) {
     const double tstar = StraightMinimumTime(a, b, limits);
     ASSERT_NEAR(warm.duration(), tstar, 1e-9 * tstar);
 
-    CollocationOptions options;  // K = 100
+    CollocationOptions options = TestOptions();  // K = 100
     const CollocationResult result = OptimizeByCollocation(warm, limits, options);
     ExpectReportFigures(result.report);
     ASSERT_FALSE(result.trajectory.empty());
@@ -152,7 +160,7 @@ TEST(Collocation, PassesVerificationOnThePandaAroundABox) {
   const JointPath path{PandaHome(), via, PandaAway()};
   ASSERT_TRUE(checker->IsMotionValid(path[0], path[1], 0.005) && checker->IsMotionValid(path[1], path[2], 0.005));
   const TimedTrajectory warm = ParameterizeTimeOptimal(path, limits, {}, checker.get());
-  CollocationOptions options;
+  CollocationOptions options = TestOptions();
   options.knots = 40;
   const CollocationResult result = OptimizeByCollocation(warm, limits, options, checker.get());
   ExpectReportFigures(result.report);
@@ -166,7 +174,7 @@ TEST(Collocation, JerkLimitsHoldAndTheAccelerationIsZeroAtRest) {
   KinematicLimits limits = PandaLimits(checker->robot());
   limits.max_jerk = Eigen::VectorXd::Constant(7, 60.0);
   const TimedTrajectory warm = ParameterizeRestToRest({PandaHome(), PandaAway()}, limits);
-  CollocationOptions options;
+  CollocationOptions options = TestOptions();
   options.knots = 40;
   const CollocationResult result = OptimizeByCollocation(warm, limits, options, checker.get());
   ExpectReportFigures(result.report);
@@ -187,7 +195,7 @@ TEST(Collocation, TorqueLimitsOnThePandaHold) {
   ASSERT_TRUE(HasInertia(robot));
   KinematicLimits limits = PandaLimits(robot);
   const TimedTrajectory warm = ParameterizeTimeOptimal({PandaHome(), PandaAway()}, limits);
-  CollocationOptions options;
+  CollocationOptions options = TestOptions();
   options.knots = 30;
   const CollocationResult free = OptimizeByCollocation(warm, limits, options, checker.get());
   ASSERT_TRUE(free.report.ok) << free.report.message;
@@ -215,7 +223,7 @@ TEST(Collocation, JerkWeightLowersTheJerkIntegral) {
   const auto checker = Panda(false);
   const KinematicLimits limits = PandaLimits(checker->robot());
   const TimedTrajectory warm = ParameterizeTimeOptimal({PandaHome(), PandaAway()}, limits);
-  CollocationOptions options;
+  CollocationOptions options = TestOptions();
   options.knots = 30;
   const CollocationResult plain = OptimizeByCollocation(warm, limits, options, checker.get());
   options.jerk_weight = 1e-4;
@@ -240,7 +248,7 @@ TEST(Collocation, ClearanceAroundThePostWhereTheStraightLineCollides) {
   limits.max_velocity = Eigen::Vector2d(2.0, 2.0);
   limits.max_acceleration = Eigen::Vector2d(4.0, 4.0);
   const TimedTrajectory warm = ParameterizeTimeOptimal(path, limits, {}, checker.get());
-  CollocationOptions options;
+  CollocationOptions options = TestOptions();
   options.knots = 40;
   const CollocationResult result = OptimizeByCollocation(warm, limits, options, checker.get());
   ExpectReportFigures(result.report);
@@ -268,7 +276,7 @@ TEST(Collocation, KeepsNonZeroEndVelocitiesOfTheWarmStart) {
   timing.start_velocity = 0.3 * (path[1] - path[0]);
   timing.end_velocity = 0.2 * (path[1] - path[0]);
   const TimedTrajectory warm = ParameterizeTimeOptimal(path, limits, timing);
-  CollocationOptions options;
+  CollocationOptions options = TestOptions();
   options.knots = 20;
   const CollocationResult result = OptimizeByCollocation(warm, limits, options);
   ExpectReportFigures(result.report);
@@ -285,7 +293,7 @@ TEST(Collocation, RepeatsBitForBit) {
   limits.max_acceleration = Eigen::Vector3d(3.0, 4.0, 2.0);
   const TimedTrajectory warm =
       ParameterizeTimeOptimal({Eigen::Vector3d(0.0, 0.0, 0.0), Eigen::Vector3d(1.0, -0.5, 0.7)}, limits);
-  CollocationOptions options;
+  CollocationOptions options = TestOptions();
   options.knots = 20;
   const CollocationResult a = OptimizeByCollocation(warm, limits, options);
   const CollocationResult b = OptimizeByCollocation(warm, limits, options);
@@ -306,7 +314,7 @@ TEST(Collocation, ConcurrentCallsAgreeWithASequentialOne) {
   limits.max_acceleration = Eigen::Vector3d(3.0, 4.0, 2.0);
   const TimedTrajectory warm =
       ParameterizeTimeOptimal({Eigen::Vector3d(0.0, 0.0, 0.0), Eigen::Vector3d(1.0, -0.5, 0.7)}, limits);
-  CollocationOptions options;
+  CollocationOptions options = TestOptions();
   options.knots = 20;
   const CollocationResult alone = OptimizeByCollocation(warm, limits, options);
   ASSERT_TRUE(alone.report.ok) << alone.report.message;
@@ -339,7 +347,7 @@ TEST(Collocation, StopEndsTheSolveWithoutATrajectory) {
   limits.max_velocity = Eigen::Vector2d(1.0, 1.0);
   limits.max_acceleration = Eigen::Vector2d(1.0, 1.0);
   const TimedTrajectory warm = ParameterizeTimeOptimal({Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(1.0, 2.0)}, limits);
-  CollocationOptions options;
+  CollocationOptions options = TestOptions();
   options.knots = 20;
   options.stop = [] { return true; };
   const CollocationResult result = OptimizeByCollocation(warm, limits, options);
@@ -355,7 +363,7 @@ TEST(Collocation, ImpossibleTorqueLimitsAreReportedNotOk) {
   const TimedTrajectory warm = ParameterizeTimeOptimal({PandaHome(), PandaAway()}, kinematic);
   KinematicLimits limits = kinematic;
   limits.max_effort = Eigen::VectorXd::Constant(7, 2.0);  // the shoulder cannot even hold the arm
-  CollocationOptions options;
+  CollocationOptions options = TestOptions();
   options.knots = 10;
   options.max_iterations = 100;
   const CollocationResult result = OptimizeByCollocation(warm, limits, options, checker.get());

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../budget_scale.h"
 #include "server_fixture.h"
 
 namespace chasles::testing {
@@ -147,7 +148,8 @@ TEST_P(EveryPlannerOnEveryRequest, ReturnsAVerifiedTrajectory) {
     for (const std::string& kind : p.robot_kinds()) kind_supported |= kind == RequestKind(request);
   }
   // Anytime planners refine until the budget ends: keep it small (a car's curves cost more).
-  request.set_time_budget(optimizing ? (IsCarRequest(request) ? 2.0 : 0.5) : 5.0);
+  // Scaled under the sanitizers (budget_scale.h).
+  request.set_time_budget(test::Budget(optimizing ? (IsCarRequest(request) ? 2.0 : 0.5) : 5.0));
   v1::PlanResponse response;
   const grpc::Status status = server_->Plan(request, &response);
   if (!kind_supported) {
