@@ -11,6 +11,7 @@
 #include "chasles/multi/coordinator.h"
 #include "chasles/server/convert.h"
 #include "chasles/server/convert_multi.h"
+#include "../budget_scale.h"
 #include "server_fixture.h"
 
 namespace chasles::testing {
@@ -88,6 +89,8 @@ TEST_F(CoordinateTest, ExampleScenariosSucceedOrReportTheirConflict) {
     v1::CoordinateRequest request;
     const auto parsed = google::protobuf::util::JsonStringToMessage(ReadText(ExamplePath("requests/" + name + ".json")), &request);
     ASSERT_TRUE(parsed.ok()) << parsed.ToString();
+    // The example's budget (0 = 30 s), scaled under the sanitizers (budget_scale.h).
+    request.set_time_budget(test::Budget(request.time_budget() > 0 ? request.time_budget() : 30.0));
     v1::CoordinateResponse response;
     const grpc::Status status = Coordinate(request, &response);
     ASSERT_TRUE(status.ok()) << status.error_message();
