@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../budget_scale.h"
 #include "server_fixture.h"
 
 namespace chasles {
@@ -192,7 +193,7 @@ TEST_F(BenchCli, InterruptStopsAndKeepsTheFinishedRuns) {
   LoopbackServer server(2);
   const fs::path config = Write("long.yaml",
                                 "runs: 50\n"
-                                "run_budget: 0.5\n"
+                                "run_budget: " + std::to_string(test::Budget(0.5)) + "\n"
                                 "problems:\n"
                                 "  - request: " + ExamplePath("requests/planar_2r_table.json") + "\n"
                                 "configs:\n"
@@ -211,7 +212,8 @@ TEST_F(BenchCli, InterruptStopsAndKeepsTheFinishedRuns) {
     _exit(127);
   }
   // RRT* uses its whole 0.5 s budget: 50 runs on 2 workers take 12.5 s; interrupt after ~1.2 s.
-  std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+  // Both scaled under the sanitizers (budget_scale.h), where the CLI and the runs start slower.
+  std::this_thread::sleep_for(std::chrono::duration<double>(test::Budget(1.2)));
   kill(pid, SIGINT);
   int status = 0;
   ASSERT_EQ(waitpid(pid, &status, 0), pid);
