@@ -108,13 +108,7 @@ void Convert(int selector, std::string_view bytes) {
     case 5: {
       v1::UpdateSceneRequest request;
       if (!Parse(bytes, &request)) return;
-      PointCloudInsertion insertion;  // as PlanningServer::UpdateScene fills it
-      insertion.octomap = request.octomap();
-      insertion.points.assign(request.points().begin(), request.points().end());
-      const v1::Vector3& origin = request.sensor_origin();
-      insertion.sensor_origin = Eigen::Vector3d(origin.x(), origin.y(), origin.z());
-      insertion.max_range = request.max_range();
-      insertion.resolution = request.resolution();
+      const PointCloudInsertion insertion = PointCloudInsertionFromProto(request);  // as the server does
       PointCloudInsertionStats stats;
       Server().scene->InsertPointCloud(insertion, &stats);
       return;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <string>
 
@@ -197,9 +198,14 @@ void SampleCap::Check(double duration, double period, int dofs) const {
   const double fit_samples =
       std::min(static_cast<double>(max_samples), std::floor(static_cast<double>(max_reply_bytes) / per_sample));
   if (estimate <= static_cast<double>(max_samples) && bytes <= static_cast<double>(max_reply_bytes)) return;
-  const double smallest_period = duration / std::max(1.0, fit_samples - 2.0);
+  // Rounded up to 3 significant digits, so the period suggested does fit.
+  const double exact_period = duration / std::max(1.0, fit_samples - 2.0);
+  const double scale = std::pow(10.0, std::floor(std::log10(exact_period)) - 2.0);
+  const double smallest_period = std::ceil(exact_period / scale) * scale;
+  char duration_text[32];
+  std::snprintf(duration_text, sizeof(duration_text), "%.4g", duration);
   std::ostringstream message;
-  message << field << " = " << FormatNumber(period) << " s over the " << FormatNumber(duration)
+  message << field << " = " << FormatNumber(period) << " s over the " << duration_text
           << " s trajectory gives about " << static_cast<std::uint64_t>(estimate) << " samples (~"
           << static_cast<std::uint64_t>(std::ceil(bytes / 1048576.0)) << " MiB for " << dofs << " joints), more than ";
   if (estimate > static_cast<double>(max_samples)) {
@@ -207,7 +213,9 @@ void SampleCap::Check(double duration, double period, int dofs) const {
   } else {
     message << "the server's reply cap of " << (max_reply_bytes >> 20) << " MiB (" << reply_cap_source << ")";
   }
-  message << "; use a " << field << " of at least " << FormatNumber(smallest_period)
+  char period_text[32];
+  std::snprintf(period_text, sizeof(period_text), "%.3g", smallest_period);
+  message << "; use a " << field << " of at least " << period_text
           << " s, or sample the trajectory on the client";
   ThrowResourceExhausted(message.str());
 }

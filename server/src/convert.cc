@@ -469,6 +469,17 @@ void IkResultToProto(const IkResult& result, const IkRequest& ik, const RobotMod
   response->set_seconds(result.seconds);
 }
 
+PointCloudInsertion PointCloudInsertionFromProto(const v1::UpdateSceneRequest& request) {
+  PointCloudInsertion insertion;
+  insertion.octomap = request.octomap();
+  insertion.points.assign(request.points().begin(), request.points().end());
+  const v1::Vector3& origin = request.sensor_origin();
+  insertion.sensor_origin = Eigen::Vector3d(origin.x(), origin.y(), origin.z());
+  insertion.max_range = request.max_range();
+  insertion.resolution = request.resolution();
+  return insertion;
+}
+
 std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::string& field, const InputLimits& limits) {
   auto scene = std::make_shared<Scene>();
   ForEachPrimitive(proto, field,

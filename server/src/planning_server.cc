@@ -328,13 +328,7 @@ class PlanningService final : public RawService {
           v1::UpdateSceneResponse& response = call.response;
           const StoredScene base =
               request.scene_id().empty() ? store_->default_scene() : store_->FindScene(request.scene_id());
-          PointCloudInsertion insertion;
-          insertion.octomap = request.octomap();
-          insertion.points.assign(request.points().begin(), request.points().end());
-          const v1::Vector3& origin = request.sensor_origin();
-          insertion.sensor_origin = Eigen::Vector3d(origin.x(), origin.y(), origin.z());
-          insertion.max_range = request.max_range();
-          insertion.resolution = request.resolution();
+          const PointCloudInsertion insertion = PointCloudInsertionFromProto(request);
           PointCloudInsertionStats stats;
           std::shared_ptr<const Scene> updated;
           std::uint64_t bytes = 0;

@@ -58,6 +58,9 @@ void IkResultToProto(const IkResult& result, const IkRequest& ik, const RobotMod
 std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& scene, const std::string& field = "scene",
                                             const InputLimits& limits = {});
 
+/// The point cloud of an UpdateScene request (its values are checked by Scene::InsertPointCloud).
+PointCloudInsertion PointCloudInsertionFromProto(const v1::UpdateSceneRequest& request);
+
 /// A PoseGoal with the proto's defaults and ranges; `field` names it, e.g. "robots[1].pose_goal".
 PoseGoalSpec PoseGoalFromProto(const v1::PoseGoal& goal, const RobotModel& robot, const std::string& field);
 
