@@ -263,9 +263,7 @@ class PlanningService final : public RawService {
       RequestSettings settings;
       double input_duration = 0.0;
       OptimizeQuery query = OptimizeQueryFromProto(request, store_->Checker(robot, scene), &settings, &input_duration);
-      query.sample_cap.max_samples = options_.max_samples;
-      query.sample_cap.max_reply_bytes = ReplyBytes();
-      query.sample_cap.reply_cap_source = ReplyCapSource();
+      ApplyReplyCap(&query.sample_cap);
       const Termination termination = call.Start(BudgetEnd(settings.time_budget, call.deadline), call.deadline);
       const OptimizeOutcome outcome = OptimizePath(query, termination);
       OptimizeOutcomeToProto(outcome, query, &response);
@@ -403,9 +401,7 @@ class PlanningService final : public RawService {
               request, scene.scene,
               [this](const v1::TeamRobot& robot, const std::string& field) { return TeamRobotOf(robot, field).model; },
               registry_);
-          query.sample_cap.max_samples = options_.max_samples;
-          query.sample_cap.max_reply_bytes = ReplyBytes() / std::max<std::uint64_t>(1, query.robots.size());
-          query.sample_cap.reply_cap_source = ReplyCapSource() + " shared by " + std::to_string(query.robots.size()) + " robots";
+          ApplyReplyCap(&query.sample_cap, query.robots.size());
           if (request.has_workcell()) {
             const double origin =
                 request.workcell().start_time() == 0.0 ? workcells_->Now() : request.workcell().start_time();
@@ -616,13 +612,14 @@ class PlanningService final : public RawService {
       return call;
     }
     if (!call->Parse(in)) return call;
-    if (const grpc::Status refused = CheckBudgets(BudgetsOf(call->request)); !refused.ok()) {
+    const BudgetFields budgets = BudgetsOf(call->request);
+    if (const grpc::Status refused = CheckBudgets(budgets); !refused.ok()) {
       call->Complete(refused);
       return call;
     }
     JobTicket ticket;
     ticket.client = call->record.client;
-    for (const auto& [field, seconds] : BudgetsOf(call->request)) {
+    for (const auto& [field, seconds] : budgets) {
       if (seconds > options_.long_budget) ticket.long_running = true;
     }
     auto job = [this, call, work = std::move(work)]() mutable {
@@ -695,16 +692,17 @@ class PlanningService final : public RawService {
                             "planner graph (e.g. max_nodes), or a larger sample_period");
   }
 
-  /// The estimated bytes a reply may carry: the message cap less room for everything else.
-  std::uint64_t ReplyBytes() const {
+  /// The server's caps on a reply's samples: --max-samples each, and the message cap less room
+  /// for everything else (1 MiB, or an eighth of small caps) shared by `robots` trajectories.
+  void ApplyReplyCap(SampleCap* cap, std::size_t robots = 1) const {
     const std::uint64_t max_message = static_cast<std::uint64_t>(options_.max_message_mb) << 20;
-    return max_message - std::min<std::uint64_t>(max_message / 8, 1u << 20);
-  }
-
-  std::string ReplyCapSource() const {
-    const std::uint64_t max_message = static_cast<std::uint64_t>(options_.max_message_mb) << 20;
-    return "--max-message-mb " + std::to_string(options_.max_message_mb) + " less " +
-           std::to_string((max_message - ReplyBytes()) >> 10 >= 1024 ? (max_message - ReplyBytes()) >> 20 : 0) + " MiB";
+    const std::uint64_t margin = std::min<std::uint64_t>(max_message / 8, 1u << 20);
+    const std::uint64_t shares = std::max<std::uint64_t>(1, robots);
+    cap->max_samples = options_.max_samples;
+    cap->max_reply_bytes = (max_message - margin) / shares;
+    cap->reply_cap_source = "--max-message-mb " + std::to_string(options_.max_message_mb) + " less " +
+                            (margin == (1u << 20) ? "1 MiB" : std::to_string(margin >> 10) + " KiB");
+    if (shares > 1) cap->reply_cap_source += " shared by " + std::to_string(shares) + " robots";
   }
 
   /// Logs the finished call and hands it to the metrics.
@@ -735,9 +733,7 @@ class PlanningService final : public RawService {
       // A team of one among the workcell's committed trajectories.
       call.record.fields.front().second = "workcell:" + planner;
       CoordinationQuery query = WorkcellPlanQuery(request, robot.model, scene.scene, registry_);
-      query.sample_cap.max_samples = options_.max_samples;
-      query.sample_cap.max_reply_bytes = ReplyBytes();
-      query.sample_cap.reply_cap_source = ReplyCapSource();
+      ApplyReplyCap(&query.sample_cap);
       query.sample_cap.field = "trajectory.sample_period";
       const double origin =
           request.workcell().start_time() == 0.0 ? workcells_->Now() : request.workcell().start_time();
@@ -761,9 +757,7 @@ class PlanningService final : public RawService {
     // 2. The query, with the proto's defaults and the server's caps.
     RequestSettings settings;
     PlanQuery query = PlanQueryFromProto(request, checker, registry_, &settings);
-    query.sample_cap.max_samples = options_.max_samples;
-    query.sample_cap.max_reply_bytes = ReplyBytes();
-      query.sample_cap.reply_cap_source = ReplyCapSource();
+    ApplyReplyCap(&query.sample_cap);
     const double prepare = SecondsSince(call.arrival) - call.record.queue_seconds;
 
     // 3. Budget: the request's, cut short so a result can still travel back before the gRPC

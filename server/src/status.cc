@@ -1,25 +1,12 @@
 #include "chasles/server/status.h"
 
-#include <algorithm>
-#include <cstdio>
 #include <string>
 
 namespace chasles {
 
 std::string StatusMessage(std::string_view text) {
   constexpr std::size_t kMaxBytes = 4096;
-  std::string out;
-  out.reserve(std::min(text.size(), kMaxBytes) + 32);
-  for (std::size_t k = 0; k < text.size() && k < kMaxBytes; ++k) {
-    const auto byte = static_cast<unsigned char>(text[k]);
-    if (byte < 0x20 || byte == 0x7f) {
-      char hex[8];
-      std::snprintf(hex, sizeof(hex), "\\x%02x", byte);
-      out += hex;
-    } else {
-      out += text[k];
-    }
-  }
+  std::string out = EscapeControlCharacters(std::string(text.substr(0, kMaxBytes)));
   if (text.size() > kMaxBytes) out += "…(+" + std::to_string(text.size() - kMaxBytes) + " bytes)";
   return out;
 }
