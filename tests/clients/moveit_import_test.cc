@@ -10,6 +10,7 @@
 #include <google/protobuf/util/message_differencer.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -611,15 +612,20 @@ struct CommandResult {
 };
 
 CommandResult RunCli(const std::string& arguments) {
+  // ctest runs these tests as parallel processes sharing TempDir(): every call gets its own files.
+  static int call = 0;
+  const std::string stem = "moveit_cli_" + std::to_string(::getpid()) + "_" + std::to_string(++call);
   const std::filesystem::path dir = std::filesystem::path(::testing::TempDir());
-  const std::string out = (dir / "moveit_cli_out.txt").string();
-  const std::string err = (dir / "moveit_cli_err.txt").string();
+  const std::string out = (dir / (stem + "_out.txt")).string();
+  const std::string err = (dir / (stem + "_err.txt")).string();
   const std::string command = std::string(CHASLES_CLI) + " import-moveit " + arguments + " > " + out + " 2> " + err;
   const int status = std::system(command.c_str());
   CommandResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   result.out = testing::ReadText(out);
   result.err = testing::ReadText(err);
+  std::filesystem::remove(out);
+  std::filesystem::remove(err);
   return result;
 }
 
@@ -641,7 +647,9 @@ TEST(MoveItCli, PrintsAPlanRequestWithTheSameScene) {
 TEST(MoveItCli, EmbedsTheRobotAndWritesOut) {
   const std::string urdf = std::string(CHASLES_SOURCE_DIR) + "/examples/robots/panda.urdf";
   const std::string srdf = std::string(CHASLES_SOURCE_DIR) + "/examples/robots/panda.srdf";
-  const std::string out = (std::filesystem::path(::testing::TempDir()) / "moveit_cli_request.json").string();
+  const std::string out = (std::filesystem::path(::testing::TempDir()) /
+                           ("moveit_cli_request_" + std::to_string(::getpid()) + ".json"))
+                              .string();
   std::filesystem::remove(out);
   const CommandResult result = RunCli(ExamplesDir() + "/scene0002.yaml " + ExamplesDir() +
                                       "/request0002.yaml --robot " + urdf + " --srdf " + srdf + " --out " + out);
