@@ -317,8 +317,13 @@ struct CollisionChecker::Impl {
   double FclClearance(const Frame* frames) const;
   bool Collide(const Eigen::VectorXd& q, CollisionResult* report) const;
   void BuildLevers();
-  void SweepBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double* out) const;
-  bool CertifiedMotion(const Eigen::VectorXd& a, const Eigen::VectorXd& b, CheckCounters* counters) const;
+  /// D_k = Σ_i w_i·R_ik: how far sphere k's centre can move per unit of the curve parameter
+  /// when |dq_i/ds| <= w_i.
+  void SweepBounds(const Eigen::VectorXd& w, double* out) const;
+  /// Conservative advancement along q(s), s ∈ [0, 1], with |dq_i/ds| <= w_i (see
+  /// IsCurveCertified); joint limits are the caller's.
+  bool CertifiedCurve(const CollisionChecker::Curve& curve, const Eigen::VectorXd& speed,
+                      CheckCounters* counters) const;
 };
 
 // Lever arms. A revolute joint turns everything below it about an axis through its child
@@ -326,8 +331,9 @@ struct CollisionChecker::Impl {
 // bounded, by the triangle inequality, by the sphere centre's norm in its link frame plus the
 // norms of the joint-origin translations between that link and the joint (a prismatic joint in
 // between adds the largest |limit| to that length). A prismatic joint moves every point below
-// it by exactly |Δq|. Summing over the chain: |x(q + Δq) − x(q)| <= Σ_i R_i |Δq_i| along any
-// path whose joint increments are monotone — in particular a straight segment.
+// it by exactly |Δq|. Summing over the chain, the centre's speed is at most Σ_i R_i |q̇_i|, so
+// along any path |x(s1) − x(s0)| <= Σ_i R_i ∫|q̇_i| <= Σ_i R_i w_i (s1 − s0) when |dq_i/ds| <= w_i
+// (a straight segment a→b: w = |b − a|).
 void CollisionChecker::Impl::BuildLevers() {
   num_dofs = robot->num_dofs();
   const std::size_t ns = sx.size();
@@ -363,13 +369,13 @@ void CollisionChecker::Impl::BuildLevers() {
   }
 }
 
-void CollisionChecker::Impl::SweepBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double* out) const {
+void CollisionChecker::Impl::SweepBounds(const Eigen::VectorXd& w, double* out) const {
   const std::size_t ns = sx.size();
   for (std::size_t k = 0; k < ns; ++k) {
     const double* r = &lever[k * num_dofs];
     double d = 0.0;
     for (int i = 0; i < num_dofs; ++i) {
-      if (r[i] != 0.0) d += std::abs(b[i] - a[i]) * r[i];
+      if (r[i] != 0.0) d += w[i] * r[i];
     }
     out[k] = d;
   }
@@ -384,12 +390,12 @@ constexpr double kMaxLinkGridMargin = 0.1;   // [m]
 constexpr double kInitialGridMargin = 0.02;  // [m]
 }  // namespace
 
-bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eigen::VectorXd& b,
-                                             CheckCounters* counters) const {
+bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve, const Eigen::VectorXd& speed,
+                                            CheckCounters* counters) const {
   const std::size_t ns = sx.size();
   const std::size_t nl = slinks.size();
   std::vector<double> D(ns), Dl(nl, 0.0);
-  SweepBounds(a, b, D.data());
+  SweepBounds(speed, D.data());
   for (std::size_t li = 0; li < nl; ++li) {
     for (int k = slinks[li].begin; k < slinks[li].end; ++k) Dl[li] = std::max(Dl[li], D[k]);
   }
@@ -411,7 +417,7 @@ bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eig
         const double* r = &lever[static_cast<std::size_t>(k) * num_dofs];
         double d = 0.0;
         for (int i = 0; i < num_dofs; ++i) {
-          if (!other[i] && r[i] != 0.0) d += std::abs(b[i] - a[i]) * r[i];
+          if (!other[i] && r[i] != 0.0) d += speed[i] * r[i];
         }
         if (!std::isfinite(d)) return false;
         PD.push_back(d);
@@ -423,13 +429,13 @@ bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eig
   std::vector<char> placed(nl);
   std::vector<double> margin(ns * grids.size(), kInitialGridMargin);  // last grid margin that held
   Scratch<Frame, 64> frames(num_links);
-  const Eigen::VectorXd delta = b - a;
-  Eigen::VectorXd q(a.size());
+  Eigen::VectorXd q(num_dofs);
   double s = 0.0;
   for (int state = 0;; ++state) {
     if (state >= kMaxCertifiedStates) return false;
     if (counters != nullptr) ++counters->state_checks;
-    q = a + s * delta;
+    curve(s, &q);
+    if (!q.allFinite()) return false;
     ComputeFk(q, &frames[0]);
     // data(), not &v[0]: a robot without collision spheres (nl = ns = 0) has empty vectors.
     PlaceLinkBounds(&frames[0], lb.data(), placed.data());
@@ -524,7 +530,7 @@ bool CollisionChecker::Impl::CertifiedMotion(const Eigen::VectorXd& a, const Eig
         }
       }
     }
-    if (step >= 1.0 - s) return true;  // [s, 1] is clear; b was checked exactly
+    if (step >= 1.0 - s) return true;  // [s, 1] is clear
     if (!(step >= kMinCertifiedStep)) return false;  // grazing (or NaN): reject conservatively
     s += step;
     if (s >= 1.0) return true;
@@ -1234,7 +1240,32 @@ bool CollisionChecker::IsMotionCertified(const Eigen::VectorXd& a, const Eigen::
       if (impl_->Collide(q, nullptr)) return false;
     }
   }
-  return impl_->CertifiedMotion(a, b, counters);
+  const Eigen::VectorXd delta = b - a;
+  return impl_->CertifiedCurve([&](double s, Eigen::VectorXd* q) { *q = a + s * delta; }, delta.cwiseAbs(), counters);
+}
+
+bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorXd& speed_bound,
+                                        CheckCounters* counters) const {
+  CheckSize(*robot_, speed_bound, "speed_bound");
+  for (int i = 0; i < speed_bound.size(); ++i) {
+    if (!std::isfinite(speed_bound[i]) || speed_bound[i] < 0.0) {
+      ThrowInvalid("speed_bound[" + std::to_string(i) + "] = " + FormatNumber(speed_bound[i]) +
+                   " must be finite and >= 0");
+    }
+  }
+  if (impl_->certifiable) return impl_->CertifiedCurve(curve, speed_bound, counters);
+  // Discrete fallback: states no more than 0.005 apart in every joint, in order.
+  const double span = speed_bound.maxCoeff();
+  const double steps = std::ceil(span / 0.005);
+  if (steps > 1e9) ThrowInvalid("curve needs more than 1e9 checks at 0.005; split it");
+  const long n = std::max(1L, static_cast<long>(steps));
+  Eigen::VectorXd q(robot_->num_dofs());
+  for (long i = 0; i <= n; ++i) {
+    curve(static_cast<double>(i) / static_cast<double>(n), &q);
+    if (counters != nullptr) ++counters->state_checks;
+    if (!q.allFinite() || impl_->Collide(q, nullptr)) return false;
+  }
+  return true;
 }
 
 std::vector<double> CollisionChecker::SweepBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const {
@@ -1242,7 +1273,7 @@ std::vector<double> CollisionChecker::SweepBounds(const Eigen::VectorXd& a, cons
   CheckSize(*robot_, b, "b");
   if (!impl_->certifiable) return {};
   std::vector<double> out(impl_->sx.size());
-  impl_->SweepBounds(a, b, out.data());
+  impl_->SweepBounds((b - a).cwiseAbs(), out.data());
   return out;
 }
 

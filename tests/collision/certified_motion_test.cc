@@ -67,6 +67,52 @@ TEST(CertifiedMotion, ThinSheetBetweenSamplesIsFound) {
   EXPECT_THROW(checker.IsMotionCertified(Q1(-1), Eigen::VectorXd::Zero(2)), Error);
 }
 
+TEST(CertifiedCurve, ACurveThatDipsIntoAnObstacleBetweenItsEndsIsRejected) {
+  // x(s) = -1 + 2s + 0.3 sin(πs)·… stays left of the sheet only if it never reaches x = 0.0022:
+  // a parabola through x = -0.5 at both ends whose apex pokes 0.0025 into the sheet region.
+  auto robot = test::SliderRobot(Shape::Sphere(0.0001));
+  auto scene = std::make_shared<Scene>();
+  scene->AddObject({"sheet", Shape::Box({0.0006, 1.0, 1.0}, At(0.0025, 0, 0))});
+  CollisionChecker checker(robot, scene);
+  ASSERT_TRUE(checker.certifies_motion());
+  const auto parabola = [](double apex) {
+    return [apex](double s, Eigen::VectorXd* q) { *q = Q1(-0.5 + 4.0 * (apex + 0.5) * s * (1.0 - s)); };
+  };
+  // |dx/ds| = 4 (apex + 0.5) |1 − 2s| <= 4 (apex + 0.5).
+  const auto speed = [](double apex) { return Q1(4.0 * (apex + 0.5)); };
+  EXPECT_FALSE(checker.IsCurveCertified(parabola(0.0025), speed(0.0025)));  // apex inside the sheet
+  EXPECT_FALSE(checker.IsCurveCertified(parabola(0.003), speed(0.003)));    // through it and back
+  EXPECT_TRUE(checker.IsCurveCertified(parabola(0.002), speed(0.002)));     // 0.2 mm short of it
+  // Both ends are free (x = -0.5): a check of the chord alone would accept the motion.
+  EXPECT_TRUE(checker.IsMotionCertified(Q1(-0.5), Q1(-0.5)));
+  // A straight segment as a curve gives the segment's answer.
+  const auto line = [](double a, double b) {
+    return [a, b](double s, Eigen::VectorXd* q) { *q = Q1(a + s * (b - a)); };
+  };
+  EXPECT_FALSE(checker.IsCurveCertified(line(-1, 1), Q1(2)));
+  EXPECT_TRUE(checker.IsCurveCertified(line(-1, -0.01), Q1(0.99)));
+  EXPECT_THROW(checker.IsCurveCertified(line(-1, 1), Q1(-1)), Error);
+  EXPECT_THROW(checker.IsCurveCertified(line(-1, 1), Eigen::VectorXd::Zero(2)), Error);
+  // A curve that returns NaN is never certified.
+  EXPECT_FALSE(checker.IsCurveCertified([](double, Eigen::VectorXd* q) { *q = Q1(std::nan("")); }, Q1(1)));
+}
+
+TEST(CertifiedCurve, FallsBackToDiscreteStatesWhenTheCheckerCannotCertify) {
+  auto robot = test::SliderRobot(Shape::Sphere(0.0001));
+  auto scene = std::make_shared<Scene>();
+  scene->AddObject({"sheet", Shape::Box({0.0006, 1.0, 1.0}, At(0.0025, 0, 0))});
+  CollisionOptions fcl;
+  fcl.force_fcl = true;
+  CollisionChecker checker(robot, scene, fcl);
+  ASSERT_FALSE(checker.certifies_motion());
+  CheckCounters counters;
+  // 2 m at 0.005: 401 states, s = i/400 → x = -1 + 0.005 i misses the sheet, as the discrete
+  // check does.
+  EXPECT_TRUE(checker.IsCurveCertified([](double s, Eigen::VectorXd* q) { *q = Q1(-1 + 2 * s); }, Q1(2), &counters));
+  EXPECT_EQ(counters.state_checks, 401u);
+  EXPECT_FALSE(checker.IsCurveCertified([](double s, Eigen::VectorXd* q) { *q = Q1(0.0025 * s); }, Q1(0.0025)));
+}
+
 TEST(CertifiedMotion, LeverArmBoundHoldsAlongSegments) {
   auto panda = test::LoadRobot("panda");
   CollisionChecker checker(panda, std::make_shared<Scene>());

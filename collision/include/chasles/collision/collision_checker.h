@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -99,6 +100,25 @@ class CollisionChecker {
   /// `counters->state_checks` counts the evaluated states. Precondition: sizes == num_dofs().
   bool IsMotionCertified(const Eigen::VectorXd& a, const Eigen::VectorXd& b,
                          CheckCounters* counters = nullptr) const;
+
+  /// A joint-space curve q(s), s ∈ [0, 1]: writes q(s) (num_dofs values) into *q.
+  using Curve = std::function<void(double s, Eigen::VectorXd* q)>;
+
+  /// Certified check of a curve, e.g. one polynomial piece of a timed trajectory: true only when
+  /// no state q(s), s ∈ [0, 1], collides (self under the ACM, or the scene other than an allowed
+  /// pair, padding included). `speed_bound[i]` must bound |dq_i/ds| over all of [0, 1] (for a
+  /// piece of duration T: T·max|q̇_i| over it); the advancement of IsMotionCertified then
+  /// holds unchanged, with D_k = Σ_i speed_bound_i·R_ik — the centre of sphere k moves at most
+  /// Σ_i R_ik ∫|q̇_i| along any path. Joint limits are NOT checked here (a curve's range is the
+  /// caller's: VerifyTrajectory checks it exactly at each polynomial's extrema). No probes: the
+  /// advancement starts at s = 0. Same conservatism as IsMotionCertified (false when a step
+  /// falls below 1e-7 or more than 20000 states would be evaluated, or q(s) is not finite).
+  /// When !certifies_motion() it checks states at s = i/n with n = ⌈max_i speed_bound_i /
+  /// 0.005⌉ (no joint moves more than 0.005 between them, by the bound) and certifies nothing.
+  /// \throws Error(kInvalidArgument) when speed_bound has the wrong size or a value that is not
+  ///         finite and >= 0.
+  bool IsCurveCertified(const Curve& curve, const Eigen::VectorXd& speed_bound,
+                        CheckCounters* counters = nullptr) const;
 
   /// True when IsMotionCertified is certified (see there) rather than the discrete fallback.
   bool certifies_motion() const;
