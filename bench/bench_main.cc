@@ -2,7 +2,7 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|pipeline|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
@@ -48,6 +48,7 @@
 #include "chasles/server/planning_server.h"
 #include "chasles/v1/chasles.grpc.pb.h"
 #include "bench_hardening.h"
+#include "bench_pipeline.h"
 
 namespace chasles {
 namespace {
@@ -60,6 +61,7 @@ struct Options {
   std::uint64_t seed = 1;
   std::vector<std::string> planners;  // empty = all
   std::vector<std::string> scenes = {"table", "shelf", "cage", "shelf_octomap"};
+  bool scenes_given = false;  // --scenes: else the pipeline section uses its own (with bin)
   double budget = 1.0;          // non-optimizing planners [s]
   double anytime_budget = 0.1;  // optimizing planners [s]
   int grpc_requests = 200;
@@ -1046,7 +1048,10 @@ int Main(int argc, char** argv) {
     else if (arg == "--queries") options.queries = std::stoi(value());
     else if (arg == "--seed") options.seed = std::stoull(value());
     else if (arg == "--planners") options.planners = Split(value());
-    else if (arg == "--scenes") options.scenes = Split(value());
+    else if (arg == "--scenes") {
+      options.scenes = Split(value());
+      options.scenes_given = true;
+    }
     else if (arg == "--budget") options.budget = std::stod(value());
     else if (arg == "--anytime-budget") options.anytime_budget = std::stod(value());
     else if (arg == "--grpc-requests") options.grpc_requests = std::stoi(value());
@@ -1067,7 +1072,7 @@ int Main(int argc, char** argv) {
     else if (arg == "--uploads") options.uploads = std::stoi(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all]\n"
+                   "usage: chasles-bench [--section checks|plan|pipeline|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all]\n"
                    "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
@@ -1075,12 +1080,26 @@ int Main(int argc, char** argv) {
                    "                     [--problems maze,office,drone_course,panda_shelf]\n"
                    "                     [--segments N] [--paths N] [--knots K] [--methods topp,collocation,spline]\n"
                    "                     [--runs N] [--scenarios crossing_arms,swap_bases,corridor] [--team-budget S]\n"
-                   "                     [--bench-repeats N]\n");
+                   "                     [--bench-repeats N]\n"
+                   "  pipeline: --scenes (default table,shelf,cage,bin), --planners (default rrt_connect), --queries,\n"
+                   "            --seed, --budget, --anytime-budget, --bench-repeats (alternations of ours, FCL, RPC)\n");
       return arg == "--help" ? 0 : 2;
     }
   }
   if (options.section == "checks" || options.section == "all") BenchChecks(options);
   if (options.section == "plan" || options.section == "all") BenchPlanning(options);
+  if (options.section == "pipeline" || options.section == "all") {
+    PipelineBenchOptions pipeline;
+    pipeline.examples_dir = examples_dir;
+    if (options.scenes_given) pipeline.scenes = options.scenes;
+    if (!options.planners.empty()) pipeline.planners = options.planners;
+    pipeline.queries = options.queries;
+    pipeline.seed = options.seed;
+    pipeline.repeats = options.bench_repeats;
+    pipeline.budget = options.budget;
+    pipeline.anytime_budget = options.anytime_budget;
+    BenchPipeline(pipeline, MakeQueries);
+  }
   if (options.section == "families" || options.section == "all") BenchFamilies(options);
   if (options.section == "grpc" || options.section == "all") BenchGrpc(options);
   if (options.section == "kinematics" || options.section == "all") BenchKinematics(options);

@@ -1,0 +1,41 @@
+#pragma once
+/// \file
+/// chasles-bench --section pipeline (issue 16): the whole single-arm request — plan, shortcut,
+/// time-parameterise (TOPP), certify — on the Panda scenes, in-process against the same queries
+/// through the FCL path, and as a Plan RPC over loopback against the in-process pipeline.
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace chasles {
+
+class CollisionChecker;
+
+/// `count` seeded start/goal pairs for `checker`: both collision-free, the straight segment
+/// between them colliding (bench_main.cc's MakeQueries, so the plan section's queries are these).
+using QueryMaker = std::function<std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>>(
+    const CollisionChecker& checker, int count, std::uint64_t seed)>;
+
+struct PipelineBenchOptions {
+  std::string examples_dir;  ///< holds robots/panda.urdf, robots/panda.srdf, scenes/<name>.json
+  std::vector<std::string> scenes = {"table", "shelf", "cage", "bin"};
+  std::vector<std::string> planners = {"rrt_connect"};
+  int queries = 50;             ///< per scene, >= 1
+  std::uint64_t seed = 1;       ///< of the queries; query k plans with seed + k
+  int repeats = 3;              ///< alternations of (ours, FCL path, Plan RPC), >= 1
+  double budget = 1.0;          ///< per query, non-optimizing planners [s]
+  double anytime_budget = 0.1;  ///< per query, optimizing planners [s]
+  double sample_period = 0.01;  ///< of the returned samples [s]
+};
+
+/// Prints three markdown tables to stdout: the stages in-process (ours and the FCL path), the
+/// Plan RPC against the in-process pipeline, and the issue's targets, met or not.
+/// \throws std::runtime_error when an example file is missing or an RPC fails.
+void BenchPipeline(const PipelineBenchOptions& options, const QueryMaker& make_queries);
+
+}  // namespace chasles
