@@ -48,9 +48,13 @@ bool SegmentValid(const CollisionChecker& checker, const Eigen::VectorXd& a, con
 /// Greedy vertex reduction: from each kept waypoint, jump to the farthest later waypoint that
 /// the straight segment reaches validly (and not longer than the polyline it replaces).
 JointPath ReduceVertices(const JointPath& path, const CollisionChecker& checker, double max_step,
-                         CheckCounters* counters) {
+                         CheckCounters* counters, std::vector<char>* checked) {
   const int n = static_cast<int>(path.size());
-  if (n < 3) return path;
+  if (n < 3) {
+    checked->assign(std::max(n - 1, 0), 0);
+    return path;
+  }
+  checked->clear();
   // prefix[k] = polyline length from path[0] to path[k].
   std::vector<double> prefix(n, 0.0);
   for (int k = 1; k < n; ++k) prefix[k] = prefix[k - 1] + (path[k] - path[k - 1]).norm();
@@ -59,15 +63,18 @@ JointPath ReduceVertices(const JointPath& path, const CollisionChecker& checker,
   int i = 0;
   while (i < n - 1) {
     int next = i + 1;
+    char valid = 0;  // the kept input segment i → i + 1 was not checked here
     for (int j = n - 1; j > i + 1; --j) {
       const double direct = (path[j] - path[i]).norm();
       if (direct > prefix[j] - prefix[i]) continue;  // rounding only; never lengthen
       if (SegmentValid(checker, path[i], path[j], max_step, counters)) {
         next = j;
+        valid = 1;
         break;
       }
     }
     out.push_back(path[next]);
+    checked->push_back(valid);
     i = next;
   }
   return out;
@@ -85,6 +92,12 @@ JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
                        const ShortcutOptions& options, CheckCounters* counters) {
   if (options.max_attempts < 0) {
     ThrowInvalid("shortcut max_attempts = " + std::to_string(options.max_attempts) + " must be >= 0");
+  }
+  if (options.stall_attempts < 0) {
+    ThrowInvalid("shortcut stall_attempts = " + std::to_string(options.stall_attempts) + " must be >= 0");
+  }
+  if (!(options.stall_improvement >= 0.0 && options.stall_improvement < 1.0)) {
+    ThrowInvalid("shortcut stall_improvement = " + FormatNumber(options.stall_improvement) + " must be in [0, 1)");
   }
   if (!std::isfinite(options.max_step)) {
     ThrowInvalid("shortcut max_step = " + FormatNumber(options.max_step) + " must be finite");
@@ -107,14 +120,24 @@ JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
   }
   if (path.size() < 3) return path;
 
-  JointPath current = ReduceVertices(RemoveDuplicates(path), checker, options.max_step, counters);
+  // checked[k]: segment current[k] → current[k + 1] passed SegmentValid in this call. On a
+  // certifying checker every sub-segment of a checked segment is certified too (its states are
+  // a subset, up to rounding of ~1e-16 rad), so a shortcut's head and tail pieces need no new
+  // check; on the discrete path they are re-checked at their own states.
+  std::vector<char> checked;
+  JointPath current = ReduceVertices(RemoveDuplicates(path), checker, options.max_step, counters, &checked);
+  const bool inherit = checker.certifies_motion();
+  double length = PathLength(current);
 
   std::mt19937_64 rng(options.seed);
   bool changed = false;
+  int stalled = 0;        // consecutive attempts that shortened the path by less than the threshold
   for (int attempt = 0; attempt < options.max_attempts; ++attempt) {
     if (options.stop && options.stop()) break;
+    if (options.stall_attempts > 0 && stalled >= options.stall_attempts) break;
     const int segments = static_cast<int>(current.size()) - 1;
     if (segments < 2) break;  // a single straight segment cannot get shorter
+    ++stalled;
     // Two different segments i < j, a point on each.
     int i = UniformIndex(rng, segments);
     int j = UniformIndex(rng, segments - 1);
@@ -131,25 +154,45 @@ JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
     const double new_length = (qb - qa).norm();
     if (!(new_length < old_length * (1.0 - 1e-9))) continue;  // not meaningfully shorter
 
-    // qa and qb lie on valid segments, but their pieces are new segments and are re-checked
-    // (certified, or at max_step) so the result's every segment passes IsMotionValid.
+    // qa and qb lie on valid segments; their pieces are new segments, checked unless they are
+    // pieces of a segment certified above.
     const bool head_needed = !(qa == current[i]);
     const bool tail_needed = !(qb == current[j + 1]);
     if (!SegmentValid(checker, qa, qb, options.max_step, counters)) continue;
-    if (head_needed && !SegmentValid(checker, current[i], qa, options.max_step, counters)) continue;
-    if (tail_needed && !SegmentValid(checker, qb, current[j + 1], options.max_step, counters)) continue;
+    if (head_needed && !(inherit && checked[i]) &&
+        !SegmentValid(checker, current[i], qa, options.max_step, counters)) {
+      continue;
+    }
+    if (tail_needed && !(inherit && checked[j]) &&
+        !SegmentValid(checker, qb, current[j + 1], options.max_step, counters)) {
+      continue;
+    }
 
     JointPath next;
+    std::vector<char> next_checked;
     next.reserve(current.size() + 2);
     next.insert(next.end(), current.begin(), current.begin() + i + 1);
-    if (head_needed) next.push_back(qa);
-    if (tail_needed && !(head_needed && qb == qa)) next.push_back(qb);
+    next_checked.insert(next_checked.end(), checked.begin(), checked.begin() + i);
+    if (head_needed) {
+      next.push_back(qa);
+      next_checked.push_back(1);
+    }
+    if (tail_needed && !(head_needed && qb == qa)) {
+      next.push_back(qb);
+      next_checked.push_back(1);  // qa → qb
+    }
+    next_checked.push_back(1);  // the last new segment: qa/qb → current[j + 1] (or qa → qb)
     next.insert(next.end(), current.begin() + j + 1, current.end());
+    next_checked.insert(next_checked.end(), checked.begin() + j + 1, checked.end());
     current = std::move(next);
+    checked = std::move(next_checked);
+    const double shorter = length - PathLength(current);
+    if (shorter >= options.stall_improvement * length) stalled = 0;
+    length -= shorter;
     changed = true;
   }
   // Shortcut points may have made further waypoints redundant.
-  if (changed) current = ReduceVertices(current, checker, options.max_step, counters);
+  if (changed) current = ReduceVertices(current, checker, options.max_step, counters, &checked);
   // Endpoints are never replaced above; assert that the contract holds bit for bit.
   current.front() = path.front();
   current.back() = path.back();

@@ -204,6 +204,8 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
     options.max_attempts = query.shortcut_attempts;
     options.max_step = query.collision_resolution;
     options.seed = query.seed;
+    options.stall_attempts = query.shortcut_stall;
+    options.stall_improvement = 0.01;
     // The time budget is the planner's; only the deadline or a cancellation cuts this short.
     options.stop = [&termination] {
       const StopReason reason = termination.Reason();

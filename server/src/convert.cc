@@ -641,6 +641,7 @@ PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<con
                  " must be -1 (off), 0 (default 100) or > 0");
   }
   query.shortcut_attempts = trajectory.shortcut_attempts() == 0 ? 100 : trajectory.shortcut_attempts();
+  query.shortcut_stall = trajectory.shortcut_attempts() == 0 ? 10 : 0;  // a number the client named runs in full
 
   query.trajectory = TrajectorySpecFromProto(trajectory, robot, "trajectory");
   query.Validate(registry);

@@ -90,6 +90,60 @@ TEST(Shortcut, RandomShortcutsImproveOnVertexReductionAlone) {
   EXPECT_LE(PathLength(shortened), PathLength(reduced));
 }
 
+TEST(Shortcut, StallEndsAttemptsThatNoLongerShortenThePath) {
+  const auto checker = test::PlanarCheckerWithPost();
+  const JointPath input = test::ZigZagAroundPost();
+  ShortcutOptions options;
+  options.max_attempts = 200;
+  options.stall_attempts = 5;
+  options.stall_improvement = 0.999;  // no single attempt shortens the path by 99.9%
+  int polls = 0;
+  options.stop = [&polls] { return ++polls < 0; };
+  const JointPath out = ShortcutPath(input, *checker, options);
+  EXPECT_EQ(polls, 6);  // five attempts, then the stall ends it at the sixth poll
+  ExpectEverySegmentValid(out, *checker);
+  // With no stall rule every attempt runs (the path keeps at least two segments around the post).
+  options.stall_attempts = 0;
+  polls = 0;
+  ShortcutPath(input, *checker, options);
+  EXPECT_EQ(polls, 200);
+  // The pipeline's rule (10 attempts under 1%) stops early with fewer checks, and still
+  // shortens the path beyond vertex reduction alone.
+  options.stall_attempts = 10;
+  options.stall_improvement = 0.01;
+  options.stop = {};
+  CheckCounters full_checks, early_checks;
+  const JointPath reduced = ShortcutPath(input, *checker, ShortcutOptions{0, kStep, 1, 0, 0.0, {}});
+  const JointPath full = ShortcutPath(input, *checker, ShortcutOptions{200, kStep, 1, 0, 0.0, {}}, &full_checks);
+  const JointPath early = ShortcutPath(input, *checker, options, &early_checks);
+  EXPECT_LT(early_checks.state_checks, full_checks.state_checks);
+  EXPECT_LT(PathLength(early), PathLength(reduced));
+  EXPECT_LE(PathLength(full), PathLength(reduced));
+  ExpectEverySegmentValid(early, *checker);
+  options.stall_attempts = -1;
+  EXPECT_THROW(ShortcutPath(input, *checker, options), Error);
+  options.stall_attempts = 1;
+  options.stall_improvement = 1.0;
+  EXPECT_THROW(ShortcutPath(input, *checker, options), Error);
+}
+
+TEST(Shortcut, EverySegmentOfTheResultIsCertifiedOnACertifyingChecker) {
+  const auto checker = test::PlanarCheckerWithPost();
+  ASSERT_TRUE(checker->certifies_motion());
+  const JointPath input = test::ZigZagAroundPost();
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    ShortcutOptions options;
+    options.max_attempts = 100;
+    options.seed = seed;
+    const JointPath out = ShortcutPath(input, *checker, options);
+    // Head and tail pieces inherit their segment's certificate; an independent re-check of each
+    // result segment must agree.
+    for (std::size_t k = 0; k + 1 < out.size(); ++k) {
+      EXPECT_TRUE(checker->IsMotionCertified(out[k], out[k + 1])) << "seed " << seed << " segment " << k;
+    }
+  }
+}
+
 TEST(Shortcut, StopEndsRandomShortcutsWithAValidPath) {
   const auto checker = test::PlanarCheckerWithPost();
   const JointPath input = test::ZigZagAroundPost();

@@ -49,6 +49,10 @@ struct PlanQuery {
   double sample_period = 0.01;        ///< [s], in [1e-4, 1]
   SampleCap sample_cap;               ///< checked before sampling (server flags set it)
   int shortcut_attempts = 100;        ///< -1 = off; never applied to a car's path (its shape is kept)
+  /// Shortcutting stops after this many consecutive attempts that each shorten the path by less
+  /// than 1% (ShortcutOptions::stall_attempts); 0 = every attempt runs. The server sets 0 when
+  /// the request names its shortcut_attempts.
+  int shortcut_stall = 10;
 
   /// \throws Error(kInvalidArgument/kNotFound) naming the field (proto field names), e.g.
   /// `start.positions[2] = nan must be finite`, `goal.tolerance = 0.5 must be within [0, 0.1]`.
