@@ -1284,4 +1284,6 @@ double CollisionChecker::Clearance(const Eigen::VectorXd& q) const {
   return impl_->fast ? impl_->FastClearance(&frames[0]) : impl_->FclClearance(&frames[0]);
 }
 
+const CollisionOptions& CollisionChecker::options() const { return impl_->options; }
+
 }  // namespace chasles

@@ -62,7 +62,7 @@ TEST_P(FastVsFcl, SameAnswersOnRandomPandaConfigurations) {
             << worst_clearance_error << " m\n";
 }
 
-INSTANTIATE_TEST_SUITE_P(ExampleScenes, FastVsFcl, ::testing::Values("table", "shelf", "cage"));
+INSTANTIATE_TEST_SUITE_P(ExampleScenes, FastVsFcl, ::testing::Values("table", "shelf", "cage", "bin"));
 
 // Distance from a point to a scene primitive (0 inside), written independently of the checker.
 double PointDistance(const Shape& s, const Eigen::Vector3d& world) {
