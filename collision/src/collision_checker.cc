@@ -749,20 +749,26 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
 
 double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
   const std::size_t ns = sx.size();
+  const std::size_t nl = slinks.size();
   Scratch<double, 1024> w(3 * ns);
-  for (const SphereLink& L : slinks) {
-    for (int k = L.begin; k < L.end; ++k) {
-      const double x[3] = {sx[k], sy[k], sz[k]};
-      Apply(frames[L.link], x, &w[3 * k]);
-    }
-  }
+  Scratch<double, 256> lb(3 * nl);
+  Scratch<char, 256> placed(nl);
+  PlaceLinkBounds(frames, &lb[0], &placed[0]);
   double best = kInf;
+  // A link's bounding sphere is at most as far from an obstacle as any of its spheres, so a
+  // link whose bound is no closer than the best distance so far cannot lower it.
   for (const Prim& o : prims) {
     const UnitSet* allowed = Allowed(o.allowed);
-    for (std::size_t k = 0; k < ns; ++k) {
-      if (allowed != nullptr && allowed->Has(slink_of[k])) continue;
-      best = std::min(best, SphereDistance(o, &w[3 * k], sr[k]));
+    for (std::size_t li = 0; li < nl; ++li) {
+      if (allowed != nullptr && allowed->Has(li)) continue;
+      const SphereLink& L = slinks[li];
+      if (L.end - L.begin > 1 && SphereDistance(o, &lb[3 * li], L.br) >= best) continue;
+      PlaceLinkSpheres(frames, li, &w[0], &placed[0]);
+      for (int k = L.begin; k < L.end; ++k) best = std::min(best, SphereDistance(o, &w[3 * k], sr[k]));
     }
+  }
+  if (!scene_geoms.empty()) {
+    for (std::size_t li = 0; li < nl; ++li) PlaceLinkSpheres(frames, li, &w[0], &placed[0]);
   }
   if (!scene_geoms.empty()) {
     fcl::DistanceRequestd request;

@@ -61,6 +61,8 @@ class CollisionChecker {
   const RobotModel& robot() const { return *robot_; }
   const Scene& scene() const { return *scene_; }
   const std::shared_ptr<const RobotModel>& robot_ptr() const { return robot_; }
+  /// The options the checker was built with (padding, force_fcl).
+  const CollisionOptions& options() const;
 
   /// True when q is inside the joint limits and collision-free (self and scene).
   /// Precondition: q.size() == robot().num_dofs().
