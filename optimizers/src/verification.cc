@@ -3,10 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <queue>
 #include <string>
+#include <vector>
 
 #include "chasles/robot/dynamics.h"
 #include "chasles/robot/error.h"
+#include "piece_certification.h"
 
 namespace chasles {
 namespace {
@@ -84,23 +88,57 @@ class Verifier {
     return true;
   }
 
-  /// Collisions (self and scene) and, when limited, torques of one state.
-  bool CheckState(const Piece& piece, double tau) {
-    const double t = piece.t0 + tau;
-    // CheckLimits has passed: any excess over a position limit is rounding (<= 1e-12 relative).
-    const Eigen::VectorXd q = piece.State(tau).q.cwiseMax(robot_.lower_limits()).cwiseMin(robot_.upper_limits());
+  /// CheckLimits has passed: any excess over a position limit is rounding (<= 1e-12 relative).
+  Eigen::VectorXd Clamped(const Eigen::VectorXd& q) const {
+    return q.cwiseMax(robot_.lower_limits()).cwiseMin(robot_.upper_limits());
+  }
+
+  /// Collisions (self and scene) of one state at time t.
+  bool CheckCollision(const Eigen::VectorXd& q, double t) {
     ++report_->states_checked;
-    if (!checker_.IsValid(q, &counters_)) {
-      const CollisionResult contact = checker_.Check(q);
-      if (!contact.in_collision) return Fail("state is invalid" + At(t) + " (rejected by the checker)");
-      if (contact.self_collision) {
-        return Fail("self-collision" + At(t) + " between link '" + contact.link_a + "' and link '" + contact.other + "'");
-      }
-      return Fail("collision" + At(t) + " between link '" + contact.link_a + "' and '" + contact.other + "'");
+    if (checker_.IsValid(q, &counters_)) return true;
+    const CollisionResult contact = checker_.Check(q);
+    if (!contact.in_collision) return Fail("state is invalid" + At(t) + " (rejected by the checker)");
+    return Fail(ContactText(contact, t));
+  }
+
+  /// "collision at t = … between link 'a' and 'b'" / "self-collision at t = … between link 'a'
+  /// and link 'b'".
+  static std::string ContactText(const CollisionResult& contact, double t) {
+    if (contact.self_collision) {
+      return "self-collision" + At(t) + " between link '" + contact.link_a + "' and link '" + contact.other + "'";
     }
+    return "collision" + At(t) + " between link '" + contact.link_a + "' and '" + contact.other + "'";
+  }
+
+  /// Collisions and, when limited, torques of one state (the discrete check).
+  bool CheckState(const Piece& piece, double tau) {
+    if (!CheckCollision(Clamped(piece.State(tau).q), piece.t0 + tau)) return false;
+    return CheckEffort(piece, tau);
+  }
+
+  /// Proves piece k free along its continuous motion (sphere path): conservative advancement
+  /// over spans of at most kCertifiedSpanTravel, a span that does not certify bisected up to
+  /// kMaxBisections levels. On failure the reason names the contact, found densely in the
+  /// first part that did not certify.
+  bool CertifyPiece(const Piece& piece) {
+    for (const detail::PieceSpan& span : detail::SplitPiece(piece, detail::kCertifiedSpanTravel)) {
+      CheckCounters counters;
+      detail::PieceSpan failed;
+      const bool ok = detail::CertifySpan(piece, span, checker_, kMaxBisections, &counters, &failed);
+      report_->states_checked += static_cast<int>(counters.state_checks);
+      if (!ok) return Fail(Uncertified(piece, failed));
+    }
+    return true;
+  }
+
+  /// Torques of one state when max_effort is set (no collision check).
+  bool CheckEffort(const Piece& piece, double tau) {
     if (limits_.max_effort.size() == 0) return true;
-    const int n = static_cast<int>(q.size());
+    const double t = piece.t0 + tau;
     const TrajectorySample x = piece.State(tau);
+    const Eigen::VectorXd q = Clamped(x.q);
+    const int n = static_cast<int>(q.size());
     const Eigen::VectorXd effort = InverseDynamics(robot_, q, x.qd, x.qdd, dynamics_);
     for (int i = 0; i < n; ++i) {
       const double ratio = std::abs(effort[i]) / limits_.max_effort[i];
@@ -114,6 +152,39 @@ class Verifier {
   }
 
  private:
+  static constexpr int kMaxBisections = 12;
+  static constexpr double kProbeMargin = 1e-5;  // [m] padding added to name a near-contact
+
+  /// Why the part `failed` of `piece` is not certified: the first colliding state among states
+  /// at most 0.0005 rad apart (at least 16 intervals), else the first pair that comes within
+  /// kProbeMargin of touching at those states, else only the time span.
+  std::string Uncertified(const Piece& piece, const detail::PieceSpan& failed) const {
+    const double travel = detail::SpanSpeedBound(piece, failed).maxCoeff();
+    const int m = std::max(16, static_cast<int>(std::min(1e5, std::ceil(travel / 0.0005))));
+    const auto curve = detail::SpanCurve(piece, failed, robot_);
+    const auto time = [&](int i) { return piece.t0 + failed.begin + (failed.end - failed.begin) * i / m; };
+    std::vector<Eigen::VectorXd> states(m + 1);
+    for (int i = 0; i <= m; ++i) {
+      curve(static_cast<double>(i) / m, &states[i]);
+      const CollisionResult contact = checker_.Check(states[i]);
+      if (contact.in_collision) return ContactText(contact, time(i));
+    }
+    CollisionOptions probe_options = checker_.options();
+    probe_options.padding += kProbeMargin;
+    const CollisionChecker probe(checker_.robot_ptr(), std::make_shared<Scene>(checker_.scene()), probe_options);
+    for (int i = 0; i <= m; ++i) {
+      const CollisionResult near = probe.Check(states[i]);
+      if (!near.in_collision) continue;
+      return "not certified" + At(time(i)) + ": link '" + near.link_a + "' passes within rounding of " +
+             (near.self_collision ? "link '" : "'") + near.other + "' (closer than " + FormatNumber(kProbeMargin) +
+             " m; conservative advancement cannot prove the gap, no colliding state found)";
+    }
+    return "not certified between t = " + FormatNumber(piece.t0 + failed.begin) + " and " +
+           FormatNumber(piece.t0 + failed.end) +
+           " s: conservative advancement stalled (no colliding state and no contact within " +
+           FormatNumber(kProbeMargin) + " m found)";
+  }
+
   const CollisionChecker& checker_;
   const RobotModel& robot_;
   const KinematicLimits& limits_;
@@ -167,7 +238,61 @@ std::string PieceDefect(const TimedTrajectory& trajectory, std::size_t k, int n,
   return {};
 }
 
+const char* ShapeName(ShapeType type) {
+  switch (type) {
+    case ShapeType::kSphere: return "sphere";
+    case ShapeType::kBox: return "box";
+    case ShapeType::kCylinder: return "cylinder";
+    case ShapeType::kCapsule: return "capsule";
+    case ShapeType::kMesh: return "mesh";
+  }
+  return "shape";
+}
+
+/// At most 5 items joined by ", ", then how many more.
+std::string JoinSome(const std::vector<std::string>& items) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size() && i < 5; ++i) out += (i == 0 ? "" : ", ") + items[i];
+  if (items.size() > 5) out += " and " + std::to_string(items.size() - 5) + " more";
+  return out;
+}
+
 }  // namespace
+
+std::string DiscreteCheckCause(const CollisionChecker& checker) {
+  std::vector<std::string> parts;
+  std::vector<std::string> links;
+  for (const Link& link : checker.robot().links()) {
+    for (const Shape& shape : link.collision) {
+      if (shape.type == ShapeType::kSphere) continue;
+      links.push_back("'" + link.name + "' (" + ShapeName(shape.type) + ")");
+      break;
+    }
+  }
+  if (!links.empty()) parts.push_back("robot links with shapes other than spheres: " + JoinSome(links));
+  std::vector<std::string> meshes;
+  for (const SceneObject& object : checker.scene().objects()) {
+    if (object.shape.type == ShapeType::kMesh) meshes.push_back("'" + object.name + "'");
+  }
+  if (!meshes.empty()) parts.push_back("scene meshes " + JoinSome(meshes));
+  const std::size_t maps = checker.scene().occupancy_maps().size();
+  if (maps > 0 && !checker.uses_fast_path()) {
+    std::vector<std::string> names;
+    for (const OccupancyMap& map : checker.scene().occupancy_maps()) names.push_back("'" + map.name + "'");
+    parts.push_back("occupancy maps " + JoinSome(names) + " (FCL octree)");
+  } else if (maps > static_cast<std::size_t>(checker.num_gridded_occupancy_maps())) {
+    parts.push_back(std::to_string(maps - checker.num_gridded_occupancy_maps()) + " of " + std::to_string(maps) +
+                    " occupancy maps too large to grid (their occupied voxels span more than 2^28 finest voxels)");
+  }
+  if (parts.empty()) {
+    if (checker.certifies_motion()) return {};
+    parts.push_back(checker.options().force_fcl ? "the checker was built with force_fcl (the generic FCL path)"
+                                                : "the checker cannot bound its motion");
+  }
+  std::string out;
+  for (std::size_t i = 0; i < parts.size(); ++i) out += (i == 0 ? "" : "; ") + parts[i];
+  return out;
+}
 
 VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eigen::VectorXd& start,
                                     const Eigen::VectorXd& goal, const CollisionChecker& checker,
@@ -205,6 +330,13 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
   }
 
   VerificationReport report;
+  if (checker.certifies_motion()) {
+    report.collision_guarantee = "certified";
+  } else {
+    report.collision_guarantee = "discrete";
+    report.collision_guarantee_reason = "collisions checked at states at most " + FormatNumber(options.max_joint_step) +
+                                        " rad apart, not proven between them: " + DiscreteCheckCause(checker);
+  }
   if (trajectory.empty()) {
     report.reason = "trajectory is empty";
     return report;
@@ -265,9 +397,15 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
   for (const Piece& piece : pieces) {
     if (!verifier.CheckLimits(piece)) return report;
   }
+  // 4. Collisions: certified over each piece's continuous motion on the sphere path, else at
+  //    discrete states; torques at discrete states either way.
+  const bool certified = checker.certifies_motion();
+  const bool effort = limits.max_effort.size() != 0;
   constexpr double kMaxStatesPerPiece = 1e8;
   for (std::size_t k = 0; k < pieces.size(); ++k) {
     const Piece& piece = pieces[k];
+    if (certified && !verifier.CertifyPiece(piece)) return report;
+    if (certified && !effort) continue;
     double steps = std::ceil(piece.MaxJointTravel() / options.max_joint_step);
     if (options.max_time_step > 0.0) steps = std::max(steps, std::ceil(piece.duration / options.max_time_step));
     if (steps > kMaxStatesPerPiece) {
@@ -278,9 +416,12 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
     }
     const int m = std::max(1, static_cast<int>(steps));
     for (int i = (k == 0 ? 0 : 1); i <= m; ++i) {  // piece k's first state is piece k−1's last
-      if (!verifier.CheckState(piece, piece.duration * i / m)) return report;
+      const double tau = piece.duration * i / m;
+      if (!(certified ? verifier.CheckEffort(piece, tau) : verifier.CheckState(piece, tau))) return report;
     }
   }
+  // The exact final configuration (the trajectory's end_position, which the last sample is).
+  if (!verifier.CheckCollision(verifier.Clamped(last.q), trajectory.duration())) return report;
   report.ok = true;
   return report;
 }
@@ -293,6 +434,78 @@ double DistanceToSegment(const Eigen::VectorXd& x, const Eigen::VectorXd& a, con
   const double len2 = ab.squaredNorm();
   const double s = len2 > 0.0 ? std::min(1.0, std::max(0.0, (x - a).dot(ab) / len2)) : 0.0;
   return (x - (a + s * ab)).norm();
+}
+
+constexpr double kClearanceTolerance = 1e-5;  // [m]
+constexpr int kMaxClearanceStates = 5000;
+
+/// A lower bound on the clearance over the whole continuous trajectory (checker certifies
+/// motions, so it has lever bounds). Between states at local times τa < τb of a span with
+/// Lipschitz constant L per unit τ, the clearance c(τ) >= max(ca − L(τ − τa), cb − L(τb − τ)),
+/// whose minimum is (ca + cb − L(τb − τa))/2. Starting from states at most 0.05 rad apart, the
+/// interval with the lowest bound is bisected until every bound is within kClearanceTolerance
+/// of the smallest clearance evaluated (or kMaxClearanceStates states were evaluated: the
+/// figure is then the loosest remaining bound, still below the true minimum).
+double ClearanceLowerBound(const TimedTrajectory& trajectory, const CollisionChecker& checker) {
+  constexpr double kInitialTravel = 0.05;  // [rad]
+  struct Interval {
+    double bound;
+    const Piece* piece;
+    double a, b, ca, cb, lipschitz;  // local times, clearances there, L per unit time
+    bool operator>(const Interval& other) const { return bound > other.bound; }
+  };
+  std::priority_queue<Interval, std::vector<Interval>, std::greater<Interval>> open;
+  const RobotModel& robot = checker.robot();
+  double best = std::numeric_limits<double>::infinity();
+  int evaluated = 0;
+  Eigen::VectorXd q;
+  const auto clearance = [&](const Piece& piece, double tau) {
+    detail::ClampedPosition(piece, tau, robot, &q);
+    const double c = checker.Clearance(q);
+    best = std::min(best, c);
+    ++evaluated;
+    return c;
+  };
+  const auto push = [&](const Piece* piece, double a, double b, double ca, double cb, double lipschitz) {
+    const double bound = std::min(std::min(ca, cb), 0.5 * (ca + cb - lipschitz * (b - a)));
+    open.push({bound, piece, a, b, ca, cb, lipschitz});
+  };
+  for (const Piece& piece : trajectory.pieces()) {
+    if (!(piece.duration > 0.0)) {
+      clearance(piece, 0.0);
+      continue;
+    }
+    for (const detail::PieceSpan& span : detail::SplitPiece(piece, detail::kCertifiedSpanTravel)) {
+      const double length = span.end - span.begin;
+      if (!(length > 0.0)) continue;
+      const double lipschitz = detail::SpanClearanceLipschitz(piece, span, checker) / length;
+      const double travel = detail::SpanSpeedBound(piece, span).maxCoeff();
+      const int m = std::max(1, static_cast<int>(std::ceil(travel / kInitialTravel)));
+      double a = span.begin, ca = clearance(piece, a);
+      for (int i = 1; i <= m; ++i) {
+        const double b = i == m ? span.end : span.begin + length * i / m;
+        const double cb = clearance(piece, b);
+        push(&piece, a, b, ca, cb, lipschitz);
+        a = b;
+        ca = cb;
+      }
+    }
+  }
+  while (!open.empty() && open.top().bound < best - kClearanceTolerance && evaluated < kMaxClearanceStates) {
+    const Interval top = open.top();
+    open.pop();
+    const double mid = 0.5 * (top.a + top.b);
+    if (!(mid > top.a && mid < top.b)) {
+      best = std::min(best, top.bound);  // cannot split further: keep its bound
+      continue;
+    }
+    const double cm = clearance(*top.piece, mid);
+    push(top.piece, top.a, mid, top.ca, cm, top.lipschitz);
+    push(top.piece, mid, top.b, cm, top.cb, top.lipschitz);
+  }
+  double out = best;
+  if (!open.empty()) out = std::min(out, open.top().bound);
+  return std::max(0.0, out);
 }
 
 }  // namespace
@@ -350,11 +563,13 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
     const int m = std::max(1, static_cast<int>(std::ceil(piece.MaxJointTravel() / step)));
     for (int i = samples.empty() ? 0 : 1; i <= m; ++i) samples.push_back(trajectory.Evaluate(piece.t0 + piece.duration * i / m));
   }
+  // Off the sphere path: the clearance at (at most about 200 of) the sampled states.
+  const bool bound_clearance = checker != nullptr && checker->certifies_motion();
   const int clearance_every = std::max<int>(1, static_cast<int>(samples.size()) / 200);
   for (std::size_t s = 0; s < samples.size(); ++s) {
     const TrajectorySample& x = samples[s];
     states.push_back(x.q);
-    if (checker != nullptr && (s % clearance_every == 0 || s + 1 == samples.size())) {
+    if (checker != nullptr && !bound_clearance && (s % clearance_every == 0 || s + 1 == samples.size())) {
       out.min_clearance = std::min(out.min_clearance, checker->Clearance(x.q));
     }
     if (effort) {
@@ -362,6 +577,7 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
       for (int i = 0; i < n; ++i) out.max_effort_ratio = std::max(out.max_effort_ratio, std::abs(tau[i]) / limits.max_effort[i]);
     }
   }
+  if (bound_clearance) out.min_clearance = ClearanceLowerBound(trajectory, *checker);
   if (path.size() >= 2) {
     for (const Eigen::VectorXd& q : states) {
       double nearest = std::numeric_limits<double>::infinity();

@@ -521,8 +521,19 @@ TEST(VerifyTeamTest, RobotsSweepingTheSameRegionTogetherFailAndOneDelayedPasses)
       VerifyTeam(c.team, {c.reach, later}, {c.rest, c.rest}, {c.rest, c.rest}, {c.limits, c.limits}, options);
   EXPECT_TRUE(apart.ok) << apart.reason;
   EXPECT_EQ(apart.reason, "");
-  // Every 1 ms over the whole team duration at least.
-  EXPECT_GE(apart.states_checked, static_cast<std::uint64_t>(later.duration() / options.time_step));
+  // Sphere robots: the team's motion is certified along its continuous motion.
+  ASSERT_TRUE(c.team.certifies_motion());
+  EXPECT_GT(apart.states_checked, 0u);
+  // On the FCL path: every 1 ms over the whole team duration at least.
+  CollisionOptions fcl;
+  fcl.force_fcl = true;
+  const CollisionChecker sampled_team(c.team.robot_ptr(), std::make_shared<Scene>(), fcl);
+  const TeamVerificationReport sampled =
+      VerifyTeam(sampled_team, {c.reach, later}, {c.rest, c.rest}, {c.rest, c.rest}, {c.limits, c.limits}, options);
+  EXPECT_TRUE(sampled.ok) << sampled.reason;
+  EXPECT_GE(sampled.states_checked, static_cast<std::uint64_t>(later.duration() / options.time_step));
+  EXPECT_FALSE(VerifyTeam(sampled_team, {c.reach, c.reach}, {c.rest, c.rest}, {c.rest, c.rest}, {c.limits, c.limits},
+                          options).ok);
   EXPECT_NEAR(apart.max_velocity_ratio, 1.0, 1e-9);
   EXPECT_NEAR(apart.max_acceleration_ratio, 1.0, 1e-9);
 
@@ -549,11 +560,21 @@ TEST(VerifyTeamTest, WaitsAreCheckedAtTheTimeStep) {
   const Crossing c;
   TeamVerificationOptions options;
   options.time_step = 0.01;
-  const TeamVerificationReport wait = VerifyTeam(c.team, {HoldTrajectory(c.rest, 10.0), HoldTrajectory(c.rest, 4.0)},
-                                                 {c.rest, c.rest}, {c.rest, c.rest}, {c.limits, c.limits}, options);
+  // At discrete states (FCL path): every time step of the 10 s.
+  CollisionOptions fcl;
+  fcl.force_fcl = true;
+  const CollisionChecker sampled_team(c.team.robot_ptr(), std::make_shared<Scene>(), fcl);
+  const TeamVerificationReport wait =
+      VerifyTeam(sampled_team, {HoldTrajectory(c.rest, 10.0), HoldTrajectory(c.rest, 4.0)}, {c.rest, c.rest},
+                 {c.rest, c.rest}, {c.limits, c.limits}, options);
   EXPECT_TRUE(wait.ok) << wait.reason;
   EXPECT_GE(wait.states_checked, 1000u);
   EXPECT_LE(wait.states_checked, 1010u);
+  // Certified (sphere path): standing still is one state per piece.
+  const TeamVerificationReport certified = VerifyTeam(c.team, {HoldTrajectory(c.rest, 10.0), HoldTrajectory(c.rest, 4.0)},
+                                                      {c.rest, c.rest}, {c.rest, c.rest}, {c.limits, c.limits}, options);
+  EXPECT_TRUE(certified.ok) << certified.reason;
+  EXPECT_LT(certified.states_checked, 10u);
 
   // A robot standing in the way is hit by the other moving through it while it waits.
   const TimedTrajectory blocking = HoldTrajectory(Eigen::Vector3d(0.6, 0, 0), 10.0);

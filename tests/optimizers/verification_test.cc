@@ -46,16 +46,181 @@ TEST_F(VerificationTest, GoodTrajectoryPasses) {
       VerifyTrajectory(trajectory_, path_.front(), path_.back(), *checker_, limits_);
   EXPECT_TRUE(report.ok) << report.reason;
   EXPECT_EQ(report.reason, "");
-  // Dense: at least one state per 0.005 rad of the widest joint motion of every segment.
-  double steps = 0;
-  for (std::size_t k = 0; k + 1 < path_.size(); ++k) {
-    steps += std::ceil((path_[k + 1] - path_[k]).cwiseAbs().maxCoeff() / 0.005);
-  }
-  EXPECT_GE(report.states_checked, static_cast<int>(steps));
+  // The sphere path certifies every piece: at least one advancement state per piece.
+  ASSERT_TRUE(checker_->certifies_motion());
+  EXPECT_EQ(report.collision_guarantee, "certified");
+  EXPECT_EQ(report.collision_guarantee_reason, "");
+  EXPECT_GE(report.states_checked, static_cast<int>(trajectory_.pieces().size()));
   EXPECT_LE(report.max_velocity_ratio, 1.0 + 1e-9);
   EXPECT_GT(report.max_velocity_ratio, 0.999);  // minimum time: some joint cruises at its limit
   EXPECT_LE(report.max_acceleration_ratio, 1.0 + 1e-9);
   EXPECT_GT(report.max_acceleration_ratio, 0.999);
+
+  // On the FCL path the check is discrete: at least one state per 0.005 rad of the widest joint
+  // motion of every segment, and the report says so and why.
+  CollisionOptions fcl;
+  fcl.force_fcl = true;
+  const CollisionChecker discrete(checker_->robot_ptr(), std::make_shared<Scene>(checker_->scene()), fcl);
+  const VerificationReport sampled = VerifyTrajectory(trajectory_, path_.front(), path_.back(), discrete, limits_);
+  EXPECT_TRUE(sampled.ok) << sampled.reason;
+  double steps = 0;
+  for (std::size_t k = 0; k + 1 < path_.size(); ++k) {
+    steps += std::ceil((path_[k + 1] - path_[k]).cwiseAbs().maxCoeff() / 0.005);
+  }
+  EXPECT_GE(sampled.states_checked, static_cast<int>(steps));
+  EXPECT_EQ(sampled.collision_guarantee, "discrete");
+  EXPECT_THAT(sampled.collision_guarantee_reason, HasSubstr("at most 0.005 rad apart"));
+  EXPECT_THAT(sampled.collision_guarantee_reason, HasSubstr("force_fcl"));
+}
+
+/// The stretched planar arm swinging q1 up to `apex` and back along q1(τ) = apex − (τ − τ*)²
+/// over [0, 2] s (q2 = 0), and a wall above it whose face the tip sphere (centre 2 m out,
+/// radius 0.08 m) crosses by `depth` [m] at the apex only.
+struct DippingSwing {
+  static constexpr double kApex = 0.3;
+  double apex_time = 0.0;
+  TimedTrajectory trajectory;
+  std::shared_ptr<const Scene> scene;
+  /// The trajectory moves at both ends.
+  VerificationOptions Options() const {
+    VerificationOptions options;
+    options.start_velocity = trajectory.Evaluate(0.0).qd;
+    options.end_velocity = trajectory.Evaluate(trajectory.duration()).qd;
+    return options;
+  }
+};
+
+DippingSwing MakeDippingSwing(double depth) {
+  DippingSwing out;
+  // max|q̇| = 2·(2 − τ*) = 2.8 rad/s nearly: 1120 states at 0.005 rad, 1/560 s apart; τ* lies
+  // half-way between two of them, where q1 is 8e-7 rad (the tip 1.5 µm) below the apex.
+  out.apex_time = 0.6 + 0.5 / 560.0;
+  TimedTrajectory::Piece piece;
+  piece.duration = 2.0;
+  piece.coefficients = Eigen::MatrixXd::Zero(2, 3);
+  const double ts = out.apex_time;
+  piece.coefficients.row(0) << DippingSwing::kApex - ts * ts, 2.0 * ts, -1.0;
+  out.trajectory = TimedTrajectory({piece});
+  auto scene = std::make_shared<Scene>();
+  const double face = 2.0 * std::sin(DippingSwing::kApex) + 0.08 - depth;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = Eigen::Vector3d(2.0, face + 0.2, 0.0);
+  scene->AddObject({"wall", Shape::Box(Eigen::Vector3d(0.6, 0.4, 0.4), pose)});
+  out.scene = scene;
+  return out;
+}
+
+TEST(CertifiedVerification, APieceThatDipsIntoAnObstacleBetweenDiscreteStatesIsRejected) {
+  const DippingSwing swing = MakeDippingSwing(0.5e-6);  // 0.5 µm deep, for about 1 ms
+  const TimedTrajectory& trajectory = swing.trajectory;
+  const Eigen::VectorXd start = trajectory.Evaluate(0.0).q, goal = trajectory.Evaluate(2.0).q;
+  const KinematicLimits limits = Limits(3.0, 10.0);
+  const CollisionChecker checker(test::PlanarArm(), swing.scene);
+  ASSERT_TRUE(checker.certifies_motion());
+  // The apex state itself collides; the discrete states around it do not.
+  ASSERT_FALSE(checker.IsValid(trajectory.Evaluate(swing.apex_time).q));
+  ASSERT_EQ(std::ceil(trajectory.pieces()[0].MaxJointTravel() / 0.005), 1120.0);
+  for (int i : {336, 337}) ASSERT_TRUE(checker.IsValid(trajectory.Evaluate(i / 560.0).q)) << i;
+
+  const VerificationReport report = VerifyTrajectory(trajectory, start, goal, checker, limits, swing.Options());
+  EXPECT_FALSE(report.ok);
+  EXPECT_EQ(report.collision_guarantee, "certified");
+  EXPECT_THAT(report.reason, HasSubstr("between link 'link2' and 'wall'"));
+  const double t = std::stod(report.reason.substr(report.reason.find("t = ") + 4));
+  EXPECT_NEAR(t, swing.apex_time, 2e-3) << report.reason;
+
+  // The same trajectory checked at discrete states (FCL path) passes: the dip falls between them.
+  CollisionOptions fcl;
+  fcl.force_fcl = true;
+  const CollisionChecker discrete(test::PlanarArm(), swing.scene, fcl);
+  const VerificationReport sampled = VerifyTrajectory(trajectory, start, goal, discrete, limits, swing.Options());
+  EXPECT_TRUE(sampled.ok) << sampled.reason;
+  EXPECT_EQ(sampled.collision_guarantee, "discrete");
+
+  // With the wall 0.1 mm higher the swing is certified free.
+  const DippingSwing clear = MakeDippingSwing(-1e-4);
+  const CollisionChecker clear_checker(test::PlanarArm(), clear.scene);
+  const VerificationReport free = VerifyTrajectory(clear.trajectory, start, goal, clear_checker, limits, clear.Options());
+  EXPECT_TRUE(free.ok) << free.reason;
+  // ... and its min_clearance is a lower bound on the true minimum, 0.1 mm at the apex, within 1e-5 m.
+  const TrajectoryQuality quality = MeasureTrajectory(clear.trajectory, limits, {}, &clear_checker);
+  EXPECT_LE(quality.min_clearance, 1e-4 + 1e-12);
+  EXPECT_GE(quality.min_clearance, 1e-4 - 1e-5 - 1e-12);
+}
+
+TEST(CertifiedVerification, AMotionGrazingAnObstacleWithinRoundingIsNotCertified) {
+  // The stretched arm sweeps q1 through π/2 at 1 rad/s; a ceiling 1e-12 m above the tip
+  // sphere's top at π/2. The sphere moves sideways there, so the advancement's steps
+  // (clearance / sweep bound) fall below 1e-7: not certified, though no state collides.
+  TimedTrajectory::Piece piece;
+  piece.duration = 1.0;
+  piece.coefficients = Eigen::MatrixXd::Zero(2, 2);
+  piece.coefficients.row(0) << M_PI / 2 - 0.5, 1.0;
+  const TimedTrajectory trajectory({piece});
+  VerificationOptions options;
+  options.start_velocity = options.end_velocity = Eigen::Vector2d(1.0, 0.0);
+  const auto ceiling = [](double gap) {
+    auto scene = std::make_shared<Scene>();
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = Eigen::Vector3d(0.0, 2.08 + gap + 0.1, 0.0);
+    scene->AddObject({"ceiling", Shape::Box(Eigen::Vector3d(0.6, 0.2, 0.4), pose)});
+    return scene;
+  };
+  const Eigen::VectorXd start = trajectory.Evaluate(0.0).q, goal = trajectory.Evaluate(1.0).q;
+  const CollisionChecker checker(test::PlanarArm(), ceiling(1e-12));
+  ASSERT_TRUE(checker.IsValid(Eigen::Vector2d(M_PI / 2, 0.0)));
+  const VerificationReport report = VerifyTrajectory(trajectory, start, goal, checker, Limits(3.0, 10.0), options);
+  EXPECT_FALSE(report.ok);
+  EXPECT_THAT(report.reason, HasSubstr("not certified at t = "));
+  EXPECT_THAT(report.reason, HasSubstr("link 'link2' passes within rounding of 'ceiling'"));
+  const double t = std::stod(report.reason.substr(report.reason.find("t = ") + 4));
+  EXPECT_NEAR(t, 0.5, 1e-3) << report.reason;
+  // 10 µm of room is proven.
+  const CollisionChecker roomy(test::PlanarArm(), ceiling(1e-5));
+  EXPECT_TRUE(VerifyTrajectory(trajectory, start, goal, roomy, Limits(3.0, 10.0), options).ok);
+}
+
+TEST(CertifiedVerification, MeshScenesAndBoxRobotsAreCheckedDiscretelyAndSaySo) {
+  const DippingSwing swing = MakeDippingSwing(-1e-3);
+  const Eigen::VectorXd start = swing.trajectory.Evaluate(0.0).q, goal = swing.trajectory.Evaluate(2.0).q;
+  // The wall as a triangle mesh (a tetrahedron well above the swing).
+  auto mesh = std::make_shared<TriangleMesh>();
+  mesh->vertices = {{0, 0, 0}, {0.1, 0, 0}, {0, 0.1, 0}, {0, 0, 0.1}};
+  mesh->triangles = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
+  Shape shape;
+  shape.type = ShapeType::kMesh;
+  shape.mesh = mesh;
+  shape.pose.translation() = Eigen::Vector3d(2.0, 1.5, 0.0);
+  auto scene = std::make_shared<Scene>(*swing.scene);
+  scene->AddObject({"tetra", shape});
+  const CollisionChecker checker(test::PlanarArm(), scene);
+  ASSERT_TRUE(checker.uses_fast_path());
+  ASSERT_FALSE(checker.certifies_motion());
+  const VerificationReport report =
+      VerifyTrajectory(swing.trajectory, start, goal, checker, Limits(3.0, 10.0), swing.Options());
+  EXPECT_TRUE(report.ok) << report.reason;
+  EXPECT_EQ(report.collision_guarantee, "discrete");
+  EXPECT_THAT(report.collision_guarantee_reason, HasSubstr("scene meshes 'tetra'"));
+  EXPECT_EQ(DiscreteCheckCause(checker), "scene meshes 'tetra'");
+  EXPECT_GE(report.states_checked, 1120);
+
+  // A robot with a box shape takes the FCL path: the cause names the link and the shape.
+  Link base, mover;
+  base.name = "base";
+  mover.name = "block";
+  mover.parent_joint = 0;
+  mover.collision.push_back(Shape::Box(Eigen::Vector3d(0.1, 0.1, 0.1)));
+  Joint slide;
+  slide.name = "slide_x";
+  slide.type = JointType::kPrismatic;
+  slide.parent_link = 0;
+  slide.child_link = 1;
+  slide.axis = Eigen::Vector3d::UnitX();
+  slide.limits = {-1.0, 1.0, 1.0, 0.0};
+  slide.dof = 0;
+  const CollisionChecker boxes(RobotModel::FromTree("slider", {base, mover}, {slide}), swing.scene);
+  ASSERT_FALSE(boxes.certifies_motion());
+  EXPECT_EQ(DiscreteCheckCause(boxes), "robot links with shapes other than spheres: 'block' (box)");
 }
 
 TEST_F(VerificationTest, TrajectoryThroughTheObstacleFailsNamingLinkAndObstacle) {

@@ -27,7 +27,16 @@ struct VerificationOptions {
 struct VerificationReport {
   bool ok = false;
   std::string reason;              ///< empty when ok, else what failed and where (time, joint)
+  /// States evaluated for collisions: the conservative advancement's states when certified, the
+  /// discrete states otherwise (plus the exact final configuration).
   int states_checked = 0;
+  /// Which collision guarantee step 4 gives: "certified" — no state anywhere on the continuous
+  /// motion collides (conservative advancement over every polynomial piece, padding included);
+  /// "discrete" — the states checked (at most max_joint_step apart) are free, the motion
+  /// between them is not proven. Set also when verification fails.
+  std::string collision_guarantee;
+  /// Empty when certified; else why the checker cannot certify (DiscreteCheckCause) and the step.
+  std::string collision_guarantee_reason;
   double max_velocity_ratio = 0.0;     ///< max over the trajectory and joints of |q̇ᵢ|/vᵢ (exact)
   double max_acceleration_ratio = 0.0; ///< max of |q̈ᵢ|/aᵢ (exact)
   double max_jerk_ratio = 0.0;         ///< max of |q⃛ᵢ|/jᵢ (exact); 0 without jerk limits
@@ -42,12 +51,25 @@ struct VerificationReport {
 /// 2. q(0) vs start, q(T) vs goal, q̇(0) and q̇(T) vs the expected velocities;
 /// 3. piece by piece in time order, exactly at the extrema of each polynomial: position limits
 ///    (to 1e-12 relative), velocity, acceleration and (when limited) jerk limits;
-/// 4. states spaced so no joint moves more than max_joint_step between consecutive ones
-///    (m = ⌈maxᵢ max|q̇ᵢ|·duration / step⌉ per piece, or ⌈duration / max_time_step⌉ if more): collisions (self + scene) and, with
-///    max_effort on a robot with inertia, the inverse-dynamics torques.
+/// 4. collisions (self + scene) and, with max_effort on a robot with inertia, torques:
+///    - when checker.certifies_motion() (sphere robot; primitives and gridded occupancy maps):
+///      every piece is certified along its continuous motion, piece by piece in time order: cut
+///      into spans of at most 0.25 rad of joint travel, each span's curve checked by
+///      CollisionChecker::IsCurveCertified with the exact speed bound (span length)·max|q̇ᵢ|
+///      over the span (extrema of the polynomial); a span that does not certify is bisected, up
+///      to 12 levels, so only a motion that collides or passes within rounding of a contact
+///      fails. The contact is then named from states at most 0.0005 rad apart in the first part
+///      that failed. Torques are checked at discrete states as below.
+///    - otherwise: states spaced so no joint moves more than max_joint_step between consecutive
+///      ones (m = ⌈maxᵢ max|q̇ᵢ|·duration / step⌉ per piece, or ⌈duration / max_time_step⌉ if
+///      more), collisions and torques at each.
+///    Then the exact final configuration (the trajectory's end position).
 /// `reason` says what failed and where, e.g.
 /// `collision at t = 1.234 s between link 'panda_link5' and 'shelf_top'`,
 /// `self-collision at t = 0.5 s between link 'link1' and link 'link4'`,
+/// `not certified at t = 0.8 s: link 'panda_hand' passes within rounding of 'shelf_top' (closer
+/// than 1e-05 m; …)` (certified check only: no colliding state found, but the gap cannot be
+/// proven), or `not certified between t = 0.8 and 0.81 s: …` when not even a near pair is found,
 /// `joint 3 'panda_joint4' velocity 2.1 rad/s exceeds limit 2 rad/s at t = 0.5 s`,
 /// `joint 0 'joint1' position 3.2 is outside its limits [-3.14159, 3.14159] at t = 1 s`,
 /// `trajectory ends 0.001 rad from the goal configuration (tolerance 1e-06 rad) at t = 4.8 s`,
@@ -55,6 +77,11 @@ struct VerificationReport {
 /// \throws Error(kInvalidArgument) for options that are not finite with max_joint_step > 0 and
 ///         tolerances >= 0, limits that fail Validate(robot().num_dofs()), start/goal or
 ///         expected velocity sizes, or max_effort on a robot without inertia.
+/// Why `checker` checks collisions at discrete states rather than certifying motions, e.g.
+/// `robot links with shapes other than spheres: 'link1' (box); scene meshes 'bunny'`; empty when
+/// checker.certifies_motion().
+std::string DiscreteCheckCause(const CollisionChecker& checker);
+
 VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eigen::VectorXd& start,
                                     const Eigen::VectorXd& goal, const CollisionChecker& checker,
                                     const KinematicLimits& limits,
@@ -72,15 +99,28 @@ struct TrajectoryQuality {
   /// path, both ways: from sampled states to the nearest point of the path's polyline, and from
   /// each waypoint to the nearest sampled state.
   double max_deviation = 0.0;
-  /// Smallest distance between the robot and the scene's obstacles at the sampled states [m];
-  /// +inf when the scene has none (self-distance not included).
+  /// Smallest distance [m] between the robot — grown by the checker's padding — and the scene's
+  /// obstacles (CollisionChecker::Clearance; self-distance and allowed pairs not included);
+  /// +inf when the scene has none. When the checker certifies motions it is a lower bound on
+  /// the minimum over the whole continuous trajectory, within 1e-5 m of it (see
+  /// MeasureTrajectory); otherwise it is the minimum at sampled states, which may be above the
+  /// true minimum.
   double min_clearance = 0.0;
   double jerk_integral = 0.0;           ///< ∫‖q⃛‖² dt over the pieces (exact) [rad²/s⁵]
 };
 
 /// Measures `trajectory` against the limits and the input `path` (may be empty: deviation 0),
 /// sampling states every `max_joint_step` of joint motion (at most 2000 states in all) for the
-/// sampled figures. `checker` may be null (clearance and effort then 0).
+/// sampled figures. `checker` may be null (clearance +inf, effort 0).
+/// min_clearance, when checker->certifies_motion(): the clearance is Lipschitz along each span
+/// of a piece (≤ 0.25 rad of travel) with L = maxₖ Dₖ, Dₖ = Σᵢ Rₖᵢ·(span length)·max|q̇ᵢ| the
+/// lever bound of sphere k (CollisionChecker::SweepBounds), so between evaluated states at
+/// s0 < s1 it is at least (c0 + c1 − L·(s1 − s0))/2. Starting from states at most 0.05 rad
+/// apart, the interval with the lowest such bound is bisected until every bound is within
+/// 1e-5 m of the smallest clearance evaluated; the figure is the smallest bound (>= 0). At most
+/// 5000 states are evaluated: beyond that the figure is the smallest remaining bound (still a
+/// lower bound, possibly looser than 1e-5 m). Otherwise min_clearance is the minimum at (at
+/// most about 200 of) the sampled states.
 TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const KinematicLimits& limits,
                                     const JointPath& path, const CollisionChecker* checker,
                                     double max_joint_step = 0.01);

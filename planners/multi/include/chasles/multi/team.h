@@ -86,9 +86,10 @@ struct TeamVerificationReport {
   double max_acceleration_ratio = 0.0;
 };
 
-/// Verifies a coordinated set: each robot's limits exactly, starts and goals, and every team
-/// state at most time_step and max_joint_step apart against the scene, each robot itself and
-/// every other robot. `team_checker` is the composite of the same robots (self_collisions on)
+/// Verifies a coordinated set: each robot's limits exactly, starts and goals, and the team's
+/// motion against the scene, each robot itself and every other robot (VerifyTrajectory of the
+/// composed trajectory): certified along the continuous motion when team_checker certifies
+/// motions, else every team state at most time_step and max_joint_step apart. `team_checker` is the composite of the same robots (self_collisions on)
 /// over the scene; trajectories, starts, goals and limits are per robot in its order. An empty
 /// trajectory is a failed report. A contact between two robots is reported as a
 /// self-collision of the composite, naming both links ("left/link2", "right/link1").
