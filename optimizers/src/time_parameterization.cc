@@ -8,12 +8,15 @@
 
 #include "chasles/robot/dynamics.h"
 #include "chasles/robot/error.h"
+#include "piece_certification.h"
 
 namespace chasles {
 namespace {
 
 using Piece = TimedTrajectory::Piece;
 constexpr double kInf = std::numeric_limits<double>::infinity();
+/// Bisection levels of a blend span that does not certify at once (as in VerifyTrajectory).
+constexpr int kBlendBisections = 12;
 
 void ValidatePositive(const Eigen::VectorXd& values, const char* field, int num_dofs) {
   if (values.size() != num_dofs) {
@@ -203,13 +206,25 @@ TimedTrajectory Build(const JointPath& path, const Layout& L, const KinematicLim
   return TimedTrajectory(std::move(pieces), path.back());
 }
 
-/// The blend pieces that collide, as corner indices.
+/// The blend pieces that collide, as corner indices. When the checker certifies motions, a
+/// blend counts as colliding unless it is certified along its continuous motion (as
+/// VerifyTrajectory checks it); otherwise its states at most `step` apart are checked.
 std::vector<int> CollidingBlends(const TimedTrajectory& trajectory, const std::vector<int>& owners,
                                  const CollisionChecker& checker, double step) {
   std::vector<int> out;
   for (std::size_t p = 0; p < trajectory.pieces().size(); ++p) {
     if (owners[p] >= 0) continue;
     const Piece& piece = trajectory.pieces()[p];
+    if (checker.certifies_motion()) {
+      for (const detail::PieceSpan& span : detail::SplitPiece(piece, detail::kCertifiedSpanTravel)) {
+        detail::PieceSpan failed;
+        if (!detail::CertifySpan(piece, span, checker, kBlendBisections, nullptr, &failed)) {
+          out.push_back(-owners[p] - 1);
+          break;
+        }
+      }
+      continue;
+    }
     const int samples = std::max(2, static_cast<int>(std::ceil(piece.MaxJointTravel() / step)) + 1);
     for (int s = 0; s < samples; ++s) {
       const Eigen::VectorXd q = piece.State(piece.duration * s / (samples - 1)).q;

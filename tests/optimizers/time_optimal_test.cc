@@ -283,6 +283,60 @@ TEST(TimeOptimal, ABlendThatCutsIntoAnObstacleIsTightenedUntilItIsFree) {
   EXPECT_LT(traj.duration(), ParameterizeRestToRest(path, limits).duration());
 }
 
+TEST(TimeOptimal, ABlendThatGrazesAnObstacleBetweenDiscreteStatesIsTightenedOnTheCertifiedCheck) {
+  const auto checker = DiscAroundBox();
+  ASSERT_TRUE(checker->certifies_motion());
+  KinematicLimits limits;
+  limits.max_velocity = Eigen::Vector3d(3.0, 3.0, 3.0);
+  limits.max_acceleration = Eigen::Vector3d(1.0, 1.0, 1.0);
+  // Around the box's corner at (−0.5, −0.5), 0.4 m outside it on both legs; the blend passes
+  // 0.32 m from the corner, curving with a radius of 0.5 m (more than the disc's reach).
+  const JointPath path{Eigen::Vector3d(-0.9, 1.0, 0.0), Eigen::Vector3d(-0.9, -0.9, 0.0),
+                       Eigen::Vector3d(1.0, -0.9, 0.0)};
+  TimeOptimalOptions options;
+  options.max_deviation = 0.25;
+  const TimedTrajectory free = ParameterizeTimeOptimal(path, limits, options, checker.get());
+  // The blend: the piece that accelerates along both x and y.
+  const TimedTrajectory::Piece* blend = nullptr;
+  for (const auto& piece : free.pieces()) {
+    if (piece.degree() == 2 && piece.coefficients(0, 2) != 0.0 && piece.coefficients(1, 2) != 0.0) blend = &piece;
+  }
+  ASSERT_NE(blend, nullptr);
+  // A pebble (radius 1 cm) on the corner side of the blend, half-way between two of the states
+  // the discrete check uses (0.005 apart), 10 µm inside the disc's reach there.
+  const int samples = std::max(2, static_cast<int>(std::ceil(blend->MaxJointTravel() / 0.005)) + 1);
+  const double tau = blend->duration * ((samples - 1) / 2 + 0.5) / (samples - 1);
+  const TrajectorySample at = blend->State(tau);
+  Eigen::Vector3d normal(-at.qd[1], at.qd[0], 0.0);
+  normal.normalize();
+  if (normal.dot(Eigen::Vector3d(-0.5, -0.5, 0.0) - Eigen::Vector3d(at.q[0], at.q[1], 0.0)) < 0) normal = -normal;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = Eigen::Vector3d(at.q[0], at.q[1], 0.0) + (0.1 + 0.01 - 1e-5) * normal;
+  auto scene = std::make_shared<Scene>(checker->scene());
+  scene->AddObject({"pebble", Shape::Sphere(0.01, pose)});
+  const auto pebbled = std::make_shared<CollisionChecker>(checker->robot_ptr(), scene);
+  ASSERT_FALSE(pebbled->IsValid(at.q));
+  for (int j : {(samples - 1) / 2, (samples - 1) / 2 + 1}) {
+    ASSERT_TRUE(pebbled->IsValid(blend->State(blend->duration * j / (samples - 1)).q)) << j;
+  }
+
+  // Checked at discrete states (FCL path), the blend is kept and the pebble is grazed.
+  CollisionOptions fcl;
+  fcl.force_fcl = true;
+  const CollisionChecker discrete(checker->robot_ptr(), scene, fcl);
+  TimeOptimalReport sampled;
+  const TimedTrajectory grazing = ParameterizeTimeOptimal(path, limits, options, &discrete, &sampled);
+  EXPECT_EQ(sampled.blends_tightened, 0);
+  EXPECT_FALSE(VerifyTrajectory(grazing, path.front(), path.back(), *pebbled, limits).ok);
+  // Certified, the blend is tightened and the result is certified free.
+  TimeOptimalReport report;
+  const TimedTrajectory traj = ParameterizeTimeOptimal(path, limits, options, pebbled.get(), &report);
+  EXPECT_GE(report.blends_tightened, 1);
+  const VerificationReport verified = VerifyTrajectory(traj, path.front(), path.back(), *pebbled, limits);
+  EXPECT_TRUE(verified.ok) << verified.reason;
+  EXPECT_EQ(verified.collision_guarantee, "certified");
+}
+
 std::string ReadFile(const std::string& path) {
   std::ifstream in(path);
   std::stringstream out;

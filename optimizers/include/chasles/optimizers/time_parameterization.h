@@ -48,8 +48,10 @@ struct TimeOptimalOptions {
   /// Velocity at the start / end [rad/s]; empty = at rest. Non-zero: it must point along the
   /// first segment (start) / the last segment (end) and respect the velocity limits.
   Eigen::VectorXd start_velocity, end_velocity;
-  /// With a checker: every blend is checked for collisions at this joint step [rad]; a blend
-  /// that collides is redone with a quarter of the deviation (down to a stop at the corner).
+  /// With a checker: every blend is checked for collisions — certified along its continuous
+  /// motion when checker->certifies_motion() (as VerifyTrajectory does), else at states this
+  /// joint step apart [rad]; a blend that collides (or is not certified) is redone with a
+  /// quarter of the deviation (down to a stop at the corner).
   double max_joint_step = 0.005;
 };
 
