@@ -404,8 +404,14 @@ int Plan(const Options& options) {
               1e3 * t.validate(), 1e3 * t.plan(), 1e3 * t.shortcut(), 1e3 * t.parameterize(), 1e3 * t.optimize(),
               1e3 * t.verify(), 1e3 * t.total());
   PrintOptimizer(response.optimizer(), response.quality());
-  std::printf("verified    %u states at step %.4g rad, max |qd|/v %.3f, max |qdd|/a %.3f\n", v.states_checked(),
-              v.max_joint_step(), v.max_velocity_ratio(), v.max_acceleration_ratio());
+  if (v.collision_guarantee() == "certified") {
+    std::printf("verified    %u states, certified along the continuous motion, max |qd|/v %.3f, max |qdd|/a %.3f\n",
+                v.states_checked(), v.max_velocity_ratio(), v.max_acceleration_ratio());
+  } else {
+    std::printf("verified    %u states at step %.4g rad, max |qd|/v %.3f, max |qdd|/a %.3f\n", v.states_checked(),
+                v.max_joint_step(), v.max_velocity_ratio(), v.max_acceleration_ratio());
+    if (!v.collision_guarantee_reason().empty()) std::printf("            %s\n", v.collision_guarantee_reason().c_str());
+  }
   if (response.has_reached_goal()) {
     std::printf("reached     %s (manipulability %.4g)\n", FormatPositions(response.reached_goal().positions()).c_str(),
                 response.goal_manipulability());

@@ -786,6 +786,8 @@ void VerificationToProto(const VerificationReport& report, double max_joint_step
   out->set_max_acceleration_ratio(report.max_acceleration_ratio);
   out->set_max_jerk_ratio(report.max_jerk_ratio);
   out->set_max_effort_ratio(report.max_effort_ratio);
+  out->set_collision_guarantee(report.collision_guarantee);
+  out->set_collision_guarantee_reason(report.collision_guarantee_reason);
 }
 
 void SamplesToProto(const std::vector<TrajectorySample>& samples, const RobotModel& robot,

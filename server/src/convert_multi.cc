@@ -188,6 +188,8 @@ void CoordinationOutcomeToProto(const CoordinationOutcome& outcome, const Coordi
   verification->set_max_joint_step(query.collision_resolution);
   verification->set_max_velocity_ratio(outcome.verification.max_velocity_ratio);
   verification->set_max_acceleration_ratio(outcome.verification.max_acceleration_ratio);
+  verification->set_collision_guarantee(outcome.verification.collision_guarantee);
+  verification->set_collision_guarantee_reason(outcome.verification.collision_guarantee_reason);
   for (std::size_t k = 0; k < outcome.robots.size(); ++k) {
     const RobotPlan& plan = outcome.robots[k];
     v1::RobotTrajectory* robot = response->add_robots();
@@ -218,6 +220,8 @@ void WorkcellPlanToProto(const CoordinationOutcome& outcome, const CoordinationQ
   verification->set_max_joint_step(query.collision_resolution);
   verification->set_max_velocity_ratio(outcome.verification.max_velocity_ratio);
   verification->set_max_acceleration_ratio(outcome.verification.max_acceleration_ratio);
+  verification->set_collision_guarantee(outcome.verification.collision_guarantee);
+  verification->set_collision_guarantee_reason(outcome.verification.collision_guarantee_reason);
   response->mutable_quality()->set_duration(plan.duration);
 }
 

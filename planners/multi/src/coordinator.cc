@@ -589,6 +589,18 @@ std::string Coordinator::Verify(const Attempt& attempt, TeamVerificationReport* 
     const TeamVerificationReport spacing = VerifyTeam(apart, attempt.trajectories, starts, goals, limits, options);
     report->states_checked += spacing.states_checked;
     if (!spacing.ok) return "robots closer than robot_padding = " + FormatNumber(query_.robot_padding) + " m: " + spacing.reason;
+    if (spacing.collision_guarantee != "certified" && report->collision_guarantee == "certified") {
+      report->collision_guarantee = "discrete";
+      report->collision_guarantee_reason = "robot_padding between robots: " + spacing.collision_guarantee_reason;
+    }
+  }
+  if (!query_.committed.empty() && report->collision_guarantee == "certified") {
+    // FindMotionConflict checks committed motions at discrete times.
+    report->collision_guarantee = "discrete";
+    report->collision_guarantee_reason =
+        "certified against the scene, itself and each other, but against the workcell's committed trajectories "
+        "only at states at most " + FormatNumber(query_.time_step) + " s and " +
+        FormatNumber(query_.collision_resolution) + " rad apart";
   }
   for (std::size_t k = 0; k < members_.size(); ++k) {
     CommittedMotion mine;

@@ -349,6 +349,8 @@ TeamVerificationReport VerifyTeam(const CollisionChecker& team_checker, const st
   report.states_checked = static_cast<std::uint64_t>(std::max(0, own.states_checked));
   report.max_velocity_ratio = own.max_velocity_ratio;
   report.max_acceleration_ratio = own.max_acceleration_ratio;
+  report.collision_guarantee = own.collision_guarantee;
+  report.collision_guarantee_reason = own.collision_guarantee_reason;
   return report;
 }
 

@@ -84,6 +84,9 @@ struct TeamVerificationReport {
   std::uint64_t states_checked = 0;
   double max_velocity_ratio = 0.0;
   double max_acceleration_ratio = 0.0;
+  /// As VerificationReport: "certified" (the team's continuous motion) or "discrete", and why.
+  std::string collision_guarantee;
+  std::string collision_guarantee_reason;
 };
 
 /// Verifies a coordinated set: each robot's limits exactly, starts and goals, and the team's
