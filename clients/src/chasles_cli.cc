@@ -42,13 +42,13 @@ const char kUsage[] =
     "  health                          ask the server's gRPC health service (exit 0 when SERVING)\n"
     "  planners                        list planners with their parameters, defaults and ranges\n"
     "  plan REQUEST.json [--out F] [--method M] [--planner ID] [--budget S] [--seed N]\n"
-    "       [--sample-period S]\n"
+    "       [--sample-period S] [--padding M]\n"
     "                                  send a chasles.v1.PlanRequest (protobuf JSON); print a summary;\n"
     "                                  --out F.json writes the response, --out F.csv the trajectory\n"
     "                                  (columns t, q_<joint>..., qd_<joint>..., qdd_<joint>...);\n"
     "                                  --method topp|collocation|spline|none sets the post-processing;\n"
-    "                                  --planner, --budget, --seed, --sample-period override the\n"
-    "                                  request's (see below); exit 0 only when a trajectory came back\n"
+    "                                  --planner, --budget, --seed, --sample-period, --padding override\n"
+    "                                  the request's (see below); exit 0 only when a trajectory came back\n"
     "  optimize REQUEST.json [--out F] [--method M]\n"
     "                                  send a chasles.v1.OptimizeRequest (protobuf JSON: your own path\n"
     "                                  or timed trajectory); print the optimised trajectory's quality;\n"
@@ -96,7 +96,7 @@ const char kUsage[] =
     "                                  runs.csv and results.json into DIR and prints a summary table;\n"
     "                                  Ctrl-C stops it and keeps the finished runs (see docs/benchmarks.md)\n"
     "  import-moveit SCENE.yaml REQUEST.yaml [--robot F.urdf [--srdf F.srdf]] [--out F.json]\n"
-    "                [--planner ID] [--budget S] [--seed N] [--sample-period S]\n"
+    "                [--planner ID] [--budget S] [--seed N] [--sample-period S] [--padding M]\n"
     "                                  convert a MoveIt PlanningScene and MotionPlanRequest (YAML) into a\n"
     "                                  chasles.v1.PlanRequest and print it as JSON (robot joint order from\n"
     "                                  the URDF; default: the server's default robot, a Panda); the\n"
@@ -137,7 +137,7 @@ struct Options {
   std::string start_time;
   std::string hold;
   std::string reservation;
-  chasles::cli::PlanOverrides overrides;  // plan: --planner, --budget, --seed, --sample-period
+  chasles::cli::PlanOverrides overrides;  // plan: --planner, --budget, --seed, --sample-period, --padding
   std::vector<std::string> positional;
 };
 
@@ -932,7 +932,8 @@ int main(int argc, char** argv) {
   }
   if (command == "plan") return Plan(options);
   if (!options.overrides.empty()) {
-    UsageError("--planner, --budget, --seed and --sample-period belong to plan and import-moveit, not " + command);
+    UsageError("--planner, --budget, --seed, --sample-period and --padding belong to plan and import-moveit, not " +
+               command);
   }
   if (command == "optimize") return Optimize(options);
   if (command == "ik") return InverseKinematics(options);

@@ -12,7 +12,9 @@ const char kPlanOverridesUsage[] =
     "  --budget S             planning time budget [s], in (0, 600]; sets time_budget\n"
     "  --seed N               seed of every random choice, a whole number >= 0 (0 = 1); sets seed\n"
     "  --sample-period S      period of the returned samples [s], in [0.0001, 1]; sets\n"
-    "                         trajectory.sample_period\n";
+    "                         trajectory.sample_period\n"
+    "  --padding M            safety margin around every robot shape [m], in [0, 0.5]; sets\n"
+    "                         padding (0 = none)\n";
 
 namespace {
 
@@ -34,7 +36,8 @@ double Number(const std::string& flag, const std::string& text, double low, bool
 }  // namespace
 
 bool IsPlanOverrideFlag(const std::string& flag) {
-  return flag == "--planner" || flag == "--budget" || flag == "--seed" || flag == "--sample-period";
+  return flag == "--planner" || flag == "--budget" || flag == "--seed" || flag == "--sample-period" ||
+         flag == "--padding";
 }
 
 void SetPlanOverride(const std::string& flag, const std::string& value, PlanOverrides* overrides) {
@@ -54,6 +57,8 @@ void SetPlanOverride(const std::string& flag, const std::string& value, PlanOver
     overrides->seed = seed;
   } else if (flag == "--sample-period") {
     overrides->sample_period = Number(flag, value, 1e-4, false, 1.0, "a number of seconds in [0.0001, 1]");
+  } else if (flag == "--padding") {
+    overrides->padding = Number(flag, value, 0.0, false, 0.5, "a number of metres in [0, 0.5]");
   } else {
     throw std::logic_error("SetPlanOverride: '" + flag + "' is not an override flag");
   }
@@ -64,6 +69,7 @@ void ApplyPlanOverrides(const PlanOverrides& overrides, v1::PlanRequest* request
   if (overrides.time_budget) request->set_time_budget(*overrides.time_budget);
   if (overrides.seed) request->set_seed(*overrides.seed);
   if (overrides.sample_period) request->mutable_trajectory()->set_sample_period(*overrides.sample_period);
+  if (overrides.padding) request->set_padding(*overrides.padding);
 }
 
 }  // namespace chasles::cli

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
-/// Command-line overrides of a chasles.v1.PlanRequest's planner, budget, seed and sample period,
-/// shared by `chasles plan` and `chasles import-moveit` (users need not edit the JSON).
+/// Command-line overrides of a chasles.v1.PlanRequest's planner, budget, seed, sample period and
+/// padding, shared by `chasles plan` and `chasles import-moveit` (users need not edit the JSON).
 
 #include <cstdint>
 #include <optional>
@@ -17,14 +17,15 @@ struct PlanOverrides {
   std::optional<double> time_budget;      ///< --budget S -> time_budget [s], in (0, 600]
   std::optional<std::uint64_t> seed;      ///< --seed N -> seed, a whole number >= 0 (0 = seed 1)
   std::optional<double> sample_period;    ///< --sample-period S -> trajectory.sample_period [s], in [1e-4, 1]
+  std::optional<double> padding;          ///< --padding M -> padding [m], in [0, 0.5]
 
-  bool empty() const { return !planner_id && !time_budget && !seed && !sample_period; }
+  bool empty() const { return !planner_id && !time_budget && !seed && !sample_period && !padding; }
 };
 
-/// The usage lines of the four flags.
+/// The usage lines of the five flags.
 extern const char kPlanOverridesUsage[];
 
-/// True for --planner, --budget, --seed and --sample-period.
+/// True for --planner, --budget, --seed, --sample-period and --padding.
 bool IsPlanOverrideFlag(const std::string& flag);
 
 /// Stores `value` of `flag` (one IsPlanOverrideFlag accepts) in `overrides`.

@@ -255,13 +255,15 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
       if (problem.has_workcell()) ThrowInvalid(prefix + "workcell is set; benchmarks plan without workcells");
       StoredRobot robot;
       StoredScene scene;
+      double padding = 0.0;
       try {
         robot = RobotOfRequest(*services_.store, problem, prefix + "robot");
         scene = SceneOfRequest(*services_.store, problem, prefix + "scene");
+        padding = PaddingFromProto(problem.padding(), prefix + "padding");
       } catch (const Error& e) {
         throw Error(e.code(), "problem '" + problem_names_[p] + "': " + e.what());
       }
-      const std::shared_ptr<const CollisionChecker> checker = services_.store->Checker(robot, scene);
+      const std::shared_ptr<const CollisionChecker> checker = services_.store->Checker(robot, scene, padding);
       for (std::size_t c = 0; c < C; ++c) {
         const v1::BenchmarkConfig& config = r.configs(static_cast<int>(c));
         RequestSettings settings;

@@ -591,6 +591,13 @@ Eigen::VectorXd ConfigurationFromProto(const google::protobuf::RepeatedField<dou
   return q;
 }
 
+double PaddingFromProto(double padding, const std::string& field) {
+  if (!(padding >= 0.0 && padding <= 0.5)) {
+    ThrowInvalid(field + " = " + FormatNumber(padding) + " must be in [0, 0.5] m");
+  }
+  return padding;
+}
+
 PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<const CollisionChecker> checker,
                              const PlannerRegistry& registry, RequestSettings* settings) {
   const RobotModel& robot = checker->robot();

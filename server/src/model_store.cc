@@ -3,6 +3,7 @@
 #include <malloc.h>
 
 #include <algorithm>
+#include <cstdio>
 
 #include "chasles/robot/error.h"
 #include "chasles/server/convert.h"
@@ -81,11 +82,22 @@ StoredScene ModelStore::FindScene(const std::string& id) const {
                                         "send the scene inline (the request's scene field) or call UploadScene again");
 }
 
-std::shared_ptr<const CollisionChecker> ModelStore::Checker(const StoredRobot& robot, const StoredScene& scene) {
-  const std::string key = "checker:" + robot.id + "/" + scene.id;
+std::shared_ptr<const CollisionChecker> ModelStore::Checker(const StoredRobot& robot, const StoredScene& scene,
+                                                        double padding) {
+  // The padding exactly (hex float), so no two paddings share a key; none keeps the old key.
+  std::string key = "checker:" + robot.id + "/" + scene.id;
+  if (padding != 0.0) {
+    char text[40];
+    std::snprintf(text, sizeof(text), "/padding=%a", padding);
+    key += text;
+  }
   if (auto checker = cache_.Get<CollisionChecker>(key)) return checker;
+  CollisionOptions options;
+  options.padding = padding;
   std::uint64_t bytes = 0;
-  auto built = Measured(0, &bytes, [&] { return std::make_shared<const CollisionChecker>(robot.model, scene.scene); });
+  auto built = Measured(0, &bytes, [&] {
+    return std::make_shared<const CollisionChecker>(robot.model, scene.scene, options);
+  });
   return cache_.Put<CollisionChecker>(key, std::move(built), std::max<std::uint64_t>(bytes, 1));
 }
 

@@ -262,7 +262,9 @@ class PlanningService final : public RawService {
       response.set_scene_id(scene.id);
       RequestSettings settings;
       double input_duration = 0.0;
-      OptimizeQuery query = OptimizeQueryFromProto(request, store_->Checker(robot, scene), &settings, &input_duration);
+      const double padding = PaddingFromProto(request.padding(), "padding");
+      OptimizeQuery query =
+          OptimizeQueryFromProto(request, store_->Checker(robot, scene, padding), &settings, &input_duration);
       ApplyReplyCap(&query.sample_cap);
       const Termination termination = call.Start(BudgetEnd(settings.time_budget, call.deadline), call.deadline);
       const OptimizeOutcome outcome = OptimizePath(query, termination);
@@ -729,7 +731,13 @@ class PlanningService final : public RawService {
     response.set_scene_id(scene.id);
     call.record.fields.push_back({"robot", IdPrefix(robot.id)});
     call.record.fields.push_back({"scene", IdPrefix(scene.id)});
+    const double padding = PaddingFromProto(request.padding(), "padding");
     if (request.has_workcell()) {
+      if (padding != 0.0) {
+        ThrowInvalid("padding = " + FormatNumber(padding) +
+                     " is not supported with workcell (a workcell plan is coordinated without robot padding); "
+                     "send padding 0, or plan without workcell");
+      }
       // A team of one among the workcell's committed trajectories.
       call.record.fields.front().second = "workcell:" + planner;
       CoordinationQuery query = WorkcellPlanQuery(request, robot.model, scene.scene, registry_);
@@ -752,7 +760,8 @@ class PlanningService final : public RawService {
       }
       return;
     }
-    std::shared_ptr<const CollisionChecker> checker = store_->Checker(robot, scene);
+    std::shared_ptr<const CollisionChecker> checker = store_->Checker(robot, scene, padding);
+    if (padding != 0.0) call.record.fields.push_back({"padding", FormatNumber(padding)});
 
     // 2. The query, with the proto's defaults and the server's caps.
     RequestSettings settings;

@@ -308,8 +308,8 @@ void ExpectSameTrajectory(const v1::JointTrajectory& a, const v1::JointTrajector
   }
 }
 
-// plan --planner/--budget/--seed/--sample-period replace the JSON's planner.plannerId, timeBudget
-// (3 s in planar_2r_posts.json), seed (7) and trajectory.samplePeriod.
+// plan --planner/--budget/--seed/--sample-period/--padding replace the JSON's planner.plannerId,
+// timeBudget (3 s in planar_2r_posts.json), seed (7), trajectory.samplePeriod and padding.
 TEST(Cli, PlanOverridesPlannerBudgetSeedAndSamplePeriod) {
   ServerOptions options = LoopbackServer::QuietOptions(2);
   options.max_budget = 1.0;  // planar_2r_posts.json asks for 3 s: it plans only with --budget <= 1
@@ -331,10 +331,10 @@ TEST(Cli, PlanOverridesPlannerBudgetSeedAndSamplePeriod) {
   EXPECT_NE(unknown.output.find("NOT_FOUND"), std::string::npos) << unknown.output;
   EXPECT_NE(unknown.output.find("no_such_planner"), std::string::npos) << unknown.output;
 
-  // All four: the trajectory is the server's for the request with those fields.
+  // All five: the trajectory is the server's for the request with those fields.
   const std::string json = ::testing::TempDir() + "/chasles_cli_overrides_" + std::to_string(::getpid()) + ".json";
-  CommandResult planned =
-      RunCli(at + "plan " + file + " --planner rrt --budget 0.8 --seed 3 --sample-period 0.05 --out " + json);
+  CommandResult planned = RunCli(at + "plan " + file +
+                                 " --planner rrt --budget 0.8 --seed 3 --sample-period 0.05 --padding 0.01 --out " + json);
   ASSERT_EQ(planned.exit_code, 0) << planned.output;
   v1::PlanResponse written;
   ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(ReadText(json), &written).ok());
@@ -347,10 +347,18 @@ TEST(Cli, PlanOverridesPlannerBudgetSeedAndSamplePeriod) {
   expected.set_time_budget(0.8);
   expected.set_seed(3);
   expected.mutable_trajectory()->set_sample_period(0.05);
+  expected.set_padding(0.01);
   v1::PlanResponse direct;
   ASSERT_TRUE(server.Plan(expected, &direct).ok());
   ASSERT_EQ(direct.outcome(), v1::SUCCESS) << direct.message();
   ExpectSameTrajectory(written.trajectory(), direct.trajectory());
+  // The padding made a difference: without it the same seed gives another path.
+  expected.set_padding(0.0);
+  v1::PlanResponse bare;
+  ASSERT_TRUE(server.Plan(expected, &bare).ok());
+  ASSERT_EQ(bare.outcome(), v1::SUCCESS) << bare.message();
+  EXPECT_NE(bare.statistics().path_length(), written.statistics().path_length());
+  expected.set_padding(0.01);
   // The seed made the difference: the file's seed 7 gives another path.
   expected.set_seed(7);
   v1::PlanResponse seven;
@@ -375,6 +383,8 @@ TEST(Cli, PlanOverrideValuesAreValidated) {
       {"--seed 18446744073709551616", "--seed '18446744073709551616' must be a whole number"},
       {"--sample-period 0.00001", "--sample-period '0.00001' must be a number of seconds in [0.0001, 1]"},
       {"--sample-period 2", "--sample-period '2' must be a number of seconds in [0.0001, 1]"},
+      {"--padding -0.01", "--padding '-0.01' must be a number of metres in [0, 0.5]"},
+      {"--padding 0.6", "--padding '0.6' must be a number of metres in [0, 0.5]"},
       {"--planner ''", "--planner '' must be a planner id"},
       {"--seed", "--seed needs a value"},
   };

@@ -82,6 +82,11 @@ struct RequestSettings {
   double time_budget = 5.0;  ///< [s], in (0, 600]
 };
 
+/// A request's safety margin around every robot shape [m] (PlanRequest/OptimizeRequest
+/// `padding`; 0 = none): the value, checked to be in [0, 0.5].
+/// \throws Error(kInvalidArgument) e.g. `padding = -1 must be in [0, 0.5] m`.
+double PaddingFromProto(double padding, const std::string& field);
+
 /// The query part of a request (start, joint or pose goal, gravity, planner, trajectory options, seed, resolution),
 /// with every default applied as documented in the proto. `checker` supplies the robot.
 /// \throws Error(kInvalidArgument) naming the field, Error(kNotFound) for an unknown planner.

@@ -50,8 +50,11 @@ class ModelStore {
   const StoredRobot& default_robot() const { return default_robot_; }
   const StoredScene& default_scene() const { return default_scene_; }
 
-  /// The checker for (robot, scene), built once per pair and cached.
-  std::shared_ptr<const CollisionChecker> Checker(const StoredRobot& robot, const StoredScene& scene);
+  /// The checker for (robot, scene) with `padding` [m] around every robot shape
+  /// (CollisionOptions::padding, validated by the caller), built once per (robot, scene,
+  /// padding) and cached: a checker is never shared between paddings.
+  std::shared_ptr<const CollisionChecker> Checker(const StoredRobot& robot, const StoredScene& scene,
+                                                  double padding = 0.0);
 
   CacheStats cache_stats() const { return cache_.stats(); }
   const InputLimits& limits() const { return limits_; }
