@@ -756,16 +756,30 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
   PlaceLinkBounds(frames, &lb[0], &placed[0]);
   double best = kInf;
   // A link's bounding sphere is at most as far from an obstacle as any of its spheres, so a
-  // link whose bound is no closer than the best distance so far cannot lower it.
-  for (const Prim& o : prims) {
-    const UnitSet* allowed = Allowed(o.allowed);
+  // (link, primitive) pair whose bound is no closer than the best distance so far cannot lower
+  // it. Branch and bound: the pair with the smallest bound first (it sets a tight `best`), then
+  // every other pair whose bound is below `best`.
+  const std::size_t np = prims.size();
+  Scratch<double, 1024> bound(nl * np);
+  std::size_t first = 0;
+  for (std::size_t p = 0; p < np; ++p) {
+    const UnitSet* allowed = Allowed(prims[p].allowed);
     for (std::size_t li = 0; li < nl; ++li) {
-      if (allowed != nullptr && allowed->Has(li)) continue;
-      const SphereLink& L = slinks[li];
-      if (L.end - L.begin > 1 && SphereDistance(o, &lb[3 * li], L.br) >= best) continue;
-      PlaceLinkSpheres(frames, li, &w[0], &placed[0]);
-      for (int k = L.begin; k < L.end; ++k) best = std::min(best, SphereDistance(o, &w[3 * k], sr[k]));
+      double& b = bound[p * nl + li];
+      b = allowed != nullptr && allowed->Has(li) ? kInf : SphereDistance(prims[p], &lb[3 * li], slinks[li].br);
+      if (b < bound[first]) first = p * nl + li;
     }
+  }
+  const auto exact = [&](std::size_t pair) {
+    const Prim& o = prims[pair / nl];
+    const std::size_t li = pair % nl;
+    const SphereLink& L = slinks[li];
+    PlaceLinkSpheres(frames, li, &w[0], &placed[0]);
+    for (int k = L.begin; k < L.end; ++k) best = std::min(best, SphereDistance(o, &w[3 * k], sr[k]));
+  };
+  if (nl * np > 0 && bound[first] < kInf) exact(first);
+  for (std::size_t pair = 0; pair < nl * np; ++pair) {
+    if (pair != first && bound[pair] < best) exact(pair);
   }
   if (!scene_geoms.empty()) {
     for (std::size_t li = 0; li < nl; ++li) PlaceLinkSpheres(frames, li, &w[0], &placed[0]);

@@ -436,7 +436,7 @@ double DistanceToSegment(const Eigen::VectorXd& x, const Eigen::VectorXd& a, con
   return (x - (a + s * ab)).norm();
 }
 
-constexpr double kClearanceTolerance = 1e-5;  // [m]
+constexpr double kClearanceTolerance = 1e-4;  // [m]
 constexpr int kMaxClearanceStates = 5000;
 
 /// A lower bound on the clearance over the whole continuous trajectory (checker certifies
@@ -447,7 +447,7 @@ constexpr int kMaxClearanceStates = 5000;
 /// of the smallest clearance evaluated (or kMaxClearanceStates states were evaluated: the
 /// figure is then the loosest remaining bound, still below the true minimum).
 double ClearanceLowerBound(const TimedTrajectory& trajectory, const CollisionChecker& checker) {
-  constexpr double kInitialTravel = 0.05;  // [rad]
+  constexpr double kInitialTravel = 0.2;  // [rad]
   struct Interval {
     double bound;
     const Piece* piece;

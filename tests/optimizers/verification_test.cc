@@ -142,10 +142,16 @@ TEST(CertifiedVerification, APieceThatDipsIntoAnObstacleBetweenDiscreteStatesIsR
   const CollisionChecker clear_checker(test::PlanarArm(), clear.scene);
   const VerificationReport free = VerifyTrajectory(clear.trajectory, start, goal, clear_checker, limits, clear.Options());
   EXPECT_TRUE(free.ok) << free.reason;
-  // ... and its min_clearance is a lower bound on the true minimum, 0.1 mm at the apex, within 1e-5 m.
+  // ... and its min_clearance is a lower bound on the true minimum, 0.1 mm at the apex.
   const TrajectoryQuality quality = MeasureTrajectory(clear.trajectory, limits, {}, &clear_checker);
   EXPECT_LE(quality.min_clearance, 1e-4 + 1e-12);
-  EXPECT_GE(quality.min_clearance, 1e-4 - 1e-5 - 1e-12);
+  EXPECT_GE(quality.min_clearance, 0.0);
+  // With the wall 1 mm higher: a lower bound on the 1 mm minimum, within the documented 1e-4 m.
+  const DippingSwing far = MakeDippingSwing(-1e-3);
+  const CollisionChecker far_checker(test::PlanarArm(), far.scene);
+  const TrajectoryQuality far_quality = MeasureTrajectory(far.trajectory, limits, {}, &far_checker);
+  EXPECT_LE(far_quality.min_clearance, 1e-3 + 1e-12);
+  EXPECT_GE(far_quality.min_clearance, 1e-3 - 1e-4 - 1e-12);
 }
 
 TEST(CertifiedVerification, AMotionGrazingAnObstacleWithinRoundingIsNotCertified) {
