@@ -112,8 +112,9 @@ class CollisionChecker {
   /// piece of duration T: T·max|q̇_i| over it); the advancement of IsMotionCertified then
   /// holds unchanged, with D_k = Σ_i speed_bound_i·R_ik — the centre of sphere k moves at most
   /// Σ_i R_ik ∫|q̇_i| along any path. Joint limits are NOT checked here (a curve's range is the
-  /// caller's: VerifyTrajectory checks it exactly at each polynomial's extrema). No probes: the
-  /// advancement starts at s = 0. Same conservatism as IsMotionCertified (false when a step
+  /// caller's: VerifyTrajectory checks it exactly at each polynomial's extrema). Up to 7
+  /// interior probe states first (bisection order, no closer than 0.005 by the speed bound), then
+  /// the advancement from s = 0. Same conservatism as IsMotionCertified (false when a step
   /// falls below 1e-7 or more than 20000 states would be evaluated, or q(s) is not finite).
   /// When !certifies_motion() it checks states at s = i/n with n = ⌈max_i speed_bound_i /
   /// 0.005⌉ (no joint moves more than 0.005 between them, by the bound) and certifies nothing.
