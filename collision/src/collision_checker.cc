@@ -42,6 +42,8 @@
 //   one predictable branch per obstacle; an obstacle every link may touch is dropped.
 // * Contact semantics: shapes that touch (distance == 0 after padding) are in collision, as in
 //   FCL's sphere–box test. With padding > 0 the FCL path compares fcl::distance <= padding.
+//   Padding applies between the robot and the scene only; self pairs are checked on the
+//   unpadded shapes (as MoveIt does), so the fast path subtracts 2·padding from padded radii.
 
 namespace chasles {
 namespace {
@@ -478,7 +480,8 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
         for (int k = B.begin; k < B.end; ++k) {
           const double* xk = &w[3 * k];
           const double e0 = xi[0] - xk[0], e1 = xi[1] - xk[1], e2 = xi[2] - xk[2];
-          const double d = std::sqrt(e0 * e0 + e1 * e1 + e2 * e2) - sr[i] - sr[k];
+          // Self pairs are unpadded (padding keeps the robot from the scene only).
+          const double d = std::sqrt(e0 * e0 + e1 * e1 + e2 * e2) - sr[i] - sr[k] + 2.0 * options.padding;
           if (d <= 0.0) return false;
           const double v = pa[i - A.begin] + pb[k - B.begin];
           if (d < step * v) step = d / v;
@@ -733,7 +736,7 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
       for (int k = B.begin; k < B.end; ++k) {
         const double* xk = &w[3 * k];
         const double e0 = xi[0] - xk[0], e1 = xi[1] - xk[1], e2 = xi[2] - xk[2];
-        const double r = sr[i] + sr[k];
+        const double r = sr[i] + sr[k] - 2.0 * options.padding;  // the unpadded spheres
         if (e0 * e0 + e1 * e1 + e2 * e2 <= r * r) {
           return hit(A.link, robot->links()[B.link].name, true);
         }
@@ -847,17 +850,12 @@ bool CollisionChecker::Impl::FclCollide(const Frame* frames, CollisionResult* re
     const RobotShape& a = shapes[pr.first];
     const RobotShape& b = shapes[pr.second];
     if (!SpheresOverlap(center[pr.first], a.g.radius + pad, center[pr.second], b.g.radius + pad)) continue;
-    // Two padded shapes touch when their distance is <= 2·padding.
-    bool touching;
-    if (pad > 0.0) {
-      fcl::DistanceRequestd request;
-      fcl::DistanceResultd result;
-      touching = fcl::distance(a.g.geom.get(), tf[pr.first], b.g.geom.get(), tf[pr.second], request,
-                               result) <= 2.0 * pad;
-    } else {
-      touching = pair_hits(a.g.geom.get(), tf[pr.first], b.g.geom.get(), tf[pr.second]);
+    // Self pairs are checked on the unpadded shapes (padding keeps the robot from the scene).
+    fcl::CollisionRequestd request;
+    fcl::CollisionResultd result;
+    if (fcl::collide(a.g.geom.get(), tf[pr.first], b.g.geom.get(), tf[pr.second], request, result) > 0) {
+      return hit(a.link, robot->links()[b.link].name, true);
     }
-    if (touching) return hit(a.link, robot->links()[b.link].name, true);
   }
   return false;
 }

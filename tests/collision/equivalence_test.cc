@@ -85,6 +85,42 @@ double PointDistance(const Shape& s, const Eigen::Vector3d& world) {
   }
 }
 
+// Padding keeps the robot from the scene, not from itself (MoveIt's link padding): on random
+// Panda configurations with no scene, a 2 cm padding changes no self-collision answer on either
+// path, while against the table it forbids states an independent check puts within 2 cm.
+TEST(Padding, GrowsTheRobotAgainstTheSceneOnly) {
+  auto panda = test::LoadRobot("panda");
+  auto empty = std::make_shared<Scene>();
+  auto table = test::LoadScene("scenes/table.json");
+  CollisionOptions padded, padded_fcl, fcl;
+  padded.padding = padded_fcl.padding = 0.02;
+  padded_fcl.force_fcl = fcl.force_fcl = true;
+  const CollisionChecker bare_self(panda, empty), fast_self(panda, empty, padded), fcl_self(panda, empty, padded_fcl);
+  const CollisionChecker bare(panda, table, fcl), fast(panda, table, padded), fcl_padded(panda, table, padded_fcl);
+  EXPECT_TRUE(fast_self.IsValid(test::PandaReady()));
+  EXPECT_TRUE(fcl_self.IsValid(test::PandaReady()));
+  std::mt19937_64 rng(31);
+  int self_colliding = 0, within_padding = 0;
+  for (int i = 0; i < NumSamples() / 5; ++i) {
+    const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
+    const bool self_free = bare_self.IsValid(q);
+    self_colliding += self_free ? 0 : 1;
+    EXPECT_EQ(fast_self.IsValid(q), self_free) << "sample " << i;
+    EXPECT_EQ(fcl_self.IsValid(q), self_free) << "sample " << i;
+    if (!self_free) continue;
+    // Against the table: invalid exactly when the bare robot is within the padding of it
+    // (the unpadded FCL checker's clearance is the independent reference).
+    const double clearance = bare.Clearance(q);
+    if (std::abs(clearance - 0.02) < 1e-9) continue;  // rounding at the boundary
+    const bool expected = clearance > 0.02;
+    within_padding += clearance > 0.0 && clearance <= 0.02 ? 1 : 0;
+    EXPECT_EQ(fast.IsValid(q), expected) << "sample " << i << " clearance " << clearance;
+    EXPECT_EQ(fcl_padded.IsValid(q), expected) << "sample " << i << " clearance " << clearance;
+  }
+  EXPECT_GT(self_colliding, 0);  // the premise: self pairs are exercised
+  EXPECT_GT(within_padding, 0);  // and so are states the padding alone forbids
+}
+
 TEST(FastPath, MatchesABruteForceReferenceBuiltOnRobotFk) {
   auto panda = test::LoadRobot("panda");
   const AllowedCollisionMatrix& acm = panda->allowed_collisions();

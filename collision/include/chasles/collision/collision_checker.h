@@ -19,7 +19,10 @@ namespace chasles {
 
 /// Options fixed when the checker is built.
 struct CollisionOptions {
-  /// Distance added around every robot shape [m]; >= 0. Contact closer than this is a collision.
+  /// Distance added around every robot shape against the scene [m]; >= 0: robot–obstacle
+  /// contact closer than this is a collision. Self-collision is checked on the unpadded shapes
+  /// (as MoveIt's link padding), so a padding wider than half the gap between adjacent links does
+  /// not make the robot collide with itself.
   double padding = 0.0;
   /// Force the generic FCL path even when the fast sphere path applies (tests, reference).
   bool force_fcl = false;
