@@ -45,10 +45,11 @@ bool SegmentValid(const CollisionChecker& checker, const Eigen::VectorXd& a, con
                                     : checker.IsMotionValid(a, b, max_step, counters);
 }
 
-/// Greedy vertex reduction: from each kept waypoint, jump to the farthest later waypoint that
-/// the straight segment reaches validly (and not longer than the polyline it replaces).
+/// Greedy vertex reduction: from each kept waypoint, jump to the farthest later waypoint (at most
+/// `max_skip` ahead) that the straight segment reaches validly (and not longer than the polyline
+/// it replaces).
 JointPath ReduceVertices(const JointPath& path, const CollisionChecker& checker, double max_step,
-                         CheckCounters* counters, std::vector<char>* checked) {
+                         CheckCounters* counters, std::vector<char>* checked, int max_skip) {
   const int n = static_cast<int>(path.size());
   if (n < 3) {
     checked->assign(std::max(n - 1, 0), 0);
@@ -64,7 +65,7 @@ JointPath ReduceVertices(const JointPath& path, const CollisionChecker& checker,
   while (i < n - 1) {
     int next = i + 1;
     char valid = 0;  // the kept input segment i → i + 1 was not checked here
-    for (int j = n - 1; j > i + 1; --j) {
+    for (int j = std::min(n - 1, i + max_skip); j > i + 1; --j) {
       const double direct = (path[j] - path[i]).norm();
       if (direct > prefix[j] - prefix[i]) continue;  // rounding only; never lengthen
       if (SegmentValid(checker, path[i], path[j], max_step, counters)) {
@@ -125,7 +126,8 @@ JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
   // a subset, up to rounding of ~1e-16 rad), so a shortcut's head and tail pieces need no new
   // check; on the discrete path they are re-checked at their own states.
   std::vector<char> checked;
-  JointPath current = ReduceVertices(RemoveDuplicates(path), checker, options.max_step, counters, &checked);
+  const int all = static_cast<int>(path.size());
+  JointPath current = ReduceVertices(RemoveDuplicates(path), checker, options.max_step, counters, &checked, all);
   const bool inherit = checker.certifies_motion();
   double length = PathLength(current);
 
@@ -191,8 +193,9 @@ JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
     length -= shorter;
     changed = true;
   }
-  // Shortcut points may have made further waypoints redundant.
-  if (changed) current = ReduceVertices(current, checker, options.max_step, counters, &checked);
+  // Shortcut points may have made waypoints redundant: drop those whose neighbours see each
+  // other (a skip of one; longer jumps were what the shortcuts already tried).
+  if (changed) current = ReduceVertices(current, checker, options.max_step, counters, &checked, 2);
   // Endpoints are never replaced above; assert that the contract holds bit for bit.
   current.front() = path.front();
   current.back() = path.back();

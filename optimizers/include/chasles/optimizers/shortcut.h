@@ -27,7 +27,8 @@ struct ShortcutOptions {
 /// then tries up to `max_attempts` random shortcuts (fewer when `stall_attempts` stops them)
 /// between random points on two different segments
 /// (accepted when every new segment passes IsMotionValid at `max_step` and the path gets
-/// shorter), then, if any was accepted, reduces vertices once more. Endpoints are kept
+/// shorter), then, if any was accepted, drops each waypoint whose neighbours are joined by a
+/// valid segment (a skip of one waypoint; longer jumps are what the shortcuts tried). Endpoints are kept
 /// bit-exactly. The result is never longer (in joint-space Euclidean length) than the input
 /// and every new segment passes IsMotionValid at `max_step`; input segments that are kept are
 /// not re-checked. Duplicate waypoints are removed, and collinear ones whenever the joining
