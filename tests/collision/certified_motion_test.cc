@@ -3,6 +3,7 @@
 // obstacles between samples, and the FCL-path / mesh fallback.
 
 #include <algorithm>
+#include <cmath>
 #include <iostream>
 #include <random>
 
@@ -95,6 +96,89 @@ TEST(CertifiedCurve, ACurveThatDipsIntoAnObstacleBetweenItsEndsIsRejected) {
   EXPECT_THROW(checker.IsCurveCertified(line(-1, 1), Eigen::VectorXd::Zero(2)), Error);
   // A curve that returns NaN is never certified.
   EXPECT_FALSE(checker.IsCurveCertified([](double, Eigen::VectorXd* q) { *q = Q1(std::nan("")); }, Q1(1)));
+}
+
+// The advancement skips a pair while the clearance it had when last evaluated, minus the
+// most it can have shrunk since, cannot shorten the step (its free-until parameter). These
+// place an obstacle far from where the motion starts, behind a stretch of tiny steps (a guard
+// rail 0.5 mm beside the path), so it stays skipped for hundreds of states before it matters.
+std::shared_ptr<Scene> GuardRailAndSheet(double sheet_x) {
+  auto scene = std::make_shared<Scene>();
+  scene->AddObject({"guard", Shape::Box({0.2, 0.002, 0.002}, At(-0.9, 0.0016, 0))});  // 0.5 mm from the path
+  scene->AddObject({"sheet", Shape::Box({0.0006, 1.0, 1.0}, At(sheet_x, 0, 0))});
+  return scene;
+}
+
+TEST(CertifiedMotion, APairSkippedForManyStatesIsEvaluatedBeforeItCanMatter) {
+  auto robot = test::SliderRobot(Shape::Sphere(0.0001));
+  CollisionChecker checker(robot, GuardRailAndSheet(0.9));
+  ASSERT_TRUE(checker.certifies_motion());
+  CheckCounters counters;
+  EXPECT_FALSE(checker.IsMotionCertified(Q1(-1), Q1(1), &counters));
+  EXPECT_GT(counters.state_checks, 200u);  // the guard rail took many small steps
+  EXPECT_FALSE(checker.IsMotionCertified(Q1(1), Q1(-1)));
+  EXPECT_TRUE(checker.IsMotionCertified(Q1(-1), Q1(0.899)));    // stops 0.6 mm short of the sheet
+  EXPECT_FALSE(checker.IsMotionCertified(Q1(-1), Q1(0.8997)));  // ends 0.1 mm into it
+  // The sheet just past the rail: skipped while the rail is passed, then evaluated again.
+  CollisionChecker close(robot, GuardRailAndSheet(-0.79));
+  EXPECT_FALSE(close.IsMotionCertified(Q1(-1), Q1(0)));
+  EXPECT_TRUE(close.IsMotionCertified(Q1(-1), Q1(-0.7905)));  // 0.1 mm short
+}
+
+TEST(CertifiedCurve, AnObstacleLeftBehindIsCheckedAgainWhenTheCurveComesBack) {
+  // From 0.85 (5 mm before the sheet) out past the guard rail (x ≈ -0.9) and back to x1: the
+  // sheet's pair is evaluated at the start, skipped on the way out, and due again on the way back.
+  auto robot = test::SliderRobot(Shape::Sphere(0.0001));
+  CollisionChecker checker(robot, GuardRailAndSheet(0.9));
+  const double pi = std::acos(-1.0);
+  const auto out_and_back = [pi](double x1) {
+    return [pi, x1](double s, Eigen::VectorXd* q) { *q = Q1(0.85 - 1.75 * std::sin(pi * s) + (x1 - 0.85) * s); };
+  };
+  // |dx/ds| <= 1.75π + |x1 − 0.85|.
+  const auto speed = [pi](double x1) { return Q1(1.75 * pi + std::abs(x1 - 0.85)); };
+  CheckCounters counters;
+  EXPECT_FALSE(checker.IsCurveCertified(out_and_back(0.91), speed(0.91), &counters));  // back through the sheet
+  EXPECT_GT(counters.state_checks, 200u);
+  EXPECT_FALSE(checker.IsCurveCertified(out_and_back(0.8997), speed(0.8997)));  // back 0.1 mm into it
+  EXPECT_TRUE(checker.IsCurveCertified(out_and_back(0.899), speed(0.899)));     // back to 0.6 mm short
+}
+
+TEST(CertifiedMotion, PandaHandThroughAThinPlateBetweenTheProbesIsRejected) {
+  // A 0.3 mm plate across the path of a hand sphere at s = 0.93 (between the last probe, 7/8,
+  // and the end), among the cage's obstacles: every probe state is free, the dense check finds
+  // the plate, and the certified check must too although most of its pairs are being skipped.
+  auto panda = test::LoadRobot("panda");
+  auto cage = test::LoadScene("scenes/cage.json");
+  CollisionChecker cage_checker(panda, cage);
+  const int hand = panda->FindLink("panda_hand");
+  const Eigen::Vector3d sphere_centre(0, 0.015, 0.03);  // one of the hand's spheres, hand frame
+  std::mt19937_64 rng(5);
+  std::vector<Eigen::Isometry3d> poses;
+  int tested = 0;
+  for (int attempt = 0; attempt < 300 && tested < 5; ++attempt) {
+    const Eigen::VectorXd a = RandomValid(cage_checker, rng);
+    const Eigen::VectorXd b = Toward(*panda, a, RandomDir(7, rng), 1.0);
+    const auto centre_at = [&](double s) {
+      panda->ForwardKinematics(a + s * (b - a), &poses);
+      return Eigen::Vector3d(poses[hand] * sphere_centre);
+    };
+    const Eigen::Vector3d p = centre_at(0.93);
+    const Eigen::Vector3d v = centre_at(0.9301) - centre_at(0.9299);
+    if (v.norm() < 1e-6) continue;
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), v.normalized()).toRotationMatrix();
+    pose.translation() = p;
+    auto scene = std::make_shared<Scene>(*cage);
+    scene->AddObject({"plate", Shape::Box({0.06, 0.06, 0.0003}, pose)});
+    CollisionChecker checker(panda, scene);
+    bool probes_free = true;
+    for (int i = 0; i <= 8; ++i) probes_free = probes_free && checker.IsValid(a + (i / 8.0) * (b - a));
+    if (!probes_free || checker.IsMotionValid(a, b, 1e-4)) continue;
+    ++tested;
+    EXPECT_FALSE(checker.IsMotionCertified(a, b)) << "attempt " << attempt;
+    EXPECT_FALSE(checker.IsMotionCertified(b, a)) << "attempt " << attempt;
+  }
+  EXPECT_GE(tested, 3);
 }
 
 TEST(CertifiedCurve, FallsBackToDiscreteStatesWhenTheCheckerCannotCertify) {
