@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -14,12 +15,15 @@
 #include "chasles/robot/error.h"
 #include "fcl_geometry.h"
 #include "occupancy_grid.h"
+#include "sin_cos.h"
 
 // Design notes
 // ------------
 // * Forward kinematics is done here by chaining the joint transforms into flat 3x4 frames on
 //   the stack (no allocation, no Eigen temporaries); tests cross-check it against
-//   RobotModel::ForwardKinematics.
+//   RobotModel::ForwardKinematics. Only the frames of links with geometry and their ancestors
+//   are computed; a revolute joint about a coordinate axis turns two columns of parent·R0
+//   instead of a 3×3 product, and sin/cos come from detail::SinCos (sin_cos.h, within 2 ulp).
 // * Fast path (every robot shape a sphere, force_fcl off): spheres are kept as flat arrays
 //   (link-frame centre, radius + padding), grouped per link with one bounding sphere per link.
 //   Scene primitives are kept as flat records with their world->local transform precomputed;
@@ -75,6 +79,17 @@ inline void MulR(const double* a, const double* b, double* c) {
   }
 }
 
+/// Columns u, v of the row-major rotation m turn by the angle with cosine c and sine s:
+/// u' = c·u + s·v, v' = c·v − s·u (m·Rot(axis, angle) for the axis completing u, v).
+template <int u, int v>
+inline void TurnColumns(double c, double s, double* m) {
+  for (int row = 0; row < 9; row += 3) {
+    const double mu = m[row + u], mv = m[row + v];
+    m[row + u] = c * mu + s * mv;
+    m[row + v] = c * mv - s * mu;
+  }
+}
+
 void ToRowMajor(const Eigen::Matrix3d& m, double* r) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) r[3 * i + j] = m(i, j);
@@ -110,16 +125,22 @@ class Scratch {
   T* data_;
 };
 
-/// One joint of the FK chain, with the origin rotation pre-multiplied into the axis terms:
-/// R0·Rot(a, q) = c·R0 + s·(R0[a]×) + (1 − c)·(R0 a) aᵀ.
+/// One joint of the FK program: child = parent · (R0, p0) · motion, where the motion is a
+/// rotation by q about `axis` (revolute), a translation by q along it (prismatic) or nothing.
 struct FkJoint {
   int parent_link = -1;
   int child_link = -1;
   int dof = -1;
   int kind = 0;  // 0 fixed, 1 revolute, 2 prismatic
+  bool r0_identity = false;  // R0 = I exactly: parent·R0 is parent, no product needed
+  /// Revolute joints about a coordinate axis (±x, ±y, ±z exactly, as URDF and DH axes mostly
+  /// are): the axis index, and the sign folded into sin q. Rot(±e_a, q) leaves column a of
+  /// parent·R0 as it is and turns the other two (TurnColumns): 12 products, not a 3×3 product.
+  int axis_index = -1;  // -1: a general axis, Rot(a, q) = c·I + s·[a]× + (1 − c)·a·aᵀ
+  double axis_sign = 1.0;
+  double axis[3];
   double r0[9], p0[3];
-  double r0k[9], r0aa[9];
-  double r0a[3];
+  double r0a[3];  // R0·axis: a prismatic joint's direction in the parent frame
 };
 
 enum PrimKind { kPrimSphere = 0, kPrimBox = 1, kPrimCylinder = 2, kPrimCapsule = 3 };
@@ -706,6 +727,17 @@ void CollisionChecker::Impl::BuildFk() {
     }
   }
   if (root < 0) ThrowInvalid("robot '" + robot->name() + "' has no root link");
+  // Only frames something reads are computed: links with collision shapes and their ancestors
+  // (a tool frame without geometry at the end of the chain is skipped).
+  std::vector<bool> needed(num_links, false);
+  for (int l = 0; l < num_links; ++l) {
+    if (robot->links()[l].collision.empty()) continue;
+    for (int link = l; link >= 0 && !needed[link];) {
+      needed[link] = true;
+      const int j = robot->links()[link].parent_joint;
+      link = j < 0 ? -1 : robot->joints()[j].parent_link;
+    }
+  }
   // Topological order: repeatedly take joints whose parent link is placed.
   std::vector<bool> placed(num_links, false), used(robot->joints().size(), false);
   placed[root] = true;
@@ -718,6 +750,7 @@ void CollisionChecker::Impl::BuildFk() {
       used[j] = true;
       placed[joint.child_link] = true;
       progress = true;
+      if (!needed[joint.child_link]) continue;
       FkJoint f;
       f.parent_link = joint.parent_link;
       f.child_link = joint.child_link;
@@ -726,11 +759,15 @@ void CollisionChecker::Impl::BuildFk() {
       if (f.dof < 0) f.kind = 0;
       const Eigen::Matrix3d r0 = joint.origin.linear();
       const Eigen::Vector3d a = joint.axis.normalized();
-      Eigen::Matrix3d k;
-      k << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
+      f.r0_identity = r0 == Eigen::Matrix3d::Identity();
+      for (int i = 0; i < 3; ++i) {
+        f.axis[i] = a[i];
+        if (std::abs(a[i]) == 1.0 && a[(i + 1) % 3] == 0.0 && a[(i + 2) % 3] == 0.0) {
+          f.axis_index = i;
+          f.axis_sign = a[i];
+        }
+      }
       ToRowMajor(r0, f.r0);
-      ToRowMajor(r0 * k, f.r0k);
-      ToRowMajor(r0 * a * a.transpose(), f.r0aa);
       const Eigen::Vector3d r0a = r0 * a;
       for (int i = 0; i < 3; ++i) {
         f.p0[i] = joint.origin.translation()[i];
@@ -749,20 +786,41 @@ void CollisionChecker::Impl::ComputeFk(const Eigen::VectorXd& q, Frame* frames) 
     const Frame& parent = frames[j.parent_link];
     Frame& child = frames[j.child_link];
     double local_p[3] = {j.p0[0], j.p0[1], j.p0[2]};
-    if (j.kind == 1) {
-      const double angle = q[j.dof];
-      const double s = std::sin(angle), c = std::cos(angle), v = 1.0 - c;
-      double m[9];
-      for (int i = 0; i < 9; ++i) m[i] = c * j.r0[i] + s * j.r0k[i] + v * j.r0aa[i];
-      MulR(parent.r, m, child.r);
-    } else {
-      if (j.kind == 2) {
-        const double d = q[j.dof];
-        for (int i = 0; i < 3; ++i) local_p[i] += j.r0a[i] * d;
-      }
-      MulR(parent.r, j.r0, child.r);
+    if (j.kind == 2) {
+      const double d = q[j.dof];
+      for (int i = 0; i < 3; ++i) local_p[i] += j.r0a[i] * d;
     }
     Apply(parent, local_p, child.p);
+    // child.r = (parent.r · R0) · Rot(axis, q).
+    if (j.r0_identity) {
+      std::copy(parent.r, parent.r + 9, child.r);
+    } else {
+      MulR(parent.r, j.r0, child.r);
+    }
+    if (j.kind != 1) continue;
+    double s, c;
+    detail::SinCos(q[j.dof], &s, &c);
+    switch (j.axis_index) {
+      case 0:
+        TurnColumns<1, 2>(c, j.axis_sign * s, child.r);
+        break;
+      case 1:
+        TurnColumns<2, 0>(c, j.axis_sign * s, child.r);
+        break;
+      case 2:
+        TurnColumns<0, 1>(c, j.axis_sign * s, child.r);
+        break;
+      default: {  // a general axis: Rot(a, q) = c·I + s·[a]× + (1 − c)·a·aᵀ
+        const double* a = j.axis;
+        const double t = 1.0 - c;
+        const double rot[9] = {c + t * a[0] * a[0],        t * a[0] * a[1] - s * a[2], t * a[0] * a[2] + s * a[1],
+                               t * a[1] * a[0] + s * a[2], c + t * a[1] * a[1],        t * a[1] * a[2] - s * a[0],
+                               t * a[2] * a[0] - s * a[1], t * a[2] * a[1] + s * a[0], c + t * a[2] * a[2]};
+        double r[9];
+        std::copy(child.r, child.r + 9, r);
+        MulR(r, rot, child.r);
+      }
+    }
   }
 }
 

@@ -2,12 +2,17 @@
 // independent brute-force reference built on RobotModel::ForwardKinematics.
 
 #include <cmath>
+#include <iostream>
+#include <limits>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "chasles/collision/collision_checker.h"
 #include "test_util.h"
+// Internal kernels of the fast path, tested directly.
+#include "../../collision/src/sin_cos.h"
 
 namespace chasles {
 namespace {
@@ -157,6 +162,131 @@ TEST(FastPath, MatchesABruteForceReferenceBuiltOnRobotFk) {
     }
     EXPECT_EQ(mismatches, 0) << name;
   }
+}
+
+// A robot whose joints take every branch of the fast path's FK: revolute about +x, −y, −z and
+// a skew axis, prismatic along a skew axis, fixed joints with rotated origins, a link without
+// geometry in the middle of the chain and a tool link without geometry at its end.
+std::shared_ptr<const RobotModel> EveryAxisRobot() {
+  const auto origin = [](double x, double y, double z, double roll, double pitch, double yaw) {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                  Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+                     .toRotationMatrix();
+    t.translation() << x, y, z;
+    return t;
+  };
+  const auto at = [](double x, double y, double z) {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.translation() << x, y, z;
+    return t;
+  };
+  std::vector<Link> links(8);
+  const char* names[] = {"base", "l1", "l2_bare", "l3", "l4", "l5", "l6", "tool"};
+  for (int i = 0; i < 8; ++i) {
+    links[i].name = names[i];
+    links[i].parent_joint = i - 1;
+  }
+  links[0].collision = {Shape::Sphere(0.05, at(0.1, 0, 0.05))};
+  links[1].collision = {Shape::Sphere(0.04, at(0, 0.1, 0.2)), Shape::Sphere(0.03, at(0.05, 0, 0.3))};
+  links[3].collision = {Shape::Sphere(0.04, at(0.2, 0.05, 0)), Shape::Sphere(0.02, at(0, 0, 0.1))};
+  links[4].collision = {Shape::Sphere(0.03, at(0.1, 0, 0))};
+  links[5].collision = {Shape::Sphere(0.03, at(0, 0.1, 0.05))};
+  links[6].collision = {Shape::Sphere(0.02, at(0.05, 0.05, 0.05)), Shape::Sphere(0.02, at(-0.05, 0, 0.1))};
+  struct Spec {
+    JointType type;
+    Eigen::Vector3d axis;
+    Eigen::Isometry3d origin;
+  };
+  const std::vector<Spec> specs = {
+      {JointType::kRevolute, Eigen::Vector3d::UnitX(), origin(0, 0, 0.3, 0.3, -0.2, 0.1)},
+      {JointType::kRevolute, -Eigen::Vector3d::UnitY(), origin(0.1, 0.2, 0.3, 0, 0, 0)},
+      {JointType::kRevolute, Eigen::Vector3d(0.3, 0.5, 0.8), origin(0, 0, 0.2, 1.0, 0.5, -0.4)},
+      {JointType::kPrismatic, Eigen::Vector3d(0, 1, 1), origin(0.2, 0, 0, 0, 0.7, 0)},
+      {JointType::kRevolute, -Eigen::Vector3d::UnitZ(), origin(0, 0.1, 0.1, -1.2, 0, 0.3)},
+      {JointType::kFixed, Eigen::Vector3d::UnitZ(), origin(0.05, 0, 0.1, 0.2, 0.3, 0.4)},
+      {JointType::kFixed, Eigen::Vector3d::UnitZ(), at(0, 0, 0.1)},
+  };
+  std::vector<Joint> joints;
+  int dof = 0;
+  for (int i = 0; i < 7; ++i) {
+    Joint j;
+    j.name = "j" + std::to_string(i + 1);
+    j.type = specs[i].type;
+    j.parent_link = i;
+    j.child_link = i + 1;
+    j.axis = specs[i].axis.normalized();
+    j.origin = specs[i].origin;
+    if (j.type != JointType::kFixed) {
+      j.limits = j.type == JointType::kPrismatic ? JointLimits{-0.3, 0.3, 1.0, 0.0} : JointLimits{-7.0, 7.0, 1.0, 0.0};
+      j.dof = dof++;
+    }
+    joints.push_back(j);
+  }
+  return RobotModel::FromTree("every_axis", links, joints);
+}
+
+TEST(FastPath, ForwardKinematicsMatchesTheRobotModelForEveryKindOfJoint) {
+  auto robot = EveryAxisRobot();
+  auto scene = std::make_shared<Scene>();
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> u(-0.8, 0.8);
+  for (int i = 0; i < 6; ++i) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() << u(rng), u(rng), u(rng) + 0.4;
+    scene->AddObject({"ball" + std::to_string(i), Shape::Sphere(0.01, pose)});
+  }
+  const CollisionChecker checker(robot, scene);
+  ASSERT_TRUE(checker.uses_fast_path());
+  std::vector<Eigen::Isometry3d> poses;
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::VectorXd q = test::RandomConfig(*robot, rng);
+    robot->ForwardKinematics(q, &poses);
+    double clearance = std::numeric_limits<double>::infinity();
+    for (int l = 0; l < robot->num_links(); ++l) {
+      for (const Shape& s : robot->links()[l].collision) {
+        const Eigen::Vector3d c = poses[l] * s.pose.translation();
+        for (const SceneObject& o : scene->objects()) {
+          clearance = std::min(clearance, (c - o.shape.pose.translation()).norm() - s.radius - o.shape.radius);
+        }
+      }
+    }
+    ASSERT_NEAR(checker.Clearance(q), std::max(clearance, 0.0), 1e-12) << "sample " << i;
+  }
+}
+
+TEST(SinCos, WithinTwoUlpOfLibmAndExactlyLibmBeyondItsRange) {
+  std::mt19937_64 rng(12);
+  for (double range : {1e-8, 0.7, 3.2, 7.0, 100.0, 1e5}) {
+    std::uniform_real_distribution<double> u(-range, range);
+    double worst = 0.0;
+    for (int i = 0; i < 200000; ++i) {
+      const double x = u(rng);
+      double s, c;
+      detail::SinCos(x, &s, &c);
+      worst = std::max({worst, std::abs(s - std::sin(x)), std::abs(c - std::cos(x))});
+    }
+    EXPECT_LE(worst, 2.3e-16) << "|x| <= " << range;
+  }
+  // Quadrant boundaries and their neighbours.
+  for (int k = -8; k <= 8; ++k) {
+    for (double dx : {-1e-9, 0.0, 1e-9}) {
+      const double x = k * std::acos(-1.0) / 4 + dx;
+      double s, c;
+      detail::SinCos(x, &s, &c);
+      EXPECT_NEAR(s, std::sin(x), 2.3e-16) << x;
+      EXPECT_NEAR(c, std::cos(x), 2.3e-16) << x;
+    }
+  }
+  for (double x : {1e5 + 1.0, -3e7, 1e300}) {
+    double s, c;
+    detail::SinCos(x, &s, &c);
+    EXPECT_EQ(s, std::sin(x));
+    EXPECT_EQ(c, std::cos(x));
+  }
+  double s, c;
+  detail::SinCos(std::nan(""), &s, &c);
+  EXPECT_TRUE(std::isnan(s) && std::isnan(c));
 }
 
 TEST(OctoMapScene, FastAndFclPathsAgreeAndTheMapIsConservative) {
