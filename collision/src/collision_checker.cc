@@ -16,6 +16,7 @@
 #include "fcl_geometry.h"
 #include "occupancy_grid.h"
 #include "sin_cos.h"
+#include "sphere_cull.h"
 
 // Design notes
 // ------------
@@ -31,7 +32,10 @@
 //   of their finest voxels (occupancy_grid.h: FCL's own occupancy rule and box boundaries), and
 //   each sphere is tested exactly against the occupied voxels overlapping its box. A map whose
 //   obstacle voxels span more than OccupancyGrid::kMaxVoxels stays on FCL. Meshes still go
-//   through FCL, with the robot spheres as fcl::Sphered.
+//   through FCL, with the robot spheres as fcl::Sphered. The link-bound culls of a state check
+//   (against primitive bounds, and link against link for self pairs) are bit masks from one
+//   structure-of-arrays kernel (sphere_cull.h): AVX2 when the CPU has it, SSE2 or plain C++
+//   otherwise, all giving the same bits.
 // * Fast-path order: primitives, occupancy maps (scene order), self, meshes. The FCL path checks
 //   scene objects, then maps, then self, so for a scene of maps only both paths report the same
 //   first contact.
@@ -292,11 +296,17 @@ struct CollisionChecker::Impl {
 
   // Fast path.
   std::vector<SphereLink> slinks;
-  std::vector<double> link_bound_radius;  // slinks[i].br, contiguous
+  // slinks[i].br, contiguous, padded with 0 to detail::CullPadded(slinks.size()) for the cull.
+  std::vector<double> link_bound_radius;
+  // Self pairs as bit sets: bit b % 64 of self_masks[a * ⌈n/64⌉ + b / 64] when (a, b), a < b,
+  // is in self_pairs (the cull visits them in the same order as the list).
+  std::vector<std::uint64_t> self_masks;
+  detail::CullKernel cull_kernel = detail::BestCullKernel();
   std::vector<double> sx, sy, sz, sr;          // link-frame centres, radius + padding
   std::vector<int> slink_of;                   // sphere -> index into slinks
   std::vector<std::pair<int, int>> self_pairs;  // indices into slinks, not allowed by the ACM
   std::vector<Prim> prims;
+  std::vector<double> prim_x, prim_y, prim_z, prim_bound;  // prims' bounding spheres, structure of arrays
   std::vector<std::shared_ptr<fcl::Sphered>> fcl_spheres;  // per sphere, radius + padding
   std::vector<std::shared_ptr<fcl::Sphered>> fcl_link_bounds;  // per sphere link, its bound
   std::vector<detail::OccupancyGrid> grids;  // gridded occupancy maps
@@ -827,10 +837,21 @@ void CollisionChecker::Impl::ComputeFk(const Eigen::VectorXd& q, Frame* frames) 
 bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* report) const {
   const std::size_t ns = sx.size();
   const std::size_t nl = slinks.size();
-  Scratch<double, 1024> w(3 * ns);   // world sphere centres, filled per link on first use
-  Scratch<double, 256> lb(3 * nl);   // world link bounding centres
-  Scratch<char, 256> placed(nl);     // whether link li's sphere centres are in `w`
+  const std::size_t padded = detail::CullPadded(nl);
+  Scratch<double, 1024> w(3 * ns);        // world sphere centres, filled per link on first use
+  Scratch<double, 256> lb(3 * nl);        // world link bounding centres
+  Scratch<double, 256> soa(3 * padded);   // the same as structure of arrays, for the cull
+  Scratch<char, 256> placed(nl);          // whether link li's sphere centres are in `w`
+  double* const bx = &soa[0];
+  double* const by = bx + padded;
+  double* const bz = by + padded;
   PlaceLinkBounds(frames, &lb[0], &placed[0]);
+  for (std::size_t li = 0; li < padded; ++li) {  // padding lanes at +inf overlap nothing
+    bx[li] = li < nl ? lb[3 * li] : kInf;
+    by[li] = li < nl ? lb[3 * li + 1] : kInf;
+    bz[li] = li < nl ? lb[3 * li + 2] : kInf;
+  }
+  const double* const br = link_bound_radius.data();
   const auto place = [&](std::size_t li) { PlaceLinkSpheres(frames, li, &w[0], &placed[0]); };
   const auto hit = [&](int link, const std::string& other, bool self) {
     if (report != nullptr) {
@@ -841,28 +862,26 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
     }
     return true;
   };
-  // Robot vs scene primitives. The link-bound vs obstacle-bound cull is computed branch-free
-  // into a bit mask over (up to) 64 links at a time; only the set bits are visited.
-  Scratch<double, 256> soa(3 * nl);  // link bounding centres, structure of arrays
-  for (std::size_t li = 0; li < nl; ++li) {
-    soa[li] = lb[3 * li];
-    soa[nl + li] = lb[3 * li + 1];
-    soa[2 * nl + li] = lb[3 * li + 2];
+  // Robot vs scene primitives. The link-bound vs obstacle-bound cull (sphere_cull.h) gives, per
+  // primitive, a bit mask over (up to) 64 links at a time; only the set bits are visited, in
+  // link order.
+  const std::size_t nprims = prims.size();
+  const std::size_t chunks = (nl + 63) / 64;
+  Scratch<std::uint64_t, 256> masks(std::max(nprims, nl) * chunks);
+  const auto link_chunk = [&](std::size_t chunk) {
+    const std::size_t base = 64 * chunk;
+    return detail::CullSpheres{bx + base, by + base, bz + base, br + base, std::min<std::size_t>(64, nl - base)};
+  };
+  for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+    detail::OverlapMasks(cull_kernel, link_chunk(chunk), prim_x.data(), prim_y.data(), prim_z.data(),
+                         prim_bound.data(), nprims, &masks[chunk * nprims]);
   }
-  const double* bx = &soa[0];
-  const double* by = &soa[nl];
-  const double* bz = &soa[2 * nl];
-  const double* br = link_bound_radius.data();
-  for (const Prim& o : prims) {
-    for (std::size_t base = 0; base < nl; base += 64) {
-      const std::size_t end = std::min(nl, base + 64);
-      std::uint64_t mask = 0;
-      for (std::size_t li = base; li < end; ++li) {
-        const double d0 = bx[li] - o.p[0], d1 = by[li] - o.p[1], d2 = bz[li] - o.p[2];
-        const double rr = br[li] + o.bound;
-        mask |= static_cast<std::uint64_t>(d0 * d0 + d1 * d1 + d2 * d2 <= rr * rr) << (li - base);
-      }
-      if (o.allowed >= 0) mask &= ~allowed_sets[o.allowed].words[base >> 6];
+  for (std::size_t oi = 0; oi < nprims; ++oi) {
+    const Prim& o = prims[oi];
+    for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+      const std::size_t base = 64 * chunk;
+      std::uint64_t mask = masks[chunk * nprims + oi];
+      if (o.allowed >= 0) mask &= ~allowed_sets[o.allowed].words[chunk];
       while (mask != 0) {
         const std::size_t li = base + static_cast<std::size_t>(__builtin_ctzll(mask));
         mask &= mask - 1;
@@ -930,29 +949,38 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
       }
     }
   }
-  // Self collision.
-  for (const auto& pr : self_pairs) {
-    const SphereLink& A = slinks[pr.first];
-    const SphereLink& B = slinks[pr.second];
-    const double* ca = &lb[3 * pr.first];
-    const double* cb = &lb[3 * pr.second];
-    const double d0 = ca[0] - cb[0], d1 = ca[1] - cb[1], d2 = ca[2] - cb[2];
-    const double rr = A.br + B.br;
-    if (d0 * d0 + d1 * d1 + d2 * d2 > rr * rr) continue;
-    place(pr.first);
-    place(pr.second);
-    for (int i = A.begin; i < A.end; ++i) {
-      const double* xi = &w[3 * i];
-      // Cull sphere i against B's bounding sphere first.
-      const double f0 = xi[0] - cb[0], f1 = xi[1] - cb[1], f2 = xi[2] - cb[2];
-      const double rb = sr[i] + B.br;
-      if (f0 * f0 + f1 * f1 + f2 * f2 > rb * rb) continue;
-      for (int k = B.begin; k < B.end; ++k) {
-        const double* xk = &w[3 * k];
-        const double e0 = xi[0] - xk[0], e1 = xi[1] - xk[1], e2 = xi[2] - xk[2];
-        const double r = sr[i] + sr[k] - 2.0 * options.padding;  // the unpadded spheres
-        if (e0 * e0 + e1 * e1 + e2 * e2 <= r * r) {
-          return hit(A.link, robot->links()[B.link].name, true);
+  // Self collision, pair by pair in self_pairs order: the same cull of every link against
+  // every link, masked to the pairs (a, b) that are checked.
+  if (!self_pairs.empty()) {
+    for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+      detail::OverlapMasks(cull_kernel, link_chunk(chunk), bx, by, bz, br, nl, &masks[chunk * nl]);
+    }
+  }
+  for (std::size_t a = 0; a < nl && !self_pairs.empty(); ++a) {
+    const SphereLink& A = slinks[a];
+    for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+      std::uint64_t mask = self_masks[a * chunks + chunk] & masks[chunk * nl + a];
+      while (mask != 0) {
+        const std::size_t b = 64 * chunk + static_cast<std::size_t>(__builtin_ctzll(mask));
+        mask &= mask - 1;
+        const SphereLink& B = slinks[b];
+        const double* cb = &lb[3 * b];
+        place(a);
+        place(b);
+        for (int i = A.begin; i < A.end; ++i) {
+          const double* xi = &w[3 * i];
+          // Cull sphere i against B's bounding sphere first.
+          const double f0 = xi[0] - cb[0], f1 = xi[1] - cb[1], f2 = xi[2] - cb[2];
+          const double rb = sr[i] + B.br;
+          if (f0 * f0 + f1 * f1 + f2 * f2 > rb * rb) continue;
+          for (int k = B.begin; k < B.end; ++k) {
+            const double* xk = &w[3 * k];
+            const double e0 = xi[0] - xk[0], e1 = xi[1] - xk[1], e2 = xi[2] - xk[2];
+            const double r = sr[i] + sr[k] - 2.0 * options.padding;  // the unpadded spheres
+            if (e0 * e0 + e1 * e1 + e2 * e2 <= r * r) {
+              return hit(A.link, robot->links()[B.link].name, true);
+            }
+          }
         }
       }
     }
@@ -1233,9 +1261,15 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
       m.link_bound_radius.push_back(br);
       m.fcl_link_bounds.push_back(std::make_shared<fcl::Sphered>(br));
     }
-    for (std::size_t a = 0; a < m.slinks.size(); ++a) {
-      for (std::size_t b = a + 1; b < m.slinks.size(); ++b) {
-        if (!allowed(m.slinks[a].link, m.slinks[b].link)) m.self_pairs.emplace_back(a, b);
+    const std::size_t nl = m.slinks.size();
+    m.link_bound_radius.resize(detail::CullPadded(nl), 0.0);
+    const std::size_t words = (nl + 63) / 64;
+    m.self_masks.assign(nl * words, 0);
+    for (std::size_t a = 0; a < nl; ++a) {
+      for (std::size_t b = a + 1; b < nl; ++b) {
+        if (allowed(m.slinks[a].link, m.slinks[b].link)) continue;
+        m.self_pairs.emplace_back(a, b);
+        m.self_masks[a * words + b / 64] |= std::uint64_t{1} << (b % 64);
       }
     }
     m.BuildLevers();
@@ -1322,6 +1356,10 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
           break;
       }
       m.prims.push_back(p);
+      m.prim_x.push_back(p.p[0]);
+      m.prim_y.push_back(p.p[1]);
+      m.prim_z.push_back(p.p[2]);
+      m.prim_bound.push_back(p.bound);
       continue;
     }
     SceneGeom g;

@@ -2,6 +2,7 @@
 // independent brute-force reference built on RobotModel::ForwardKinematics.
 
 #include <cmath>
+#include <cstdint>
 #include <iostream>
 #include <limits>
 #include <random>
@@ -13,6 +14,7 @@
 #include "test_util.h"
 // Internal kernels of the fast path, tested directly.
 #include "../../collision/src/sin_cos.h"
+#include "../../collision/src/sphere_cull.h"
 
 namespace chasles {
 namespace {
@@ -253,6 +255,65 @@ TEST(FastPath, ForwardKinematicsMatchesTheRobotModelForEveryKindOfJoint) {
     }
     ASSERT_NEAR(checker.Clearance(q), std::max(clearance, 0.0), 1e-12) << "sample " << i;
   }
+}
+
+TEST(SphereCull, EveryKernelGivesTheScalarKernelsBits) {
+  using detail::CullKernel;
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> coord(-1.0, 1.0), radius(0.0, 0.5);
+  int kernels_run = 0;
+  for (CullKernel kernel : {CullKernel::kScalar, CullKernel::kSse2, CullKernel::kAvx2}) {
+    if (!detail::CullKernelRuns(kernel)) continue;
+    ++kernels_run;
+    for (std::size_t n : {1u, 2u, 3u, 4u, 5u, 9u, 31u, 63u, 64u}) {
+      const std::size_t padded = detail::CullPadded(n);
+      std::vector<double> x(padded, std::numeric_limits<double>::infinity()), y = x, z = x, r(padded, 0.0);
+      for (std::size_t i = 0; i < n; ++i) {
+        x[i] = coord(rng);
+        y[i] = coord(rng);
+        z[i] = coord(rng);
+        r[i] = radius(rng);
+      }
+      // Queries: random ones, and exactly touching ones (3-4-5 triangles: d² = rr² exactly).
+      std::vector<double> qx, qy, qz, qr;
+      for (int j = 0; j < 20; ++j) {
+        qx.push_back(coord(rng));
+        qy.push_back(coord(rng));
+        qz.push_back(coord(rng));
+        qr.push_back(radius(rng));
+      }
+      x[0] = 0.0, y[0] = 0.0, z[0] = 0.0, r[0] = 0.25;
+      for (double scale : {1.0, -1.0}) {
+        qx.push_back(0.375 * scale);  // |(0.375, 0.5, 0)| = 0.625 = 0.25 + 0.375
+        qy.push_back(0.5);
+        qz.push_back(0.0);
+        qr.push_back(0.375);
+        qx.push_back(0.375 * scale);  // 2^-20 short of touching
+        qy.push_back(0.5);
+        qz.push_back(0.0);
+        qr.push_back(0.375 - 0x1p-20);
+      }
+      const detail::CullSpheres spheres{x.data(), y.data(), z.data(), r.data(), n};
+      std::vector<std::uint64_t> want(qx.size()), got(qx.size());
+      detail::OverlapMasksScalar(spheres, qx.data(), qy.data(), qz.data(), qr.data(), qx.size(), want.data());
+      detail::OverlapMasks(kernel, spheres, qx.data(), qy.data(), qz.data(), qr.data(), qx.size(), got.data());
+      for (std::size_t j = 0; j < qx.size(); ++j) {
+        ASSERT_EQ(got[j], want[j]) << "kernel " << static_cast<int>(kernel) << " n " << n << " query " << j;
+        if (n < 64) {
+          ASSERT_EQ(want[j] >> n, 0u) << "no bit past n";
+        }
+        for (std::size_t i = 0; i < n; ++i) {  // the scalar bits are the plain expression
+          const double dx = x[i] - qx[j], dy = y[i] - qy[j], dz = z[i] - qz[j], rr = r[i] + qr[j];
+          ASSERT_EQ((want[j] >> i) & 1, static_cast<std::uint64_t>(dx * dx + dy * dy + dz * dz <= rr * rr));
+        }
+      }
+      ASSERT_EQ(want[20] & 1, 1u);  // touching counts
+      ASSERT_EQ(want[21] & 1, 0u);
+    }
+  }
+  EXPECT_GE(kernels_run, 1);
+  std::cout << "[ cull ] kernels compared with the scalar one: " << kernels_run - 1
+            << (detail::CullKernelRuns(CullKernel::kAvx2) ? " (AVX2 available)\n" : " (no AVX2 on this CPU)\n");
 }
 
 TEST(SinCos, WithinTwoUlpOfLibmAndExactlyLibmBeyondItsRange) {
