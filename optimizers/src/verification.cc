@@ -437,13 +437,15 @@ double DistanceToSegment(const Eigen::VectorXd& x, const Eigen::VectorXd& a, con
 }
 
 constexpr double kClearanceTolerance = 1e-4;  // [m]
+constexpr double kClearanceRelativeTolerance = 0.02;  // of the clearance: 1 mm at 5 cm
 constexpr int kMaxClearanceStates = 5000;
 
 /// A lower bound on the clearance over the whole continuous trajectory (checker certifies
 /// motions, so it has lever bounds). Between states at local times τa < τb of a span with
 /// Lipschitz constant L per unit τ, the clearance c(τ) >= max(ca − L(τ − τa), cb − L(τb − τ)),
-/// whose minimum is (ca + cb − L(τb − τa))/2. Starting from states at most 0.05 rad apart, the
-/// interval with the lowest bound is bisected until every bound is within kClearanceTolerance
+/// whose minimum is (ca + cb − L(τb − τa))/2. Starting from states at most 0.2 rad apart, the
+/// interval with the lowest bound is bisected until every bound is within
+/// max(kClearanceTolerance, kClearanceRelativeTolerance · best)
 /// of the smallest clearance evaluated (or kMaxClearanceStates states were evaluated: the
 /// figure is then the loosest remaining bound, still below the true minimum).
 double ClearanceLowerBound(const TimedTrajectory& trajectory, const CollisionChecker& checker) {
@@ -491,7 +493,10 @@ double ClearanceLowerBound(const TimedTrajectory& trajectory, const CollisionChe
       }
     }
   }
-  while (!open.empty() && open.top().bound < best - kClearanceTolerance && evaluated < kMaxClearanceStates) {
+  // Far from obstacles a tight absolute tolerance costs many states and says little: the
+  // tolerance grows with the clearance (a lower bound either way).
+  const auto tolerance = [&] { return std::max(kClearanceTolerance, kClearanceRelativeTolerance * best); };
+  while (!open.empty() && open.top().bound < best - tolerance() && evaluated < kMaxClearanceStates) {
     const Interval top = open.top();
     open.pop();
     const double mid = 0.5 * (top.a + top.b);

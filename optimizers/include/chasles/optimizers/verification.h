@@ -102,7 +102,7 @@ struct TrajectoryQuality {
   /// Smallest distance [m] between the robot — grown by the checker's padding — and the scene's
   /// obstacles (CollisionChecker::Clearance; self-distance and allowed pairs not included);
   /// +inf when the scene has none. When the checker certifies motions it is a lower bound on
-  /// the minimum over the whole continuous trajectory, within 1e-4 m of it (see
+  /// the minimum over the whole continuous trajectory, within max(1e-4 m, 2 % of it) of it (see
   /// MeasureTrajectory); otherwise it is the minimum at sampled states, which may be above the
   /// true minimum.
   double min_clearance = 0.0;
@@ -117,9 +117,9 @@ struct TrajectoryQuality {
 /// lever bound of sphere k (CollisionChecker::SweepBounds), so between evaluated states at
 /// s0 < s1 it is at least (c0 + c1 − L·(s1 − s0))/2. Starting from states at most 0.2 rad
 /// apart, the interval with the lowest such bound is bisected until every bound is within
-/// 1e-4 m of the smallest clearance evaluated; the figure is the smallest bound (>= 0). At most
+/// max(1e-4 m, 2 % of it) of the smallest clearance evaluated; the figure is the smallest bound (>= 0). At most
 /// 5000 states are evaluated: beyond that the figure is the smallest remaining bound (still a
-/// lower bound, possibly looser than 1e-4 m). Otherwise min_clearance is the minimum at (at
+/// lower bound, possibly looser). Otherwise min_clearance is the minimum at (at
 /// most about 200 of) the sampled states.
 TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const KinematicLimits& limits,
                                     const JointPath& path, const CollisionChecker* checker,
