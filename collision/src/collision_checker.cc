@@ -14,17 +14,16 @@
 
 #include "chasles/robot/error.h"
 #include "fcl_geometry.h"
+#include "forward_kinematics.h"
 #include "occupancy_grid.h"
-#include "sin_cos.h"
 #include "sphere_cull.h"
 
 // Design notes
 // ------------
-// * Forward kinematics is done here by chaining the joint transforms into flat 3x4 frames on
-//   the stack (no allocation, no Eigen temporaries); tests cross-check it against
-//   RobotModel::ForwardKinematics. Only the frames of links with geometry and their ancestors
-//   are computed; a revolute joint about a coordinate axis turns two columns of parent·R0
-//   instead of a 3×3 product, and sin/cos come from detail::SinCos (sin_cos.h, within 2 ulp).
+// * Forward kinematics (forward_kinematics.h) chains the joint transforms into column-major
+//   frames on the stack (no allocation, no Eigen temporaries), only for links with geometry and
+//   their ancestors; an AVX2 variant is chosen at run time (simd.h), bit-identical to the
+//   baseline one. Tests cross-check it against RobotModel::ForwardKinematics.
 // * Fast path (every robot shape a sphere, force_fcl off): spheres are kept as flat arrays
 //   (link-frame centre, radius + padding), grouped per link with one bounding sphere per link.
 //   Scene primitives are kept as flat records with their world->local transform precomputed;
@@ -34,8 +33,8 @@
 //   obstacle voxels span more than OccupancyGrid::kMaxVoxels stays on FCL. Meshes still go
 //   through FCL, with the robot spheres as fcl::Sphered. The link-bound culls of a state check
 //   (against primitive bounds, and link against link for self pairs) are bit masks from one
-//   structure-of-arrays kernel (sphere_cull.h): AVX2 when the CPU has it, SSE2 or plain C++
-//   otherwise, all giving the same bits.
+//   structure-of-arrays kernel (sphere_cull.h): AVX2 when the CPU has it (simd.h), SSE2 or
+//   plain C++ otherwise, all giving the same bits.
 // * Fast-path order: primitives, occupancy maps (scene order), self, meshes. The FCL path checks
 //   scene objects, then maps, then self, so for a scene of maps only both paths report the same
 //   first contact.
@@ -63,36 +62,8 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-/// Rigid frame: row-major rotation and translation.
-struct Frame {
-  double r[9];
-  double p[3];
-};
-
-inline void Apply(const Frame& f, const double* x, double* y) {
-  y[0] = f.r[0] * x[0] + f.r[1] * x[1] + f.r[2] * x[2] + f.p[0];
-  y[1] = f.r[3] * x[0] + f.r[4] * x[1] + f.r[5] * x[2] + f.p[1];
-  y[2] = f.r[6] * x[0] + f.r[7] * x[1] + f.r[8] * x[2] + f.p[2];
-}
-
-inline void MulR(const double* a, const double* b, double* c) {
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) {
-      c[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
-    }
-  }
-}
-
-/// Columns u, v of the row-major rotation m turn by the angle with cosine c and sine s:
-/// u' = c·u + s·v, v' = c·v − s·u (m·Rot(axis, angle) for the axis completing u, v).
-template <int u, int v>
-inline void TurnColumns(double c, double s, double* m) {
-  for (int row = 0; row < 9; row += 3) {
-    const double mu = m[row + u], mv = m[row + v];
-    m[row + u] = c * mu + s * mv;
-    m[row + v] = c * mv - s * mu;
-  }
-}
+using detail::Apply;
+using detail::Frame;
 
 void ToRowMajor(const Eigen::Matrix3d& m, double* r) {
   for (int i = 0; i < 3; ++i)
@@ -102,8 +73,8 @@ void ToRowMajor(const Eigen::Matrix3d& m, double* r) {
 Eigen::Isometry3d ToIsometry(const Frame& f) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) t.linear()(i, j) = f.r[3 * i + j];
-    t.translation()[i] = f.p[i];
+    for (int j = 0; j < 3; ++j) t.linear()(i, j) = f.col[j][i];
+    t.translation()[i] = f.col[3][i];
   }
   return t;
 }
@@ -127,24 +98,6 @@ class Scratch {
   T stack_[N];
   std::vector<T> heap_;
   T* data_;
-};
-
-/// One joint of the FK program: child = parent · (R0, p0) · motion, where the motion is a
-/// rotation by q about `axis` (revolute), a translation by q along it (prismatic) or nothing.
-struct FkJoint {
-  int parent_link = -1;
-  int child_link = -1;
-  int dof = -1;
-  int kind = 0;  // 0 fixed, 1 revolute, 2 prismatic
-  bool r0_identity = false;  // R0 = I exactly: parent·R0 is parent, no product needed
-  /// Revolute joints about a coordinate axis (±x, ±y, ±z exactly, as URDF and DH axes mostly
-  /// are): the axis index, and the sign folded into sin q. Rot(±e_a, q) leaves column a of
-  /// parent·R0 as it is and turns the other two (TurnColumns): 12 products, not a 3×3 product.
-  int axis_index = -1;  // -1: a general axis, Rot(a, q) = c·I + s·[a]× + (1 − c)·a·aᵀ
-  double axis_sign = 1.0;
-  double axis[3];
-  double r0[9], p0[3];
-  double r0a[3];  // R0·axis: a prismatic joint's direction in the parent frame
 };
 
 enum PrimKind { kPrimSphere = 0, kPrimBox = 1, kPrimCylinder = 2, kPrimCapsule = 3 };
@@ -290,8 +243,7 @@ struct CollisionChecker::Impl {
   const Scene* scene = nullptr;
   CollisionOptions options;
   int num_links = 0;
-  int root = 0;
-  std::vector<FkJoint> fk;
+  detail::FkProgram fk;  // forward_kinematics.h
   bool fast = false;
 
   // Fast path.
@@ -301,7 +253,7 @@ struct CollisionChecker::Impl {
   // Self pairs as bit sets: bit b % 64 of self_masks[a * ⌈n/64⌉ + b / 64] when (a, b), a < b,
   // is in self_pairs (the cull visits them in the same order as the list).
   std::vector<std::uint64_t> self_masks;
-  detail::CullKernel cull_kernel = detail::BestCullKernel();
+  detail::SimdLevel simd = detail::BestSimdLevel();  // for the culls and the FK
   std::vector<double> sx, sy, sz, sr;          // link-frame centres, radius + padding
   std::vector<int> slink_of;                   // sphere -> index into slinks
   std::vector<std::pair<int, int>> self_pairs;  // indices into slinks, not allowed by the ACM
@@ -728,110 +680,12 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
 }
 
 void CollisionChecker::Impl::BuildFk() {
-  num_links = robot->num_links();
-  root = -1;
-  for (int l = 0; l < num_links; ++l) {
-    if (robot->links()[l].parent_joint < 0) {
-      root = l;
-      break;
-    }
-  }
-  if (root < 0) ThrowInvalid("robot '" + robot->name() + "' has no root link");
-  // Only frames something reads are computed: links with collision shapes and their ancestors
-  // (a tool frame without geometry at the end of the chain is skipped).
-  std::vector<bool> needed(num_links, false);
-  for (int l = 0; l < num_links; ++l) {
-    if (robot->links()[l].collision.empty()) continue;
-    for (int link = l; link >= 0 && !needed[link];) {
-      needed[link] = true;
-      const int j = robot->links()[link].parent_joint;
-      link = j < 0 ? -1 : robot->joints()[j].parent_link;
-    }
-  }
-  // Topological order: repeatedly take joints whose parent link is placed.
-  std::vector<bool> placed(num_links, false), used(robot->joints().size(), false);
-  placed[root] = true;
-  bool progress = true;
-  while (progress) {
-    progress = false;
-    for (std::size_t j = 0; j < robot->joints().size(); ++j) {
-      const Joint& joint = robot->joints()[j];
-      if (used[j] || joint.parent_link < 0 || !placed[joint.parent_link]) continue;
-      used[j] = true;
-      placed[joint.child_link] = true;
-      progress = true;
-      if (!needed[joint.child_link]) continue;
-      FkJoint f;
-      f.parent_link = joint.parent_link;
-      f.child_link = joint.child_link;
-      f.dof = joint.dof;
-      f.kind = joint.type == JointType::kFixed ? 0 : joint.type == JointType::kPrismatic ? 2 : 1;
-      if (f.dof < 0) f.kind = 0;
-      const Eigen::Matrix3d r0 = joint.origin.linear();
-      const Eigen::Vector3d a = joint.axis.normalized();
-      f.r0_identity = r0 == Eigen::Matrix3d::Identity();
-      for (int i = 0; i < 3; ++i) {
-        f.axis[i] = a[i];
-        if (std::abs(a[i]) == 1.0 && a[(i + 1) % 3] == 0.0 && a[(i + 2) % 3] == 0.0) {
-          f.axis_index = i;
-          f.axis_sign = a[i];
-        }
-      }
-      ToRowMajor(r0, f.r0);
-      const Eigen::Vector3d r0a = r0 * a;
-      for (int i = 0; i < 3; ++i) {
-        f.p0[i] = joint.origin.translation()[i];
-        f.r0a[i] = r0a[i];
-      }
-      fk.push_back(f);
-    }
-  }
+  fk = detail::BuildFkProgram(*robot);
+  num_links = fk.num_links;
 }
 
 void CollisionChecker::Impl::ComputeFk(const Eigen::VectorXd& q, Frame* frames) const {
-  Frame& base = frames[root];
-  for (int i = 0; i < 9; ++i) base.r[i] = (i % 4 == 0) ? 1.0 : 0.0;
-  base.p[0] = base.p[1] = base.p[2] = 0.0;
-  for (const FkJoint& j : fk) {
-    const Frame& parent = frames[j.parent_link];
-    Frame& child = frames[j.child_link];
-    double local_p[3] = {j.p0[0], j.p0[1], j.p0[2]};
-    if (j.kind == 2) {
-      const double d = q[j.dof];
-      for (int i = 0; i < 3; ++i) local_p[i] += j.r0a[i] * d;
-    }
-    Apply(parent, local_p, child.p);
-    // child.r = (parent.r · R0) · Rot(axis, q).
-    if (j.r0_identity) {
-      std::copy(parent.r, parent.r + 9, child.r);
-    } else {
-      MulR(parent.r, j.r0, child.r);
-    }
-    if (j.kind != 1) continue;
-    double s, c;
-    detail::SinCos(q[j.dof], &s, &c);
-    switch (j.axis_index) {
-      case 0:
-        TurnColumns<1, 2>(c, j.axis_sign * s, child.r);
-        break;
-      case 1:
-        TurnColumns<2, 0>(c, j.axis_sign * s, child.r);
-        break;
-      case 2:
-        TurnColumns<0, 1>(c, j.axis_sign * s, child.r);
-        break;
-      default: {  // a general axis: Rot(a, q) = c·I + s·[a]× + (1 − c)·a·aᵀ
-        const double* a = j.axis;
-        const double t = 1.0 - c;
-        const double rot[9] = {c + t * a[0] * a[0],        t * a[0] * a[1] - s * a[2], t * a[0] * a[2] + s * a[1],
-                               t * a[1] * a[0] + s * a[2], c + t * a[1] * a[1],        t * a[1] * a[2] - s * a[0],
-                               t * a[2] * a[0] - s * a[1], t * a[2] * a[1] + s * a[0], c + t * a[2] * a[2]};
-        double r[9];
-        std::copy(child.r, child.r + 9, r);
-        MulR(r, rot, child.r);
-      }
-    }
-  }
+  detail::ComputeFk(simd, fk, q, frames);
 }
 
 bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* report) const {
@@ -873,7 +727,7 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
     return detail::CullSpheres{bx + base, by + base, bz + base, br + base, std::min<std::size_t>(64, nl - base)};
   };
   for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
-    detail::OverlapMasks(cull_kernel, link_chunk(chunk), prim_x.data(), prim_y.data(), prim_z.data(),
+    detail::OverlapMasks(simd, link_chunk(chunk), prim_x.data(), prim_y.data(), prim_z.data(),
                          prim_bound.data(), nprims, &masks[chunk * nprims]);
   }
   for (std::size_t oi = 0; oi < nprims; ++oi) {
@@ -953,7 +807,7 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
   // every link, masked to the pairs (a, b) that are checked.
   if (!self_pairs.empty()) {
     for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
-      detail::OverlapMasks(cull_kernel, link_chunk(chunk), bx, by, bz, br, nl, &masks[chunk * nl]);
+      detail::OverlapMasks(simd, link_chunk(chunk), bx, by, bz, br, nl, &masks[chunk * nl]);
     }
   }
   for (std::size_t a = 0; a < nl && !self_pairs.empty(); ++a) {

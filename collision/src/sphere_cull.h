@@ -7,16 +7,16 @@
 /// Every variant evaluates, lane by lane, exactly the scalar expression
 ///   (dx·dx + dy·dy) + dz·dz <= (r_i + r_q)·(r_i + r_q),  d = (x_i, y_i, z_i) − c_q,
 /// in the same order with no fused multiply-add, so all of them return the same bits (touching
-/// counts as overlapping, as in the rest of the fast path). Variants: AVX2 (4 lanes, chosen at
-/// run time when the CPU has it; compiled with target("avx2") only, which does not enable FMA
-/// contraction), SSE2 (2 lanes, the x86-64 baseline) and plain C++ elsewhere.
+/// counts as overlapping, as in the rest of the fast path). Variants (simd.h): AVX2 (4 lanes),
+/// SSE2 (2 lanes, the x86-64 baseline) and plain C++ elsewhere.
 
 #include <cstddef>
 #include <cstdint>
 
-#if defined(__x86_64__) || defined(_M_X64)
+#include "simd.h"
+
+#ifdef CHASLES_SIMD_X86
 #include <immintrin.h>
-#define CHASLES_CULL_X86 1
 #endif
 
 namespace chasles::detail {
@@ -53,7 +53,7 @@ inline void OverlapMasksScalar(const CullSpheres& s, const double* qx, const dou
   }
 }
 
-#ifdef CHASLES_CULL_X86
+#ifdef CHASLES_SIMD_X86
 
 inline void OverlapMasksSse2(const CullSpheres& s, const double* qx, const double* qy, const double* qz,
                              const double* qr, std::size_t m, std::uint64_t* masks) {
@@ -97,35 +97,13 @@ __attribute__((target("avx2"))) inline void OverlapMasksAvx2(const CullSpheres& 
   }
 }
 
-#endif  // CHASLES_CULL_X86
+#endif  // CHASLES_SIMD_X86
 
-/// Which variant OverlapMasks runs.
-enum class CullKernel { kScalar, kSse2, kAvx2 };
-
-/// The widest variant this CPU runs (checked once).
-inline CullKernel BestCullKernel() {
-#ifdef CHASLES_CULL_X86
-  static const CullKernel best = __builtin_cpu_supports("avx2") ? CullKernel::kAvx2 : CullKernel::kSse2;
-  return best;
-#else
-  return CullKernel::kScalar;
-#endif
-}
-
-/// The kernels this CPU can run (for tests that compare them).
-inline bool CullKernelRuns(CullKernel kernel) {
-#ifdef CHASLES_CULL_X86
-  return kernel != CullKernel::kAvx2 || BestCullKernel() == CullKernel::kAvx2;
-#else
-  return kernel == CullKernel::kScalar;
-#endif
-}
-
-inline void OverlapMasks(CullKernel kernel, const CullSpheres& s, const double* qx, const double* qy,
+inline void OverlapMasks(SimdLevel level, const CullSpheres& s, const double* qx, const double* qy,
                          const double* qz, const double* qr, std::size_t m, std::uint64_t* masks) {
-#ifdef CHASLES_CULL_X86
-  if (kernel == CullKernel::kAvx2) return OverlapMasksAvx2(s, qx, qy, qz, qr, m, masks);
-  if (kernel == CullKernel::kSse2) return OverlapMasksSse2(s, qx, qy, qz, qr, m, masks);
+#ifdef CHASLES_SIMD_X86
+  if (level == SimdLevel::kAvx2) return OverlapMasksAvx2(s, qx, qy, qz, qr, m, masks);
+  if (level == SimdLevel::kSse2) return OverlapMasksSse2(s, qx, qy, qz, qr, m, masks);
 #endif
   OverlapMasksScalar(s, qx, qy, qz, qr, m, masks);
 }

@@ -13,6 +13,7 @@
 #include "chasles/collision/collision_checker.h"
 #include "test_util.h"
 // Internal kernels of the fast path, tested directly.
+#include "../../collision/src/forward_kinematics.h"
 #include "../../collision/src/sin_cos.h"
 #include "../../collision/src/sphere_cull.h"
 
@@ -258,12 +259,12 @@ TEST(FastPath, ForwardKinematicsMatchesTheRobotModelForEveryKindOfJoint) {
 }
 
 TEST(SphereCull, EveryKernelGivesTheScalarKernelsBits) {
-  using detail::CullKernel;
+  using detail::SimdLevel;
   std::mt19937_64 rng(8);
   std::uniform_real_distribution<double> coord(-1.0, 1.0), radius(0.0, 0.5);
   int kernels_run = 0;
-  for (CullKernel kernel : {CullKernel::kScalar, CullKernel::kSse2, CullKernel::kAvx2}) {
-    if (!detail::CullKernelRuns(kernel)) continue;
+  for (SimdLevel kernel : {SimdLevel::kScalar, SimdLevel::kSse2, SimdLevel::kAvx2}) {
+    if (!detail::SimdLevelRuns(kernel)) continue;
     ++kernels_run;
     for (std::size_t n : {1u, 2u, 3u, 4u, 5u, 9u, 31u, 63u, 64u}) {
       const std::size_t padded = detail::CullPadded(n);
@@ -313,7 +314,53 @@ TEST(SphereCull, EveryKernelGivesTheScalarKernelsBits) {
   }
   EXPECT_GE(kernels_run, 1);
   std::cout << "[ cull ] kernels compared with the scalar one: " << kernels_run - 1
-            << (detail::CullKernelRuns(CullKernel::kAvx2) ? " (AVX2 available)\n" : " (no AVX2 on this CPU)\n");
+            << (detail::SimdLevelRuns(SimdLevel::kAvx2) ? " (AVX2 available)\n" : " (no AVX2 on this CPU)\n");
+}
+
+TEST(FastPathFk, EveryBuildVariantGivesTheSameBitsAndTheRobotModelsFrames) {
+  using detail::SimdLevel;
+  std::mt19937_64 rng(4);
+  std::vector<Eigen::Isometry3d> poses;
+  for (const auto& robot : {test::LoadRobot("panda"), EveryAxisRobot()}) {
+    const detail::FkProgram program = detail::BuildFkProgram(*robot);
+    std::vector<bool> computed(robot->num_links(), false);
+    computed[program.root] = true;
+    for (const detail::FkJoint& j : program.joints) computed[j.child_link] = true;
+    std::vector<detail::Frame> base(program.num_links), other(program.num_links);
+    for (int i = 0; i < 500; ++i) {
+      const Eigen::VectorXd q = test::RandomConfig(*robot, rng);
+      detail::ComputeFkBaseline(program, q, base.data());
+      robot->ForwardKinematics(q, &poses);
+      for (int l = 0; l < robot->num_links(); ++l) {
+        if (!computed[l]) continue;
+        for (int r = 0; r < 3; ++r) {
+          for (int c = 0; c < 3; ++c) ASSERT_NEAR(base[l].col[c][r], poses[l].linear()(r, c), 1e-14) << robot->name();
+          ASSERT_NEAR(base[l].col[3][r], poses[l].translation()[r], 1e-14) << robot->name();
+        }
+      }
+      for (SimdLevel level : {SimdLevel::kScalar, SimdLevel::kSse2, SimdLevel::kAvx2}) {
+        if (!detail::SimdLevelRuns(level)) continue;
+        detail::ComputeFk(level, program, q, other.data());
+        for (int l = 0; l < robot->num_links(); ++l) {
+          if (!computed[l]) continue;
+          for (int c = 0; c < 4; ++c) {
+            for (int r = 0; r < 3; ++r) {
+              ASSERT_EQ(other[l].col[c][r], base[l].col[c][r]) << robot->name() << " level " << static_cast<int>(level);
+            }
+          }
+        }
+      }
+    }
+    // Every link with geometry has a frame; a bare tool link at the end of a chain has none.
+    for (int l = 0; l < robot->num_links(); ++l) {
+      if (!robot->links()[l].collision.empty()) {
+        EXPECT_TRUE(computed[l]) << robot->links()[l].name;
+      }
+    }
+    if (robot->name() == "every_axis") {
+      EXPECT_FALSE(computed[robot->FindLink("tool")]);
+    }
+  }
 }
 
 TEST(SinCos, WithinTwoUlpOfLibmAndExactlyLibmBeyondItsRange) {
