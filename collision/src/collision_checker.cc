@@ -16,6 +16,7 @@
 #include "fcl_geometry.h"
 #include "forward_kinematics.h"
 #include "occupancy_grid.h"
+#include "primitives.h"
 #include "sphere_cull.h"
 
 // Design notes
@@ -100,95 +101,13 @@ class Scratch {
   T* data_;
 };
 
-enum PrimKind { kPrimSphere = 0, kPrimBox = 1, kPrimCylinder = 2, kPrimCapsule = 3 };
-
-/// A scene primitive for the fast path, with its world->local transform precomputed.
-struct Prim {
-  int kind;
-  int object;      // index into scene.objects()
-  int allowed = -1;  // index into Impl::allowed_sets of the links that may touch it, or -1
-  double rt[9];    // world->local rotation (Rᵀ), row-major
-  double p[3];     // world position of the centre
-  double a, b, c;  // box half extents; sphere/cylinder/capsule: a = radius, b = half length
-  double bound;    // bounding-sphere radius about p
-};
-
-/// Distance from a point (world) to a primitive, squared, with the primitive "grown" so that a
-/// sphere of radius r collides iff the returned value <= r² (sphere, capsule: distance to the
-/// core point/segment minus the core radius is handled by the caller via `grow`).
-inline void ToLocal(const Prim& o, const double* x, double* l) {
-  const double d0 = x[0] - o.p[0], d1 = x[1] - o.p[1], d2 = x[2] - o.p[2];
-  l[0] = o.rt[0] * d0 + o.rt[1] * d1 + o.rt[2] * d2;
-  l[1] = o.rt[3] * d0 + o.rt[4] * d1 + o.rt[5] * d2;
-  l[2] = o.rt[6] * d0 + o.rt[7] * d1 + o.rt[8] * d2;
-}
-
-/// True when a sphere (world centre x, radius r) touches or overlaps primitive o.
-inline bool SphereHits(const Prim& o, const double* x, double r) {
-  switch (o.kind) {
-    case kPrimSphere: {
-      const double d0 = x[0] - o.p[0], d1 = x[1] - o.p[1], d2 = x[2] - o.p[2];
-      const double rr = r + o.a;
-      return d0 * d0 + d1 * d1 + d2 * d2 <= rr * rr;
-    }
-    case kPrimBox: {
-      double l[3];
-      ToLocal(o, x, l);
-      const double e0 = std::max(std::abs(l[0]) - o.a, 0.0);
-      const double e1 = std::max(std::abs(l[1]) - o.b, 0.0);
-      const double e2 = std::max(std::abs(l[2]) - o.c, 0.0);
-      return e0 * e0 + e1 * e1 + e2 * e2 <= r * r;
-    }
-    case kPrimCylinder: {
-      double l[3];
-      ToLocal(o, x, l);
-      const double dz = std::max(std::abs(l[2]) - o.b, 0.0);
-      if (dz > r) return false;
-      const double rho2 = l[0] * l[0] + l[1] * l[1];
-      if (rho2 <= o.a * o.a) return true;  // dz <= r already
-      const double dr = std::sqrt(rho2) - o.a;
-      return dr * dr + dz * dz <= r * r;
-    }
-    default: {  // capsule
-      double l[3];
-      ToLocal(o, x, l);
-      const double dz = std::max(std::abs(l[2]) - o.b, 0.0);
-      const double rr = r + o.a;
-      return l[0] * l[0] + l[1] * l[1] + dz * dz <= rr * rr;
-    }
-  }
-}
-
-/// Distance from the surface of a sphere (centre x, radius r) to primitive o; <= 0 on contact.
-inline double SphereDistance(const Prim& o, const double* x, double r) {
-  switch (o.kind) {
-    case kPrimSphere: {
-      const double d0 = x[0] - o.p[0], d1 = x[1] - o.p[1], d2 = x[2] - o.p[2];
-      return std::sqrt(d0 * d0 + d1 * d1 + d2 * d2) - r - o.a;
-    }
-    case kPrimBox: {
-      double l[3];
-      ToLocal(o, x, l);
-      const double e0 = std::max(std::abs(l[0]) - o.a, 0.0);
-      const double e1 = std::max(std::abs(l[1]) - o.b, 0.0);
-      const double e2 = std::max(std::abs(l[2]) - o.c, 0.0);
-      return std::sqrt(e0 * e0 + e1 * e1 + e2 * e2) - r;
-    }
-    case kPrimCylinder: {
-      double l[3];
-      ToLocal(o, x, l);
-      const double dz = std::max(std::abs(l[2]) - o.b, 0.0);
-      const double dr = std::max(std::sqrt(l[0] * l[0] + l[1] * l[1]) - o.a, 0.0);
-      return std::sqrt(dr * dr + dz * dz) - r;
-    }
-    default: {
-      double l[3];
-      ToLocal(o, x, l);
-      const double dz = std::max(std::abs(l[2]) - o.b, 0.0);
-      return std::sqrt(l[0] * l[0] + l[1] * l[1] + dz * dz) - r - o.a;
-    }
-  }
-}
+using detail::Prim;
+using detail::SphereDistance;
+using detail::SphereHits;
+using detail::kPrimBox;
+using detail::kPrimCapsule;
+using detail::kPrimCylinder;
+using detail::kPrimSphere;
 
 /// A link that carries spheres (fast path).
 struct SphereLink {
@@ -858,27 +777,39 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
   // (link, primitive) pair whose bound is no closer than the best distance so far cannot lower
   // it. Branch and bound: the pair with the smallest bound first (it sets a tight `best`), then
   // every other pair whose bound is below `best`.
+  // The bounds, one primitive against every link at once (primitives.h), in pair p·padded + li.
   const std::size_t np = prims.size();
-  Scratch<double, 1024> bound(nl * np);
+  const std::size_t padded = detail::CullPadded(nl);
+  Scratch<double, 256> soa(3 * padded);  // link bounding centres, structure of arrays
+  for (std::size_t li = 0; li < padded; ++li) {
+    soa[li] = li < nl ? lb[3 * li] : 0.0;
+    soa[padded + li] = li < nl ? lb[3 * li + 1] : 0.0;
+    soa[2 * padded + li] = li < nl ? lb[3 * li + 2] : 0.0;
+  }
+  Scratch<double, 1024> bound(np * padded);
   std::size_t first = 0;
   for (std::size_t p = 0; p < np; ++p) {
+    double* b = &bound[p * padded];
+    detail::SphereDistances(simd, prims[p], &soa[0], &soa[padded], &soa[2 * padded], link_bound_radius.data(), nl, b);
     const UnitSet* allowed = Allowed(prims[p].allowed);
     for (std::size_t li = 0; li < nl; ++li) {
-      double& b = bound[p * nl + li];
-      b = allowed != nullptr && allowed->Has(li) ? kInf : SphereDistance(prims[p], &lb[3 * li], slinks[li].br);
-      if (b < bound[first]) first = p * nl + li;
+      if (allowed != nullptr && allowed->Has(li)) b[li] = kInf;
+      if (b[li] < bound[first]) first = p * padded + li;
     }
   }
   const auto exact = [&](std::size_t pair) {
-    const Prim& o = prims[pair / nl];
-    const std::size_t li = pair % nl;
+    const Prim& o = prims[pair / padded];
+    const std::size_t li = pair % padded;
     const SphereLink& L = slinks[li];
     PlaceLinkSpheres(frames, li, &w[0], &placed[0]);
     for (int k = L.begin; k < L.end; ++k) best = std::min(best, SphereDistance(o, &w[3 * k], sr[k]));
   };
   if (nl * np > 0 && bound[first] < kInf) exact(first);
-  for (std::size_t pair = 0; pair < nl * np; ++pair) {
-    if (pair != first && bound[pair] < best) exact(pair);
+  for (std::size_t p = 0; p < np; ++p) {
+    for (std::size_t li = 0; li < nl; ++li) {
+      const std::size_t pair = p * padded + li;
+      if (pair != first && bound[pair] < best) exact(pair);
+    }
   }
   if (!scene_geoms.empty()) {
     for (std::size_t li = 0; li < nl; ++li) PlaceLinkSpheres(frames, li, &w[0], &placed[0]);

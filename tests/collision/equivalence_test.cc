@@ -14,6 +14,7 @@
 #include "test_util.h"
 // Internal kernels of the fast path, tested directly.
 #include "../../collision/src/forward_kinematics.h"
+#include "../../collision/src/primitives.h"
 #include "../../collision/src/sin_cos.h"
 #include "../../collision/src/sphere_cull.h"
 
@@ -361,6 +362,54 @@ TEST(FastPathFk, EveryBuildVariantGivesTheSameBitsAndTheRobotModelsFrames) {
       EXPECT_FALSE(computed[robot->FindLink("tool")]);
     }
   }
+}
+
+TEST(SphereDistances, EveryVariantGivesSphereDistancesBitsForEveryPrimitiveKind) {
+  using detail::SimdLevel;
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), pos(0.01, 0.6);
+  int compared = 0;
+  for (int kind : {detail::kPrimSphere, detail::kPrimBox, detail::kPrimCylinder, detail::kPrimCapsule}) {
+    for (int trial = 0; trial < 50; ++trial) {
+      detail::Prim o{};
+      o.kind = kind;
+      const Eigen::Matrix3d rot = Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized().toRotationMatrix();
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) o.rt[3 * i + j] = rot(j, i);
+        o.p[i] = u(rng);
+      }
+      o.a = pos(rng);
+      o.b = pos(rng);
+      o.c = pos(rng);
+      const std::size_t n = 1 + trial % 13;
+      std::vector<double> x(detail::CullPadded(n)), y(x.size()), z(x.size()), r(x.size());
+      for (std::size_t i = 0; i < n; ++i) {
+        x[i] = 1.5 * u(rng);
+        y[i] = 1.5 * u(rng);
+        z[i] = 1.5 * u(rng);
+        r[i] = 0.1 * pos(rng);
+      }
+      // Points on the primitive's axes and at its centre: zeros (and −0) in the local frame.
+      x[0] = o.p[0], y[0] = o.p[1], z[0] = o.p[2];
+      if (trial % 5 == 4) x[n - 1] = std::nan("");  // NaN propagates as in SphereDistance
+      for (SimdLevel level : {SimdLevel::kScalar, SimdLevel::kSse2, SimdLevel::kAvx2}) {
+        if (!detail::SimdLevelRuns(level)) continue;
+        std::vector<double> out(x.size());
+        detail::SphereDistances(level, o, x.data(), y.data(), z.data(), r.data(), n, out.data());
+        for (std::size_t i = 0; i < n; ++i) {
+          const double centre[3] = {x[i], y[i], z[i]};
+          const double want = detail::SphereDistance(o, centre, r[i]);
+          if (std::isnan(want)) {
+            ASSERT_TRUE(std::isnan(out[i])) << "kind " << kind << " level " << static_cast<int>(level);
+          } else {
+            ASSERT_EQ(out[i], want) << "kind " << kind << " level " << static_cast<int>(level) << " i " << i;
+          }
+          ++compared;
+        }
+      }
+    }
+  }
+  EXPECT_GT(compared, 1000);
 }
 
 TEST(SinCos, WithinTwoUlpOfLibmAndExactlyLibmBeyondItsRange) {
