@@ -31,6 +31,15 @@
 #include "chasles/v1/chasles.grpc.pb.h"
 
 namespace chasles {
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -40,14 +49,6 @@ constexpr double kPlanMedianTargetMs = 0.25;
 constexpr double kPipelineMedianTargetMs = 2.0;
 constexpr double kRpcMedianTargetMs = 4.0;
 constexpr double kP95OverMedianTarget = 10.0;
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("cannot read " + path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 /// The p-quantile, but nan (a visible table cell) for no values instead of 0.
 double QuantileOrNan(std::vector<double> values, double p) {

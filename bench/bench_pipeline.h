@@ -16,6 +16,9 @@ namespace chasles {
 
 class CollisionChecker;
 
+/// The whole file at `path` (the benches' robots and scenes). \throws std::runtime_error naming it.
+std::string ReadFile(const std::string& path);
+
 /// `count` seeded start/goal pairs for `checker`: both collision-free, the straight segment
 /// between them colliding (bench_main.cc's MakeQueries, so the plan section's queries are these).
 using QueryMaker = std::function<std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>>(
