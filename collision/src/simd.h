@@ -18,7 +18,9 @@ enum class SimdLevel { kScalar, kSse2, kAvx2 };
 /// The widest level this CPU runs (checked once).
 inline SimdLevel BestSimdLevel() {
 #ifdef CHASLES_SIMD_X86
-  static const SimdLevel best = __builtin_cpu_supports("avx2") ? SimdLevel::kAvx2 : SimdLevel::kSse2;
+  // __builtin_cpu_init: libgcc's CPU data may not be set up yet when a checker is built by a
+  // static initializer.
+  static const SimdLevel best = (__builtin_cpu_init(), __builtin_cpu_supports("avx2")) ? SimdLevel::kAvx2 : SimdLevel::kSse2;
   return best;
 #else
   return SimdLevel::kScalar;
