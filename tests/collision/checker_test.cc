@@ -224,7 +224,7 @@ TEST(Mesh, SphereVsMeshObstacleOnBothPaths) {
 
 TEST(ExampleScenes, ReferenceConfigurationsAreCollisionFree) {
   auto panda = test::LoadRobot("panda");
-  for (const char* name : {"table", "shelf", "cage", "shelf_octomap"}) {
+  for (const char* name : {"table", "shelf", "cage", "bin", "shelf_octomap"}) {
     SCOPED_TRACE(name);
     auto scene = test::LoadScene(std::string("scenes/") + name + ".json");
     EXPECT_FALSE(scene->empty());
