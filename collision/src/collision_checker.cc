@@ -1282,21 +1282,10 @@ bool CollisionChecker::IsMotionCertified(const Eigen::VectorXd& a, const Eigen::
   CheckSize(*robot_, b, "b");
   if (!impl_->certifiable) return IsMotionValid(a, b, 0.005, counters);
   if (!IsValid(b, counters) || !IsValid(a, counters)) return false;
-  // Probe a few interior states first (bisection order, at most kProbeDepth levels, never
-  // closer than 0.005 apart): a segment that cuts through an obstacle is rejected here instead
-  // of by the advancement creeping up to the contact.
-  const double span = (b - a).cwiseAbs().maxCoeff();
-  Eigen::VectorXd q(a.size());
-  for (int level = 1; level <= kProbeDepth && span / (1 << level) >= 0.005; ++level) {
-    const int n = 1 << level;
-    for (int i = 1; i < n; i += 2) {
-      q = a + (static_cast<double>(i) / n) * (b - a);
-      if (counters != nullptr) ++counters->state_checks;
-      if (impl_->Collide(q, nullptr)) return false;
-    }
-  }
+  // The straight segment as a curve: IsCurveCertified's probes, then the advancement (a and b
+  // are finite here, inside the limits).
   const Eigen::VectorXd delta = b - a;
-  return impl_->CertifiedCurve([&](double s, Eigen::VectorXd* q) { *q = a + s * delta; }, delta.cwiseAbs(), counters);
+  return IsCurveCertified([&](double s, Eigen::VectorXd* q) { *q = a + s * delta; }, delta.cwiseAbs(), counters);
 }
 
 bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorXd& speed_bound,
@@ -1309,9 +1298,9 @@ bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorX
     }
   }
   if (impl_->certifiable) {
-    // Probes first, as IsMotionCertified does: up to 7 interior states in bisection order, no
-    // closer than 0.005 in any joint (by the speed bound), so a curve through an obstacle is
-    // rejected here rather than by the advancement creeping up to the contact.
+    // Probes first: up to 7 interior states in bisection order, no closer than 0.005 in any
+    // joint (by the speed bound), so a curve through an obstacle is rejected here rather than by
+    // the advancement creeping up to the contact.
     const double span = speed_bound.maxCoeff();
     Eigen::VectorXd q(robot_->num_dofs());
     for (int level = 1; level <= kProbeDepth && span / (1 << level) >= 0.005; ++level) {
