@@ -229,6 +229,15 @@ struct CollisionChecker::Impl {
       Apply(frames[L.link], x, &w[3 * k]);
     }
   }
+  /// The link bounding centres `lb` (3 per link) as structure of arrays: x, y, z rows of
+  /// detail::CullPadded(nl) each in `soa`, the lanes past the last link set to `fill`.
+  void LinkBoundsSoa(const double* lb, double fill, double* soa) const {
+    const std::size_t nl = slinks.size();
+    const std::size_t padded = detail::CullPadded(nl);
+    for (std::size_t li = 0; li < padded; ++li) {
+      for (std::size_t axis = 0; axis < 3; ++axis) soa[axis * padded + li] = li < nl ? lb[3 * li + axis] : fill;
+    }
+  }
   double FastClearance(const Frame* frames) const;
   bool FclCollide(const Frame* frames, CollisionResult* report) const;
   double FclClearance(const Frame* frames) const;
@@ -619,11 +628,7 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
   double* const by = bx + padded;
   double* const bz = by + padded;
   PlaceLinkBounds(frames, &lb[0], &placed[0]);
-  for (std::size_t li = 0; li < padded; ++li) {  // padding lanes at +inf overlap nothing
-    bx[li] = li < nl ? lb[3 * li] : kInf;
-    by[li] = li < nl ? lb[3 * li + 1] : kInf;
-    bz[li] = li < nl ? lb[3 * li + 2] : kInf;
-  }
+  LinkBoundsSoa(&lb[0], kInf, bx);  // padding lanes at +inf overlap nothing
   const double* const br = link_bound_radius.data();
   const auto place = [&](std::size_t li) { PlaceLinkSpheres(frames, li, &w[0], &placed[0]); };
   const auto hit = [&](int link, const std::string& other, bool self) {
@@ -781,11 +786,7 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
   const std::size_t np = prims.size();
   const std::size_t padded = detail::CullPadded(nl);
   Scratch<double, 256> soa(3 * padded);  // link bounding centres, structure of arrays
-  for (std::size_t li = 0; li < padded; ++li) {
-    soa[li] = li < nl ? lb[3 * li] : 0.0;
-    soa[padded + li] = li < nl ? lb[3 * li + 1] : 0.0;
-    soa[2 * padded + li] = li < nl ? lb[3 * li + 2] : 0.0;
-  }
+  LinkBoundsSoa(&lb[0], 0.0, &soa[0]);    // padding lanes finite (their distances are not read)
   Scratch<double, 1024> bound(np * padded);
   std::size_t first = 0;
   for (std::size_t p = 0; p < np; ++p) {
@@ -813,8 +814,6 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
   }
   if (!scene_geoms.empty()) {
     for (std::size_t li = 0; li < nl; ++li) PlaceLinkSpheres(frames, li, &w[0], &placed[0]);
-  }
-  if (!scene_geoms.empty()) {
     fcl::DistanceRequestd request;
     for (const SceneGeom& g : scene_geoms) {
       const UnitSet* allowed = Allowed(g.allowed);
