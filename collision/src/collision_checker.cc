@@ -294,7 +294,7 @@ void CollisionChecker::Impl::BuildLevers() {
   }
   for (const SphereLink& L : slinks) {
     for (int k = L.begin; k < L.end; ++k) {
-      double* r = &lever[static_cast<std::size_t>(k) * num_dofs];
+      double* r = lever.data() + static_cast<std::size_t>(k) * num_dofs;
       double dist = std::sqrt(sx[k] * sx[k] + sy[k] * sy[k] + sz[k] * sz[k]);
       int link = L.link;
       while (robot->links()[link].parent_joint >= 0) {
@@ -318,7 +318,7 @@ void CollisionChecker::Impl::BuildLevers() {
 void CollisionChecker::Impl::SweepBounds(const Eigen::VectorXd& w, double* out) const {
   const std::size_t ns = sx.size();
   for (std::size_t k = 0; k < ns; ++k) {
-    const double* r = &lever[k * num_dofs];
+    const double* r = lever.data() + k * num_dofs;
     double d = 0.0;
     for (int i = 0; i < num_dofs; ++i) {
       if (r[i] != 0.0) d += w[i] * r[i];
@@ -424,7 +424,7 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
       const std::size_t li = side == 0 ? self_pairs[p].first : self_pairs[p].second;
       const std::vector<int>& unshared = self_pair_unshared[2 * p + side];
       for (int k = slinks[li].begin; k < slinks[li].end; ++k) {
-        const double* r = &lever[static_cast<std::size_t>(k) * num_dofs];
+        const double* r = lever.data() + static_cast<std::size_t>(k) * num_dofs;
         double d = 0.0;
         for (int i : unshared) {
           if (r[i] != 0.0) d += speed[i] * r[i];
@@ -484,8 +484,8 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
     for (std::size_t oi = 0; oi < nprims; ++oi) {
       if (m.prim_free[oi] >= s + step) continue;  // none of its pairs can shorten the step
       const Prim& o = prims[oi];
-      double* const link_free = &m.prim_link_free[oi * nl];
-      double* const sphere_free = &m.prim_sphere_free[oi * ns];
+      double* const link_free = m.prim_link_free.data() + oi * nl;
+      double* const sphere_free = m.prim_sphere_free.data() + oi * ns;
       double prim_until = kInf;
       for (std::size_t li = 0; li < nl; ++li) {
         if (link_free[li] >= s + step) {
@@ -519,7 +519,7 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
     for (std::size_t p = 0; p < np; ++p) {
       if (m.self_free[p] >= s + step) continue;
       const auto& pr = self_pairs[p];
-      const double* pa = &m.PD[self_pair_offset[p]];
+      const double* pa = m.PD.data() + self_pair_offset[p];
       const double* pb = pa + (slinks[pr.first].end - slinks[pr.first].begin);
       const SphereLink& A = slinks[pr.first];
       const SphereLink& B = slinks[pr.second];
@@ -535,7 +535,7 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
       }
       place(pr.first);
       place(pr.second);
-      double* sphere_free = &m.self_sphere_free[self_pair_grid[p]];
+      double* sphere_free = m.self_sphere_free.data() + self_pair_grid[p];
       double until = kInf;
       for (int i = A.begin; i < A.end; ++i) {
         const double* xi = &w[3 * i];
