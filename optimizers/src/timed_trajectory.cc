@@ -164,12 +164,22 @@ TrajectorySample TimedTrajectory::Piece::State(double tau) const {
   out.qd.resize(n);
   out.qdd.resize(n);
   out.jerk.resize(n);
+  // Horner's rule on each row in place (the rows are strided in the column-major matrix); the
+  // same operations in the same order as poly::Eval / poly::EvalDerivative.
+  const double* const c = coefficients.data();
   for (Eigen::Index i = 0; i < n; ++i) {
-    const Eigen::VectorXd c = coefficients.row(i).transpose();
-    out.q[i] = tau == 0.0 ? c[0] : poly::Eval(c.data(), size, tau);
-    out.qd[i] = poly::EvalDerivative(c.data(), size, 1, tau);
-    out.qdd[i] = poly::EvalDerivative(c.data(), size, 2, tau);
-    out.jerk[i] = poly::EvalDerivative(c.data(), size, 3, tau);
+    double value = 0.0, d1 = 0.0, d2 = 0.0, d3 = 0.0;
+    for (int k = size - 1; k >= 0; --k) {
+      const double ck = c[i + k * n];
+      value = value * tau + ck;
+      if (k >= 1) d1 = d1 * tau + static_cast<double>(k) * ck;
+      if (k >= 2) d2 = d2 * tau + static_cast<double>(k) * static_cast<double>(k - 1) * ck;
+      if (k >= 3) d3 = d3 * tau + static_cast<double>(k) * static_cast<double>(k - 1) * static_cast<double>(k - 2) * ck;
+    }
+    out.q[i] = tau == 0.0 ? c[i] : value;
+    out.qd[i] = d1;
+    out.qdd[i] = d2;
+    out.jerk[i] = d3;
   }
   return out;
 }

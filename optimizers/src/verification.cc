@@ -430,10 +430,21 @@ namespace {
 
 /// Distance from x to the segment a–b.
 double DistanceToSegment(const Eigen::VectorXd& x, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-  const Eigen::VectorXd ab = b - a;
-  const double len2 = ab.squaredNorm();
-  const double s = len2 > 0.0 ? std::min(1.0, std::max(0.0, (x - a).dot(ab) / len2)) : 0.0;
-  return (x - (a + s * ab)).norm();
+  // Written out, without temporaries: this runs (states × waypoints) times per trajectory.
+  const Eigen::Index n = x.size();
+  double len2 = 0.0, along = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double ab = b[i] - a[i];
+    len2 += ab * ab;
+    along += (x[i] - a[i]) * ab;
+  }
+  const double s = len2 > 0.0 ? std::min(1.0, std::max(0.0, along / len2)) : 0.0;
+  double d2 = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double e = x[i] - (a[i] + s * (b[i] - a[i]));
+    d2 += e * e;
+  }
+  return std::sqrt(d2);
 }
 
 constexpr double kClearanceTolerance = 1e-4;  // [m]
