@@ -329,7 +329,8 @@ void CollisionChecker::Impl::SweepBounds(const Eigen::VectorXd& w, double* out) 
 
 namespace {
 constexpr int kMaxCertifiedStates = 20000;
-constexpr int kProbeDepth = 3;               // up to 7 probe states before advancing
+constexpr double kProbeSpacing = 0.25;       // [rad] probe states before advancing, at most this apart
+constexpr int kMaxProbeDepth = 10;           // (at most 1023 of them)
 constexpr double kMinCertifiedStep = 1e-7;   // in s
 constexpr double kMinGridMargin = 1e-5;      // [m]
 constexpr double kMaxLinkGridMargin = 0.1;   // [m]
@@ -1297,12 +1298,13 @@ bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorX
     }
   }
   if (impl_->certifiable) {
-    // Probes first: up to 7 interior states in bisection order, no closer than 0.005 in any
+    // Probes first, in bisection order, until they are at most kProbeSpacing apart in every
     // joint (by the speed bound), so a curve through an obstacle is rejected here rather than by
-    // the advancement creeping up to the contact.
+    // the advancement creeping up to the contact. Shorter curves get none: they mostly certify
+    // (verification spans, shortcut pieces), where probes are pure overhead.
     const double span = speed_bound.maxCoeff();
     Eigen::VectorXd q(robot_->num_dofs());
-    for (int level = 1; level <= kProbeDepth && span / (1 << level) >= 0.005; ++level) {
+    for (int level = 1; level <= kMaxProbeDepth && span / (1 << (level - 1)) > kProbeSpacing; ++level) {
       const int n = 1 << level;
       for (int i = 1; i < n; i += 2) {
         curve(static_cast<double>(i) / n, &q);

@@ -100,6 +100,9 @@ JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
   if (!(options.stall_improvement >= 0.0 && options.stall_improvement < 1.0)) {
     ThrowInvalid("shortcut stall_improvement = " + FormatNumber(options.stall_improvement) + " must be in [0, 1)");
   }
+  if (!(options.min_gain >= 0.0 && options.min_gain < 1.0)) {
+    ThrowInvalid("shortcut min_gain = " + FormatNumber(options.min_gain) + " must be in [0, 1)");
+  }
   if (!std::isfinite(options.max_step)) {
     ThrowInvalid("shortcut max_step = " + FormatNumber(options.max_step) + " must be finite");
   }
@@ -155,6 +158,7 @@ JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
     for (int k = i + 1; k < j; ++k) old_length += (current[k + 1] - current[k]).norm();
     const double new_length = (qb - qa).norm();
     if (!(new_length < old_length * (1.0 - 1e-9))) continue;  // not meaningfully shorter
+    if (old_length - new_length < options.min_gain * length) continue;  // not worth its checks
 
     // qa and qb lie on valid segments; their pieces are new segments, checked unless they are
     // pieces of a segment certified above.

@@ -3,6 +3,7 @@
 #include "chasles/optimizers/shortcut.h"
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -113,8 +114,8 @@ TEST(Shortcut, StallEndsAttemptsThatNoLongerShortenThePath) {
   options.stall_improvement = 0.01;
   options.stop = {};
   CheckCounters full_checks, early_checks;
-  const JointPath reduced = ShortcutPath(input, *checker, ShortcutOptions{0, kStep, 1, 0, 0.0, {}});
-  const JointPath full = ShortcutPath(input, *checker, ShortcutOptions{200, kStep, 1, 0, 0.0, {}}, &full_checks);
+  const JointPath reduced = ShortcutPath(input, *checker, ShortcutOptions{0, kStep, 1, 0, 0.0, 0.0, {}});
+  const JointPath full = ShortcutPath(input, *checker, ShortcutOptions{200, kStep, 1, 0, 0.0, 0.0, {}}, &full_checks);
   const JointPath early = ShortcutPath(input, *checker, options, &early_checks);
   EXPECT_LT(early_checks.state_checks, full_checks.state_checks);
   EXPECT_LT(PathLength(early), PathLength(reduced));
@@ -125,6 +126,43 @@ TEST(Shortcut, StallEndsAttemptsThatNoLongerShortenThePath) {
   options.stall_attempts = 1;
   options.stall_improvement = 1.0;
   EXPECT_THROW(ShortcutPath(input, *checker, options), Error);
+}
+
+TEST(Shortcut, MinGainLeavesSmallGainsUnchecked) {
+  const auto checker = test::PlanarCheckerWithPost();
+  const JointPath input = test::ZigZagAroundPost();
+  ShortcutOptions reduce_only;
+  reduce_only.max_attempts = 0;
+  CheckCounters reduce_checks;
+  const JointPath reduced = ShortcutPath(input, *checker, reduce_only, &reduce_checks);
+  // No shortcut around the post gains 99 % of the path: none is checked, nothing changes
+  // after the vertex reduction (and no final reduction runs).
+  ShortcutOptions options;
+  options.max_attempts = 200;
+  options.min_gain = 0.99;
+  CheckCounters checks;
+  const JointPath out = ShortcutPath(input, *checker, options, &checks);
+  EXPECT_EQ(checks.state_checks, reduce_checks.state_checks);
+  EXPECT_TRUE(SamePath(out, reduced));
+  // A small threshold still shortens the path, with fewer checks than checking every candidate.
+  options.min_gain = 0.005;
+  CheckCounters small_checks, all_checks;
+  const JointPath small = ShortcutPath(input, *checker, options, &small_checks);
+  options.min_gain = 0.0;
+  ShortcutPath(input, *checker, options, &all_checks);
+  EXPECT_LT(PathLength(small), PathLength(reduced));
+  EXPECT_LT(small_checks.state_checks, all_checks.state_checks);
+  ExpectEverySegmentValid(small, *checker);
+  for (double bad : {-0.1, 1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    options.min_gain = bad;
+    try {
+      ShortcutPath(input, *checker, options);
+      ADD_FAILURE() << "min_gain = " << bad << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+      EXPECT_NE(std::string(e.what()).find("min_gain"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(Shortcut, EverySegmentOfTheResultIsCertifiedOnACertifyingChecker) {

@@ -94,9 +94,10 @@ class CollisionChecker {
   /// Δs = min(d_k / D_k, s_kl / (D'_k + D'_l)), where D' sums only the joints not shared by
   /// the two links' chains (shared joints move both spheres rigidly: their distance is
   /// unchanged); a distance <= 0 is a collision. a and b are
-  /// checked exactly with IsValid (joint limits included; the limit box is convex), then up to
-  /// 7 interior states in bisection order (no closer than 0.005 apart) so a segment cutting
-  /// through an obstacle is rejected quickly, then the advancement runs from a.
+  /// checked exactly with IsValid (joint limits included; the limit box is convex), then, on a
+  /// segment longer than 0.25 in some joint, interior states in bisection order until they are
+  /// at most 0.25 apart, so a segment cutting through an obstacle is rejected quickly; then the
+  /// advancement runs from a.
   /// Conservative: returns false when Δs falls below 1e-7 or more than 20000 states would be
   /// evaluated (a motion that grazes an obstacle within rounding is rejected), so false does not
   /// prove a collision.

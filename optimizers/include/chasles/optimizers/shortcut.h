@@ -18,6 +18,11 @@ struct ShortcutOptions {
   /// least `stall_improvement` of its length (rejected attempts count); 0 = run all attempts.
   int stall_attempts = 0;
   double stall_improvement = 1e-3;  ///< relative; in [0, 1)
+  /// A random shortcut that would shorten the path by less than this fraction of its current
+  /// length is not checked (a rejected attempt). Checking is what costs: a shortcut grazing an
+  /// obstacle takes hundreds of certified states, and tiny gains add little. In [0, 1); 0 =
+  /// check every shorter candidate.
+  double min_gain = 0.0;
   /// Optional: polled before each attempt; true ends shortcutting with the (valid) path so far
   /// (a deadline or cancellation). Unset: all attempts run.
   std::function<bool()> stop;
@@ -40,7 +45,7 @@ struct ShortcutOptions {
 /// again (their states are a subset of that segment's, up to rounding).
 /// Paths of fewer than 3 waypoints are returned unchanged.
 /// \throws Error(kInvalidArgument) for max_attempts < 0, stall_attempts < 0, stall_improvement
-///         outside [0, 1), max_step not finite and > 0, or a
+///         or min_gain outside [0, 1), max_step not finite and > 0, or a
 ///         waypoint whose size is not robot().num_dofs() or that holds a non-finite value.
 JointPath ShortcutPath(const JointPath& path, const CollisionChecker& checker,
                        const ShortcutOptions& options, CheckCounters* counters = nullptr);

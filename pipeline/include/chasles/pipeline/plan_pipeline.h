@@ -50,8 +50,9 @@ struct PlanQuery {
   SampleCap sample_cap;               ///< checked before sampling (server flags set it)
   int shortcut_attempts = 100;        ///< -1 = off; never applied to a car's path (its shape is kept)
   /// Shortcutting stops after this many consecutive attempts that each shorten the path by less
-  /// than 1% (ShortcutOptions::stall_attempts); 0 = every attempt runs. The server sets 0 when
-  /// the request names its shortcut_attempts.
+  /// than 1% (ShortcutOptions::stall_attempts), and while it is on, candidates that would
+  /// shorten the path by less than 0.5% are not checked (ShortcutOptions::min_gain); 0 = every
+  /// attempt runs and is checked. The server sets 0 when the request names its shortcut_attempts.
   int shortcut_stall = 10;
 
   /// \throws Error(kInvalidArgument/kNotFound) naming the field (proto field names), e.g.
