@@ -13,6 +13,7 @@
 #include <octomap/OcTree.h>
 
 #include "chasles/robot/error.h"
+#include "checker_impl.h"
 #include "fcl_geometry.h"
 #include "forward_kinematics.h"
 #include "occupancy_grid.h"
@@ -42,16 +43,16 @@
 // * FCL path: shared, immutable fcl geometries; every query calls the geometry+transform
 //   overloads of fcl::collide / fcl::distance, which build their traversal state on the
 //   stack. Nothing is mutated in const methods, so one checker serves all threads.
-// * Certified advancement (CertifiedCurve): working memory is per thread and reused across
-//   calls, and each link–primitive and self pair caches the curve parameter up to which it
-//   cannot shorten a step (see "Pair skipping" there); the states, steps and answers are those
-//   of evaluating every pair at every state.
+// * Certified advancement (CertifiedCurve, certified_motion.cc): working memory is per thread
+//   and reused across calls, and each link–primitive and self pair caches the curve parameter up
+//   to which it cannot shorten a step (see "Pair skipping" there); the states, steps and answers
+//   are those of evaluating every pair at every state.
 // * Scene allowed collisions (Scene::allowed_collisions, MoveIt's ACM entries that come with a
-//   scene) are resolved at construction: link–link pairs join the robot's ACM (they leave the
-//   self-pair lists); link–obstacle pairs give the obstacle (Prim / SceneGeom `allowed`) a bit
-//   set over the robot units the checks iterate — sphere links on the fast path, links on the FCL
-//   path — and every robot-vs-obstacle loop skips the set bits (the primitive cull clears them
-//   from its 64-link mask). Obstacles without allowances carry -1, so a scene without any costs
+//   scene) are resolved at construction (allowed_pairs.cc): link–link pairs join the robot's
+//   ACM (they leave the self-pair lists); link–obstacle pairs give the obstacle (Prim /
+//   SceneGeom `allowed`) a bit set over the robot units the checks iterate — sphere links on the
+//   fast path, links on the FCL path — and every robot-vs-obstacle loop skips the set bits (the
+//   primitive cull clears them from its 64-link mask). Obstacles without allowances carry -1, so a scene without any costs
 //   one predictable branch per obstacle; an obstacle every link may touch is dropped.
 // * Contact semantics: shapes that touch (distance == 0 after padding) are in collision, as in
 //   FCL's sphere–box test. With padding > 0 the FCL path compares fcl::distance <= padding.
@@ -61,46 +62,18 @@
 namespace chasles {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
+using detail::kInf;
+using detail::CheckSize;
+using detail::RobotShape;
+using detail::SceneGeom;
+using detail::Scratch;
+using detail::SphereLink;
+using detail::SpheresOverlap;
+using detail::ToIsometry;
+using detail::ToRowMajor;
+using detail::UnitSet;
 using detail::Apply;
 using detail::Frame;
-
-void ToRowMajor(const Eigen::Matrix3d& m, double* r) {
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r[3 * i + j] = m(i, j);
-}
-
-Eigen::Isometry3d ToIsometry(const Frame& f) {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) t.linear()(i, j) = f.col[j][i];
-    t.translation()[i] = f.col[3][i];
-  }
-  return t;
-}
-
-/// Stack buffer with heap fallback for unusually large robots.
-template <typename T, std::size_t N>
-class Scratch {
- public:
-  explicit Scratch(std::size_t n) {
-    if (n > N) {
-      heap_.resize(n);
-      data_ = heap_.data();
-    } else {
-      data_ = stack_;
-    }
-  }
-  T& operator[](std::size_t i) { return data_[i]; }
-  const T& operator[](std::size_t i) const { return data_[i]; }
-
- private:
-  T stack_[N];
-  std::vector<T> heap_;
-  T* data_;
-};
-
 using detail::Prim;
 using detail::SphereDistance;
 using detail::SphereHits;
@@ -109,44 +82,6 @@ using detail::kPrimCapsule;
 using detail::kPrimCylinder;
 using detail::kPrimSphere;
 
-/// A link that carries spheres (fast path).
-struct SphereLink {
-  int link;
-  int begin, end;    // range in the sphere arrays
-  double bc[3];      // bounding-sphere centre, link frame
-  double br;         // bounding-sphere radius (padding included)
-};
-
-struct RobotShape {  // FCL path: one link shape
-  int link;
-  FclGeom g;
-  Eigen::Isometry3d local;  // shape pose in the link frame
-};
-
-struct SceneGeom {  // an FCL scene object (world pose fixed)
-  std::string name;
-  FclGeom g;
-  Eigen::Isometry3d pose;
-  fcl::Transform3d tf;
-  Eigen::Vector3d center;  // bounding centre, world
-  double radius;
-  bool octree = false;
-  int grid = -1;  // fast path: index into Impl::grids when this map is gridded
-  int allowed = -1;  // index into Impl::allowed_sets of the links that may touch it, or -1
-};
-
-/// A set of robot units (sphere-link indices on the fast path, link indices on the FCL path) as
-/// 64-bit words: bit i of words[i / 64].
-struct UnitSet {
-  std::vector<std::uint64_t> words;
-  bool Has(std::size_t i) const { return ((words[i >> 6] >> (i & 63)) & 1u) != 0; }
-};
-
-inline bool SpheresOverlap(const Eigen::Vector3d& c1, double r1, const Eigen::Vector3d& c2, double r2) {
-  const double r = r1 + r2;
-  return (c1 - c2).squaredNorm() <= r * r;
-}
-
 }  // namespace
 
 void CollisionOptions::Validate() const {
@@ -154,457 +89,6 @@ void CollisionOptions::Validate() const {
     std::ostringstream os;
     os << "collision.padding = " << padding << " must be finite and >= 0";
     ThrowInvalid(os.str());
-  }
-}
-
-struct CollisionChecker::Impl {
-  const RobotModel* robot = nullptr;
-  const Scene* scene = nullptr;
-  CollisionOptions options;
-  int num_links = 0;
-  detail::FkProgram fk;  // forward_kinematics.h
-  bool fast = false;
-
-  // Fast path.
-  std::vector<SphereLink> slinks;
-  // slinks[i].br, contiguous, padded with 0 to detail::CullPadded(slinks.size()) for the cull.
-  std::vector<double> link_bound_radius;
-  // Self pairs as bit sets: bit b % 64 of self_masks[a * ⌈n/64⌉ + b / 64] when (a, b), a < b,
-  // is in self_pairs (the cull visits them in the same order as the list).
-  std::vector<std::uint64_t> self_masks;
-  detail::SimdLevel simd = detail::BestSimdLevel();  // for the culls and the FK
-  std::vector<double> sx, sy, sz, sr;          // link-frame centres, radius + padding
-  std::vector<int> slink_of;                   // sphere -> index into slinks
-  std::vector<std::pair<int, int>> self_pairs;  // indices into slinks, not allowed by the ACM
-  std::vector<Prim> prims;
-  std::vector<double> prim_x, prim_y, prim_z, prim_bound;  // prims' bounding spheres, structure of arrays
-  std::vector<std::shared_ptr<fcl::Sphered>> fcl_spheres;  // per sphere, radius + padding
-  std::vector<std::shared_ptr<fcl::Sphered>> fcl_link_bounds;  // per sphere link, its bound
-  std::vector<detail::OccupancyGrid> grids;  // gridded occupancy maps
-  // Certified motion: lever[k * num_dofs + i] = R_ik, a bound on how far sphere k's centre
-  // moves per unit of q_i [m/rad, or 1 for prismatic]. certifiable = fast path and no scene
-  // geometry left to FCL (meshes, ungridded maps).
-  int num_dofs = 0;
-  std::vector<double> lever;
-  std::vector<std::vector<char>> slink_dofs;  // per sphere link: dofs in its chain (1/0)
-  // Self pairs in the advancement: pair p's per-sphere bounds start at self_pair_offset[p]
-  // (first link's spheres, then the second's; self_pair_spheres in all), and
-  // self_pair_unshared[2p + side] lists the dofs of that side's chain not in the other side's.
-  std::vector<std::size_t> self_pair_offset;
-  std::vector<std::vector<int>> self_pair_unshared;
-  std::size_t self_pair_spheres = 0;
-  // Pair p's |A|·|B| sphere pairs start at self_pair_grid[p] (self_pair_grid.back() in all).
-  std::vector<std::size_t> self_pair_grid;
-  bool certifiable = false;
-
-  // FCL path.
-  std::vector<RobotShape> shapes;
-  std::vector<std::pair<int, int>> shape_pairs;  // indices into shapes
-  // Scene objects that FCL handles: meshes and maps in the fast path, everything otherwise.
-  std::vector<SceneGeom> scene_geoms;
-
-  // Link–obstacle pairs the scene allows (see the design notes): Prim::allowed and
-  // SceneGeom::allowed index into this.
-  std::vector<UnitSet> allowed_sets;
-  const UnitSet* Allowed(int set) const { return set < 0 ? nullptr : &allowed_sets[set]; }
-
-  void BuildFk();
-  void ComputeFk(const Eigen::VectorXd& q, Frame* frames) const;
-  bool FastCollide(const Frame* frames, CollisionResult* report) const;
-  /// World centres of every sphere link's bounding sphere into lb (3 per link); marks every
-  /// link's spheres as not yet placed.
-  void PlaceLinkBounds(const Frame* frames, double* lb, char* placed) const {
-    for (std::size_t li = 0; li < slinks.size(); ++li) {
-      Apply(frames[slinks[li].link], slinks[li].bc, &lb[3 * li]);
-      placed[li] = 0;
-    }
-  }
-  /// World centres of link li's spheres into w (3 per sphere), once per state.
-  void PlaceLinkSpheres(const Frame* frames, std::size_t li, double* w, char* placed) const {
-    if (placed[li]) return;
-    placed[li] = 1;
-    const SphereLink& L = slinks[li];
-    for (int k = L.begin; k < L.end; ++k) {
-      const double x[3] = {sx[k], sy[k], sz[k]};
-      Apply(frames[L.link], x, &w[3 * k]);
-    }
-  }
-  /// The link bounding centres `lb` (3 per link) as structure of arrays: x, y, z rows of
-  /// detail::CullPadded(nl) each in `soa`, the lanes past the last link set to `fill`.
-  void LinkBoundsSoa(const double* lb, double fill, double* soa) const {
-    const std::size_t nl = slinks.size();
-    const std::size_t padded = detail::CullPadded(nl);
-    for (std::size_t li = 0; li < padded; ++li) {
-      for (std::size_t axis = 0; axis < 3; ++axis) soa[axis * padded + li] = li < nl ? lb[3 * li + axis] : fill;
-    }
-  }
-  double FastClearance(const Frame* frames) const;
-  bool FclCollide(const Frame* frames, CollisionResult* report) const;
-  double FclClearance(const Frame* frames) const;
-  bool Collide(const Eigen::VectorXd& q, CollisionResult* report) const;
-  void BuildLevers();
-  /// D_k = Σ_i w_i·R_ik: how far sphere k's centre can move per unit of the curve parameter
-  /// when |dq_i/ds| <= w_i.
-  void SweepBounds(const Eigen::VectorXd& w, double* out) const;
-  /// Conservative advancement along q(s), s ∈ [0, 1], with |dq_i/ds| <= w_i (see
-  /// IsCurveCertified); joint limits are the caller's.
-  bool CertifiedCurve(const CollisionChecker::Curve& curve, const Eigen::VectorXd& speed,
-                      CheckCounters* counters) const;
-};
-
-// Lever arms. A revolute joint turns everything below it about an axis through its child
-// frame's origin, so a point x moves at most |x − o| per radian of that joint; |x − o| is
-// bounded, by the triangle inequality, by the sphere centre's norm in its link frame plus the
-// norms of the joint-origin translations between that link and the joint (a prismatic joint in
-// between adds the largest |limit| to that length). A prismatic joint moves every point below
-// it by exactly |Δq|. Summing over the chain, the centre's speed is at most Σ_i R_i |q̇_i|, so
-// along any path |x(s1) − x(s0)| <= Σ_i R_i ∫|q̇_i| <= Σ_i R_i w_i (s1 − s0) when |dq_i/ds| <= w_i
-// (a straight segment a→b: w = |b − a|).
-void CollisionChecker::Impl::BuildLevers() {
-  num_dofs = robot->num_dofs();
-  const std::size_t ns = sx.size();
-  lever.assign(ns * static_cast<std::size_t>(num_dofs), 0.0);
-  slink_dofs.assign(slinks.size(), std::vector<char>(num_dofs, 0));
-  for (std::size_t li = 0; li < slinks.size(); ++li) {
-    for (int link = slinks[li].link; robot->links()[link].parent_joint >= 0;) {
-      const Joint& j = robot->joints()[robot->links()[link].parent_joint];
-      if (j.dof >= 0) slink_dofs[li][j.dof] = 1;
-      link = j.parent_link;
-    }
-  }
-  self_pair_offset.clear();
-  self_pair_unshared.clear();
-  self_pair_spheres = 0;
-  self_pair_grid.assign(1, 0);
-  for (const auto& pr : self_pairs) {
-    self_pair_grid.push_back(self_pair_grid.back() +
-                             static_cast<std::size_t>(slinks[pr.first].end - slinks[pr.first].begin) *
-                                 static_cast<std::size_t>(slinks[pr.second].end - slinks[pr.second].begin));
-    self_pair_offset.push_back(self_pair_spheres);
-    for (int side = 0; side < 2; ++side) {
-      const std::size_t li = side == 0 ? pr.first : pr.second;
-      const std::vector<char>& other = slink_dofs[side == 0 ? pr.second : pr.first];
-      std::vector<int> unshared;
-      for (int i = 0; i < num_dofs; ++i) {
-        if (!other[i]) unshared.push_back(i);
-      }
-      self_pair_unshared.push_back(std::move(unshared));
-      self_pair_spheres += static_cast<std::size_t>(slinks[li].end - slinks[li].begin);
-    }
-  }
-  for (const SphereLink& L : slinks) {
-    for (int k = L.begin; k < L.end; ++k) {
-      double* r = lever.data() + static_cast<std::size_t>(k) * num_dofs;
-      double dist = std::sqrt(sx[k] * sx[k] + sy[k] * sy[k] + sz[k] * sz[k]);
-      int link = L.link;
-      while (robot->links()[link].parent_joint >= 0) {
-        const Joint& j = robot->joints()[robot->links()[link].parent_joint];
-        if (j.dof >= 0 && j.type != JointType::kFixed) {
-          if (j.type == JointType::kPrismatic) {
-            r[j.dof] += 1.0;
-            const double reach = std::max(std::abs(j.limits.lower), std::abs(j.limits.upper));
-            dist += std::isfinite(reach) ? reach : kInf;
-          } else {
-            r[j.dof] += dist;
-          }
-        }
-        dist += j.origin.translation().norm();
-        link = j.parent_link;
-      }
-    }
-  }
-}
-
-void CollisionChecker::Impl::SweepBounds(const Eigen::VectorXd& w, double* out) const {
-  const std::size_t ns = sx.size();
-  for (std::size_t k = 0; k < ns; ++k) {
-    const double* r = lever.data() + k * num_dofs;
-    double d = 0.0;
-    for (int i = 0; i < num_dofs; ++i) {
-      if (r[i] != 0.0) d += w[i] * r[i];
-    }
-    out[k] = d;
-  }
-}
-
-namespace {
-constexpr int kMaxCertifiedStates = 20000;
-constexpr double kProbeSpacing = 0.25;       // [rad] probe states before advancing, at most this apart
-constexpr int kMaxProbeDepth = 10;           // (at most 1023 of them)
-constexpr double kMinCertifiedStep = 1e-7;   // in s
-constexpr double kMinGridMargin = 1e-5;      // [m]
-constexpr double kMaxLinkGridMargin = 0.1;   // [m]
-constexpr double kInitialGridMargin = 0.02;  // [m]
-}  // namespace
-
-namespace {
-
-/// Per-thread working memory of CertifiedCurve, reused across calls: once a thread has run an
-/// advancement for a robot and scene of this size, the next one allocates nothing.
-struct AdvancementScratch {
-  std::vector<double> D, Dl;         // sweep bound per sphere, its maximum per sphere link
-  std::vector<double> PD, PDl;       // self pairs: the same over the unshared joints only
-  std::vector<double> w, lb;         // world sphere centres (3 per sphere), link bound centres
-  std::vector<char> placed, bound_placed;  // per sphere link: w / lb hold this state's values
-  std::vector<double> margin;        // occupancy grids: last margin that held, per grid and sphere
-  // Free-until parameters (see "Pair skipping" below).
-  std::vector<double> prim_free;         // per primitive: the least of its links'
-  std::vector<double> prim_link_free;    // per primitive and sphere link
-  std::vector<double> prim_sphere_free;  // per primitive and sphere
-  std::vector<double> self_free;         // per self pair
-  std::vector<double> self_sphere_free;  // per self pair and pair of its spheres
-  std::vector<Frame> frames;
-  Eigen::VectorXd q;
-  bool in_use = false;
-};
-
-/// Distance [m] taken off an evaluated clearance before it is cached as a lower bound. It is
-/// far above the rounding of the distance computations (~1e-15 m at metre scale) and far below
-/// any clearance that matters, so a pair skipped on its cached bound could not have shortened
-/// the step had it been evaluated: the steps are exactly those of evaluating every pair.
-constexpr double kFreeSlack = 1e-10;
-
-/// Curve parameter up to which a pair whose clearance at s is at least d, approaching at no more
-/// than rate v [m per unit of s], stays clear by the slack: s + (d − slack) / v.
-inline double FreeUntil(double s, double d, double v) { return v > 0.0 ? s + (d - kFreeSlack) / v : kInf; }
-
-}  // namespace
-
-// Pair skipping. Every clearance the advancement evaluates shrinks at a bounded rate along the
-// curve: sphere k's clearance to a primitive by at most D_k per unit of s, a self pair's by at
-// most PD_k + PD_l. So a pair whose clearance was at least d at s0, shrinking at most at rate v,
-// cannot shorten a step Δs taken at s while s + Δs <= s0 + d / v: its free-until parameter. It
-// is cached per primitive and sphere (d the sphere's exact clearance), per primitive and link
-// (the least of its spheres', or from the link's bounding sphere, which none of its spheres is
-// closer than, with v = Dl >= D_k), per primitive (the least of its links'), and likewise per
-// self pair and pair of their spheres; a slack of kFreeSlack is taken off d. The loops skip
-// what cannot shorten the step, so after the first state only the pairs near enough to matter
-// are evaluated again. A skipped pair could neither have changed the step nor found a contact
-// (its clearance is positive), so the states visited, the steps and the answer are exactly
-// those of evaluating every pair at every state. Occupancy grids keep their margin search at
-// every state (its margins depend on the previous state's).
-bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve, const Eigen::VectorXd& speed,
-                                            CheckCounters* counters) const {
-  // The thread's scratch, or a fresh one when it is taken (a curve that runs a certified check).
-  thread_local AdvancementScratch thread_scratch;
-  std::unique_ptr<AdvancementScratch> own;
-  AdvancementScratch* scratch = &thread_scratch;
-  if (scratch->in_use) {
-    own = std::make_unique<AdvancementScratch>();
-    scratch = own.get();
-  }
-  struct Lease {
-    AdvancementScratch* s;
-    ~Lease() { s->in_use = false; }
-  } lease{scratch};
-  scratch->in_use = true;
-  AdvancementScratch& m = *scratch;
-
-  const std::size_t ns = sx.size();
-  const std::size_t nl = slinks.size();
-  const std::size_t np = self_pairs.size();
-  m.D.resize(ns);
-  m.Dl.assign(nl, 0.0);
-  double* const D = m.D.data();
-  double* const Dl = m.Dl.data();
-  SweepBounds(speed, D);
-  for (std::size_t li = 0; li < nl; ++li) {
-    for (int k = slinks[li].begin; k < slinks[li].end; ++k) Dl[li] = std::max(Dl[li], D[k]);
-  }
-  for (std::size_t k = 0; k < ns; ++k) {
-    if (!std::isfinite(D[k])) return false;
-  }
-  // Self pairs: joints in both links' chains move both spheres rigidly together and leave
-  // their distance unchanged (d/dt |x_k − x_l| = (x_k − x_l)·(ω × (x_k − x_l)) / |·| = 0), so
-  // the distance changes at most by the levers of the joints not shared, summed for both.
-  m.PD.resize(self_pair_spheres);
-  m.PDl.assign(2 * np, 0.0);
-  for (std::size_t p = 0; p < np; ++p) {
-    std::size_t at = self_pair_offset[p];
-    for (int side = 0; side < 2; ++side) {
-      const std::size_t li = side == 0 ? self_pairs[p].first : self_pairs[p].second;
-      const std::vector<int>& unshared = self_pair_unshared[2 * p + side];
-      for (int k = slinks[li].begin; k < slinks[li].end; ++k) {
-        const double* r = lever.data() + static_cast<std::size_t>(k) * num_dofs;
-        double d = 0.0;
-        for (int i : unshared) {
-          if (r[i] != 0.0) d += speed[i] * r[i];
-        }
-        if (!std::isfinite(d)) return false;
-        m.PD[at++] = d;
-        m.PDl[2 * p + side] = std::max(m.PDl[2 * p + side], d);
-      }
-    }
-  }
-  m.w.resize(3 * ns);
-  m.lb.resize(3 * nl);
-  m.placed.resize(nl);
-  m.bound_placed.resize(nl);
-  m.margin.assign(ns * grids.size(), kInitialGridMargin);
-  // -inf: evaluate at the first state; allowed link–primitive pairs are never evaluated.
-  const std::size_t nprims = prims.size();
-  m.prim_free.assign(nprims, -kInf);
-  m.prim_link_free.assign(nprims * nl, -kInf);
-  m.prim_sphere_free.assign(nprims * ns, -kInf);
-  for (std::size_t oi = 0; oi < nprims; ++oi) {
-    if (const UnitSet* allowed = Allowed(prims[oi].allowed)) {
-      for (std::size_t li = 0; li < nl; ++li) {
-        if (allowed->Has(li)) m.prim_link_free[oi * nl + li] = kInf;
-      }
-    }
-  }
-  m.self_free.assign(np, -kInf);
-  m.self_sphere_free.assign(self_pair_grid.back(), -kInf);
-  m.frames.resize(num_links);
-  m.q.resize(num_dofs);
-  Frame* const frames = m.frames.data();
-  double* const w = m.w.data();
-  double* const lb = m.lb.data();
-  // World centres of link li's bounding sphere / of its spheres, once per state, when needed.
-  const auto bound = [&](std::size_t li) {
-    if (!m.bound_placed[li]) {
-      m.bound_placed[li] = 1;
-      Apply(frames[slinks[li].link], slinks[li].bc, &lb[3 * li]);
-    }
-    return &lb[3 * li];
-  };
-  const auto place = [&](std::size_t li) { PlaceLinkSpheres(frames, li, w, m.placed.data()); };
-
-  double s = 0.0;
-  for (int state = 0;; ++state) {
-    if (state >= kMaxCertifiedStates) return false;
-    if (counters != nullptr) ++counters->state_checks;
-    curve(s, &m.q);
-    if (!m.q.allFinite()) return false;
-    ComputeFk(m.q, frames);
-    std::fill(m.placed.begin(), m.placed.end(), 0);
-    std::fill(m.bound_placed.begin(), m.bound_placed.end(), 0);
-    double step = 1.0 - s;
-    // Scene primitives: exact clearances; a link whose bounding sphere is clear by more than
-    // step·(its fastest sphere's bound) cannot shorten the step.
-    for (std::size_t oi = 0; oi < nprims; ++oi) {
-      if (m.prim_free[oi] >= s + step) continue;  // none of its pairs can shorten the step
-      const Prim& o = prims[oi];
-      double* const link_free = m.prim_link_free.data() + oi * nl;
-      double* const sphere_free = m.prim_sphere_free.data() + oi * ns;
-      double prim_until = kInf;
-      for (std::size_t li = 0; li < nl; ++li) {
-        if (link_free[li] >= s + step) {
-          prim_until = std::min(prim_until, link_free[li]);
-          continue;
-        }
-        const SphereLink& L = slinks[li];
-        const double dl = SphereDistance(o, bound(li), L.br);
-        if (dl > 0.0 && dl >= step * Dl[li]) {
-          link_free[li] = FreeUntil(s, dl, Dl[li]);
-          prim_until = std::min(prim_until, link_free[li]);
-          continue;
-        }
-        place(li);
-        double until = kInf;
-        for (int k = L.begin; k < L.end; ++k) {
-          if (sphere_free[k] < s + step) {
-            const double d = SphereDistance(o, &w[3 * k], sr[k]);
-            if (d <= 0.0) return false;
-            if (d < step * D[k]) step = d / D[k];
-            sphere_free[k] = FreeUntil(s, d, D[k]);
-          }
-          until = std::min(until, sphere_free[k]);
-        }
-        link_free[li] = until;
-        prim_until = std::min(prim_until, until);
-      }
-      m.prim_free[oi] = prim_until;
-    }
-    // Self pairs: the distance shrinks at most at PD_k + PD_l (unshared joints only).
-    for (std::size_t p = 0; p < np; ++p) {
-      if (m.self_free[p] >= s + step) continue;
-      const auto& pr = self_pairs[p];
-      const double* pa = m.PD.data() + self_pair_offset[p];
-      const double* pb = pa + (slinks[pr.first].end - slinks[pr.first].begin);
-      const SphereLink& A = slinks[pr.first];
-      const SphereLink& B = slinks[pr.second];
-      const double* ca = bound(pr.first);
-      const double* cb = bound(pr.second);
-      const double dl = std::sqrt((ca[0] - cb[0]) * (ca[0] - cb[0]) + (ca[1] - cb[1]) * (ca[1] - cb[1]) +
-                                  (ca[2] - cb[2]) * (ca[2] - cb[2])) -
-                        A.br - B.br;
-      const double vl = m.PDl[2 * p] + m.PDl[2 * p + 1];
-      if (dl > 0.0 && dl >= step * vl) {
-        m.self_free[p] = FreeUntil(s, dl, vl);
-        continue;
-      }
-      place(pr.first);
-      place(pr.second);
-      double* sphere_free = m.self_sphere_free.data() + self_pair_grid[p];
-      double until = kInf;
-      for (int i = A.begin; i < A.end; ++i) {
-        const double* xi = &w[3 * i];
-        for (int k = B.begin; k < B.end; ++k, ++sphere_free) {
-          if (*sphere_free < s + step) {
-            const double* xk = &w[3 * k];
-            const double e0 = xi[0] - xk[0], e1 = xi[1] - xk[1], e2 = xi[2] - xk[2];
-            // Self pairs are unpadded (padding keeps the robot from the scene only).
-            const double d = std::sqrt(e0 * e0 + e1 * e1 + e2 * e2) - sr[i] - sr[k] + 2.0 * options.padding;
-            if (d <= 0.0) return false;
-            const double v = pa[i - A.begin] + pb[k - B.begin];
-            if (d < step * v) step = d / v;
-            *sphere_free = FreeUntil(s, d, v);
-          }
-          until = std::min(until, *sphere_free);
-        }
-      }
-      m.self_free[p] = until;
-    }
-    // Occupancy grids: a lower bound m on the clearance — the sphere grown by m misses every
-    // occupied voxel — halving m from the last margin that held until it does.
-    for (const SceneGeom& g : scene_geoms) {
-      const detail::OccupancyGrid& grid = grids[g.grid];  // certifiable: every geom is a grid
-      if (grid.num_blocks() == 0) continue;
-      const double* gc = grid.center().data();
-      const UnitSet* allowed = Allowed(g.allowed);
-      for (std::size_t li = 0; li < nl; ++li) {
-        if (allowed != nullptr && allowed->Has(li)) continue;
-        const SphereLink& L = slinks[li];
-        const double* c = bound(li);
-        const double dg = std::sqrt((c[0] - gc[0]) * (c[0] - gc[0]) + (c[1] - gc[1]) * (c[1] - gc[1]) +
-                                    (c[2] - gc[2]) * (c[2] - gc[2])) -
-                          L.br - grid.radius();
-        if (dg > 0.0 && dg >= step * Dl[li]) continue;
-        if (Dl[li] > 0.0) {
-          const double ml = std::min(step * Dl[li], kMaxLinkGridMargin);
-          if (!grid.SphereHits(c, L.br + ml)) {
-            if (ml < step * Dl[li]) step = ml / Dl[li];
-            continue;
-          }
-        }
-        place(li);
-        for (int k = L.begin; k < L.end; ++k) {
-          const double* x = &w[3 * k];
-          const double need = step * D[k];
-          if (need <= 0.0) {  // this sphere does not move
-            if (grid.SphereHits(x, sr[k])) return false;
-            continue;
-          }
-          double& last = m.margin[static_cast<std::size_t>(g.grid) * ns + k];
-          double mk = std::min(need, 2.0 * last);
-          while (grid.SphereHits(x, sr[k] + mk)) {
-            if (mk < kMinGridMargin) {
-              if (grid.SphereHits(x, sr[k])) return false;
-              mk = 0.0;
-              break;
-            }
-            mk *= 0.5;
-          }
-          last = std::max(mk, kMinGridMargin);
-          if (mk < need) step = mk / D[k];
-        }
-      }
-    }
-    if (step >= 1.0 - s) return true;  // [s, 1] is clear
-    if (!(step >= kMinCertifiedStep)) return false;  // grazing (or NaN): reject conservatively
-    s += step;
-    if (s >= 1.0) return true;
   }
 }
 
@@ -910,82 +394,6 @@ bool CollisionChecker::Impl::Collide(const Eigen::VectorXd& q, CollisionResult* 
   return fast ? FastCollide(&frames[0], report) : FclCollide(&frames[0], report);
 }
 
-namespace {
-
-/// At most 20 names joined by ", ", then how many more; "none" when there are none.
-template <typename Range, typename Name>
-std::string NameList(const Range& items, Name name) {
-  constexpr std::size_t kMaxNames = 20;
-  std::string out;
-  std::size_t n = 0;
-  for (const auto& item : items) {
-    if (n++ < kMaxNames) out += (out.empty() ? "" : ", ") + name(item);
-  }
-  if (n > kMaxNames) out += ", … (" + std::to_string(n - kMaxNames) + " more)";
-  return n == 0 ? "none" : out;
-}
-
-/// The scene's allowed pairs resolved against a robot.
-struct SceneAllowances {
-  std::vector<char> self;                       // num_links² (1 = allowed); empty when no link–link pair
-  std::vector<std::vector<char>> objects, maps;  // per scene object / map: links (1/0); empty = none
-};
-
-SceneAllowances ResolveSceneAllowances(const RobotModel& robot, const Scene& scene) {
-  SceneAllowances out;
-  const std::vector<AllowedCollision>& pairs = scene.allowed_collisions();
-  if (pairs.empty()) return out;
-  const int nl = robot.num_links();
-  out.objects.resize(scene.objects().size());
-  out.maps.resize(scene.occupancy_maps().size());
-  const auto links = [&] { return NameList(robot.links(), [](const Link& l) { return l.name; }); };
-  const auto obstacles = [&] {
-    return "scene objects: " + NameList(scene.objects(), [](const SceneObject& o) { return o.name; }) +
-           "; OctoMaps: " + NameList(scene.occupancy_maps(), [](const OccupancyMap& m) { return m.name; });
-  };
-  const auto allow = [nl](std::vector<char>* obstacle_links, int link) {
-    if (obstacle_links->empty()) obstacle_links->assign(nl, 0);
-    (*obstacle_links)[link] = 1;
-  };
-  for (std::size_t i = 0; i < pairs.size(); ++i) {
-    const std::string field = "scene.allowed_collisions[" + std::to_string(i) + "]";
-    const AllowedCollision& pair = pairs[i];
-    const int a = robot.FindLink(pair.link);
-    if (a < 0) {
-      bool obstacle = false;
-      for (const SceneObject& o : scene.objects()) obstacle = obstacle || o.name == pair.link;
-      for (const OccupancyMap& m : scene.occupancy_maps()) obstacle = obstacle || m.name == pair.link;
-      ThrowInvalid(field + ".link1 = '" + pair.link + "' is not a link of robot '" + robot.name() + "' (links: " +
-                   links() + ")" +
-                   (obstacle ? "; it names an obstacle of the scene: link1 must be the robot link, link2 the obstacle"
-                             : ""));
-    }
-    bool found = false;
-    const int b = robot.FindLink(pair.other);
-    if (b >= 0) {
-      if (out.self.empty()) out.self.assign(static_cast<std::size_t>(nl) * nl, 0);
-      out.self[static_cast<std::size_t>(a) * nl + b] = out.self[static_cast<std::size_t>(b) * nl + a] = 1;
-      found = true;
-    }
-    for (std::size_t j = 0; j < scene.objects().size(); ++j) {
-      if (scene.objects()[j].name != pair.other) continue;
-      allow(&out.objects[j], a);
-      found = true;
-    }
-    for (std::size_t j = 0; j < scene.occupancy_maps().size(); ++j) {
-      if (scene.occupancy_maps()[j].name != pair.other) continue;
-      allow(&out.maps[j], a);
-      found = true;
-    }
-    if (!found) {
-      ThrowInvalid(field + ".link2 = '" + pair.other + "' is neither a link of robot '" + robot.name() +
-                   "' nor an object or OctoMap of the scene (links: " + links() + "; " + obstacles() + ")");
-    }
-  }
-  return out;
-}
-
-}  // namespace
 
 CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std::shared_ptr<const Scene> scene,
                                    CollisionOptions options)
@@ -1002,7 +410,7 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
   const auto& links = robot_->links();
   const int num_links = robot_->num_links();
   const AllowedCollisionMatrix& acm = robot_->allowed_collisions();
-  const SceneAllowances scene_allowed = ResolveSceneAllowances(*robot_, *scene_);
+  const detail::SceneAllowances scene_allowed = detail::ResolveSceneAllowances(*robot_, *scene_);
   const auto allowed = [&](int a, int b) {
     return a == b || (acm.num_links() == num_links && acm.IsAllowed(a, b)) ||
            (!scene_allowed.self.empty() && scene_allowed.self[static_cast<std::size_t>(a) * num_links + b]);
@@ -1209,14 +617,14 @@ bool CollisionChecker::uses_fast_path() const { return impl_->fast; }
 
 int CollisionChecker::num_gridded_occupancy_maps() const { return static_cast<int>(impl_->grids.size()); }
 
-namespace {
-void CheckSize(const RobotModel& robot, const Eigen::VectorXd& q, const char* field) {
+void detail::CheckSize(const RobotModel& robot, const Eigen::VectorXd& q, const char* field) {
   if (q.size() != robot.num_dofs()) {
     ThrowInvalid(std::string(field) + " has " + std::to_string(q.size()) + " values, robot '" +
                  robot.name() + "' has " + std::to_string(robot.num_dofs()) + " joints");
   }
 }
 
+namespace {
 bool WithinLimits(const RobotModel& robot, const Eigen::VectorXd& q) {
   const Eigen::VectorXd& lo = robot.lower_limits();
   const Eigen::VectorXd& hi = robot.upper_limits();
@@ -1274,69 +682,6 @@ bool CollisionChecker::IsMotionValid(const Eigen::VectorXd& a, const Eigen::Vect
   return true;
 }
 
-bool CollisionChecker::certifies_motion() const { return impl_->certifiable; }
-
-bool CollisionChecker::IsMotionCertified(const Eigen::VectorXd& a, const Eigen::VectorXd& b,
-                                         CheckCounters* counters) const {
-  CheckSize(*robot_, a, "a");
-  CheckSize(*robot_, b, "b");
-  if (!impl_->certifiable) return IsMotionValid(a, b, 0.005, counters);
-  if (!IsValid(b, counters) || !IsValid(a, counters)) return false;
-  // The straight segment as a curve: IsCurveCertified's probes, then the advancement (a and b
-  // are finite here, inside the limits).
-  const Eigen::VectorXd delta = b - a;
-  return IsCurveCertified([&](double s, Eigen::VectorXd* q) { *q = a + s * delta; }, delta.cwiseAbs(), counters);
-}
-
-bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorXd& speed_bound,
-                                        CheckCounters* counters) const {
-  CheckSize(*robot_, speed_bound, "speed_bound");
-  for (int i = 0; i < speed_bound.size(); ++i) {
-    if (!std::isfinite(speed_bound[i]) || speed_bound[i] < 0.0) {
-      ThrowInvalid("speed_bound[" + std::to_string(i) + "] = " + FormatNumber(speed_bound[i]) +
-                   " must be finite and >= 0");
-    }
-  }
-  if (impl_->certifiable) {
-    // Probes first, in bisection order, until they are at most kProbeSpacing apart in every
-    // joint (by the speed bound), so a curve through an obstacle is rejected here rather than by
-    // the advancement creeping up to the contact. Shorter curves get none: they mostly certify
-    // (verification spans, shortcut pieces), where probes are pure overhead.
-    const double span = speed_bound.maxCoeff();
-    Eigen::VectorXd q(robot_->num_dofs());
-    for (int level = 1; level <= kMaxProbeDepth && span / (1 << (level - 1)) > kProbeSpacing; ++level) {
-      const int n = 1 << level;
-      for (int i = 1; i < n; i += 2) {
-        curve(static_cast<double>(i) / n, &q);
-        if (counters != nullptr) ++counters->state_checks;
-        if (!q.allFinite() || impl_->Collide(q, nullptr)) return false;
-      }
-    }
-    return impl_->CertifiedCurve(curve, speed_bound, counters);
-  }
-  // Discrete fallback: states no more than 0.005 apart in every joint, in order.
-  const double span = speed_bound.maxCoeff();
-  const double steps = std::ceil(span / 0.005);
-  if (steps > 1e9) ThrowInvalid("curve needs more than 1e9 checks at 0.005; split it");
-  const long n = std::max(1L, static_cast<long>(steps));
-  Eigen::VectorXd q(robot_->num_dofs());
-  for (long i = 0; i <= n; ++i) {
-    curve(static_cast<double>(i) / static_cast<double>(n), &q);
-    if (counters != nullptr) ++counters->state_checks;
-    if (!q.allFinite() || impl_->Collide(q, nullptr)) return false;
-  }
-  return true;
-}
-
-std::vector<double> CollisionChecker::SweepBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const {
-  CheckSize(*robot_, a, "a");
-  CheckSize(*robot_, b, "b");
-  if (!impl_->certifiable) return {};
-  std::vector<double> out(impl_->sx.size());
-  impl_->SweepBounds((b - a).cwiseAbs(), out.data());
-  return out;
-}
-
 double CollisionChecker::Clearance(const Eigen::VectorXd& q) const {
   CheckSize(*robot_, q, "q");
   Scratch<Frame, 64> frames(impl_->num_links);
@@ -1347,3 +692,4 @@ double CollisionChecker::Clearance(const Eigen::VectorXd& q) const {
 const CollisionOptions& CollisionChecker::options() const { return impl_->options; }
 
 }  // namespace chasles
+

@@ -1,0 +1,448 @@
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "chasles/robot/error.h"
+#include "checker_impl.h"
+
+// Certified motion: the lever-arm bounds built with the checker (BuildLevers), the sweep bounds
+// D_k of a curve (SweepBounds) and the conservative advancement (CertifiedCurve) behind
+// CollisionChecker::IsMotionCertified / IsCurveCertified.
+
+namespace chasles {
+namespace {
+
+using detail::kInf;
+using detail::CheckSize;
+using detail::SceneGeom;
+using detail::SphereLink;
+using detail::UnitSet;
+using detail::Apply;
+using detail::Frame;
+using detail::Prim;
+using detail::SphereDistance;
+using detail::SphereHits;
+
+}  // namespace
+
+// Lever arms. A revolute joint turns everything below it about an axis through its child
+// frame's origin, so a point x moves at most |x − o| per radian of that joint; |x − o| is
+// bounded, by the triangle inequality, by the sphere centre's norm in its link frame plus the
+// norms of the joint-origin translations between that link and the joint (a prismatic joint in
+// between adds the largest |limit| to that length). A prismatic joint moves every point below
+// it by exactly |Δq|. Summing over the chain, the centre's speed is at most Σ_i R_i |q̇_i|, so
+// along any path |x(s1) − x(s0)| <= Σ_i R_i ∫|q̇_i| <= Σ_i R_i w_i (s1 − s0) when |dq_i/ds| <= w_i
+// (a straight segment a→b: w = |b − a|).
+void CollisionChecker::Impl::BuildLevers() {
+  num_dofs = robot->num_dofs();
+  const std::size_t ns = sx.size();
+  lever.assign(ns * static_cast<std::size_t>(num_dofs), 0.0);
+  slink_dofs.assign(slinks.size(), std::vector<char>(num_dofs, 0));
+  for (std::size_t li = 0; li < slinks.size(); ++li) {
+    for (int link = slinks[li].link; robot->links()[link].parent_joint >= 0;) {
+      const Joint& j = robot->joints()[robot->links()[link].parent_joint];
+      if (j.dof >= 0) slink_dofs[li][j.dof] = 1;
+      link = j.parent_link;
+    }
+  }
+  self_pair_offset.clear();
+  self_pair_unshared.clear();
+  self_pair_spheres = 0;
+  self_pair_grid.assign(1, 0);
+  for (const auto& pr : self_pairs) {
+    self_pair_grid.push_back(self_pair_grid.back() +
+                             static_cast<std::size_t>(slinks[pr.first].end - slinks[pr.first].begin) *
+                                 static_cast<std::size_t>(slinks[pr.second].end - slinks[pr.second].begin));
+    self_pair_offset.push_back(self_pair_spheres);
+    for (int side = 0; side < 2; ++side) {
+      const std::size_t li = side == 0 ? pr.first : pr.second;
+      const std::vector<char>& other = slink_dofs[side == 0 ? pr.second : pr.first];
+      std::vector<int> unshared;
+      for (int i = 0; i < num_dofs; ++i) {
+        if (!other[i]) unshared.push_back(i);
+      }
+      self_pair_unshared.push_back(std::move(unshared));
+      self_pair_spheres += static_cast<std::size_t>(slinks[li].end - slinks[li].begin);
+    }
+  }
+  for (const SphereLink& L : slinks) {
+    for (int k = L.begin; k < L.end; ++k) {
+      double* r = lever.data() + static_cast<std::size_t>(k) * num_dofs;
+      double dist = std::sqrt(sx[k] * sx[k] + sy[k] * sy[k] + sz[k] * sz[k]);
+      int link = L.link;
+      while (robot->links()[link].parent_joint >= 0) {
+        const Joint& j = robot->joints()[robot->links()[link].parent_joint];
+        if (j.dof >= 0 && j.type != JointType::kFixed) {
+          if (j.type == JointType::kPrismatic) {
+            r[j.dof] += 1.0;
+            const double reach = std::max(std::abs(j.limits.lower), std::abs(j.limits.upper));
+            dist += std::isfinite(reach) ? reach : kInf;
+          } else {
+            r[j.dof] += dist;
+          }
+        }
+        dist += j.origin.translation().norm();
+        link = j.parent_link;
+      }
+    }
+  }
+}
+
+void CollisionChecker::Impl::SweepBounds(const Eigen::VectorXd& w, double* out) const {
+  const std::size_t ns = sx.size();
+  for (std::size_t k = 0; k < ns; ++k) {
+    const double* r = lever.data() + k * num_dofs;
+    double d = 0.0;
+    for (int i = 0; i < num_dofs; ++i) {
+      if (r[i] != 0.0) d += w[i] * r[i];
+    }
+    out[k] = d;
+  }
+}
+
+namespace {
+constexpr int kMaxCertifiedStates = 20000;
+constexpr double kProbeSpacing = 0.25;       // [rad] probe states before advancing, at most this apart
+constexpr int kMaxProbeDepth = 10;           // (at most 1023 of them)
+constexpr double kMinCertifiedStep = 1e-7;   // in s
+constexpr double kMinGridMargin = 1e-5;      // [m]
+constexpr double kMaxLinkGridMargin = 0.1;   // [m]
+constexpr double kInitialGridMargin = 0.02;  // [m]
+}  // namespace
+
+namespace {
+
+/// Per-thread working memory of CertifiedCurve, reused across calls: once a thread has run an
+/// advancement for a robot and scene of this size, the next one allocates nothing.
+struct AdvancementScratch {
+  std::vector<double> D, Dl;         // sweep bound per sphere, its maximum per sphere link
+  std::vector<double> PD, PDl;       // self pairs: the same over the unshared joints only
+  std::vector<double> w, lb;         // world sphere centres (3 per sphere), link bound centres
+  std::vector<char> placed, bound_placed;  // per sphere link: w / lb hold this state's values
+  std::vector<double> margin;        // occupancy grids: last margin that held, per grid and sphere
+  // Free-until parameters (see "Pair skipping" below).
+  std::vector<double> prim_free;         // per primitive: the least of its links'
+  std::vector<double> prim_link_free;    // per primitive and sphere link
+  std::vector<double> prim_sphere_free;  // per primitive and sphere
+  std::vector<double> self_free;         // per self pair
+  std::vector<double> self_sphere_free;  // per self pair and pair of its spheres
+  std::vector<Frame> frames;
+  Eigen::VectorXd q;
+  bool in_use = false;
+};
+
+/// Distance [m] taken off an evaluated clearance before it is cached as a lower bound. It is
+/// far above the rounding of the distance computations (~1e-15 m at metre scale) and far below
+/// any clearance that matters, so a pair skipped on its cached bound could not have shortened
+/// the step had it been evaluated: the steps are exactly those of evaluating every pair.
+constexpr double kFreeSlack = 1e-10;
+
+/// Curve parameter up to which a pair whose clearance at s is at least d, approaching at no more
+/// than rate v [m per unit of s], stays clear by the slack: s + (d − slack) / v.
+inline double FreeUntil(double s, double d, double v) { return v > 0.0 ? s + (d - kFreeSlack) / v : kInf; }
+
+}  // namespace
+
+// Pair skipping. Every clearance the advancement evaluates shrinks at a bounded rate along the
+// curve: sphere k's clearance to a primitive by at most D_k per unit of s, a self pair's by at
+// most PD_k + PD_l. So a pair whose clearance was at least d at s0, shrinking at most at rate v,
+// cannot shorten a step Δs taken at s while s + Δs <= s0 + d / v: its free-until parameter. It
+// is cached per primitive and sphere (d the sphere's exact clearance), per primitive and link
+// (the least of its spheres', or from the link's bounding sphere, which none of its spheres is
+// closer than, with v = Dl >= D_k), per primitive (the least of its links'), and likewise per
+// self pair and pair of their spheres; a slack of kFreeSlack is taken off d. The loops skip
+// what cannot shorten the step, so after the first state only the pairs near enough to matter
+// are evaluated again. A skipped pair could neither have changed the step nor found a contact
+// (its clearance is positive), so the states visited, the steps and the answer are exactly
+// those of evaluating every pair at every state. Occupancy grids keep their margin search at
+// every state (its margins depend on the previous state's).
+bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve, const Eigen::VectorXd& speed,
+                                            CheckCounters* counters) const {
+  // The thread's scratch, or a fresh one when it is taken (a curve that runs a certified check).
+  thread_local AdvancementScratch thread_scratch;
+  std::unique_ptr<AdvancementScratch> own;
+  AdvancementScratch* scratch = &thread_scratch;
+  if (scratch->in_use) {
+    own = std::make_unique<AdvancementScratch>();
+    scratch = own.get();
+  }
+  struct Lease {
+    AdvancementScratch* s;
+    ~Lease() { s->in_use = false; }
+  } lease{scratch};
+  scratch->in_use = true;
+  AdvancementScratch& m = *scratch;
+
+  const std::size_t ns = sx.size();
+  const std::size_t nl = slinks.size();
+  const std::size_t np = self_pairs.size();
+  m.D.resize(ns);
+  m.Dl.assign(nl, 0.0);
+  double* const D = m.D.data();
+  double* const Dl = m.Dl.data();
+  SweepBounds(speed, D);
+  for (std::size_t li = 0; li < nl; ++li) {
+    for (int k = slinks[li].begin; k < slinks[li].end; ++k) Dl[li] = std::max(Dl[li], D[k]);
+  }
+  for (std::size_t k = 0; k < ns; ++k) {
+    if (!std::isfinite(D[k])) return false;
+  }
+  // Self pairs: joints in both links' chains move both spheres rigidly together and leave
+  // their distance unchanged (d/dt |x_k − x_l| = (x_k − x_l)·(ω × (x_k − x_l)) / |·| = 0), so
+  // the distance changes at most by the levers of the joints not shared, summed for both.
+  m.PD.resize(self_pair_spheres);
+  m.PDl.assign(2 * np, 0.0);
+  for (std::size_t p = 0; p < np; ++p) {
+    std::size_t at = self_pair_offset[p];
+    for (int side = 0; side < 2; ++side) {
+      const std::size_t li = side == 0 ? self_pairs[p].first : self_pairs[p].second;
+      const std::vector<int>& unshared = self_pair_unshared[2 * p + side];
+      for (int k = slinks[li].begin; k < slinks[li].end; ++k) {
+        const double* r = lever.data() + static_cast<std::size_t>(k) * num_dofs;
+        double d = 0.0;
+        for (int i : unshared) {
+          if (r[i] != 0.0) d += speed[i] * r[i];
+        }
+        if (!std::isfinite(d)) return false;
+        m.PD[at++] = d;
+        m.PDl[2 * p + side] = std::max(m.PDl[2 * p + side], d);
+      }
+    }
+  }
+  m.w.resize(3 * ns);
+  m.lb.resize(3 * nl);
+  m.placed.resize(nl);
+  m.bound_placed.resize(nl);
+  m.margin.assign(ns * grids.size(), kInitialGridMargin);
+  // -inf: evaluate at the first state; allowed link–primitive pairs are never evaluated.
+  const std::size_t nprims = prims.size();
+  m.prim_free.assign(nprims, -kInf);
+  m.prim_link_free.assign(nprims * nl, -kInf);
+  m.prim_sphere_free.assign(nprims * ns, -kInf);
+  for (std::size_t oi = 0; oi < nprims; ++oi) {
+    if (const UnitSet* allowed = Allowed(prims[oi].allowed)) {
+      for (std::size_t li = 0; li < nl; ++li) {
+        if (allowed->Has(li)) m.prim_link_free[oi * nl + li] = kInf;
+      }
+    }
+  }
+  m.self_free.assign(np, -kInf);
+  m.self_sphere_free.assign(self_pair_grid.back(), -kInf);
+  m.frames.resize(num_links);
+  m.q.resize(num_dofs);
+  Frame* const frames = m.frames.data();
+  double* const w = m.w.data();
+  double* const lb = m.lb.data();
+  // World centres of link li's bounding sphere / of its spheres, once per state, when needed.
+  const auto bound = [&](std::size_t li) {
+    if (!m.bound_placed[li]) {
+      m.bound_placed[li] = 1;
+      Apply(frames[slinks[li].link], slinks[li].bc, &lb[3 * li]);
+    }
+    return &lb[3 * li];
+  };
+  const auto place = [&](std::size_t li) { PlaceLinkSpheres(frames, li, w, m.placed.data()); };
+
+  double s = 0.0;
+  for (int state = 0;; ++state) {
+    if (state >= kMaxCertifiedStates) return false;
+    if (counters != nullptr) ++counters->state_checks;
+    curve(s, &m.q);
+    if (!m.q.allFinite()) return false;
+    ComputeFk(m.q, frames);
+    std::fill(m.placed.begin(), m.placed.end(), 0);
+    std::fill(m.bound_placed.begin(), m.bound_placed.end(), 0);
+    double step = 1.0 - s;
+    // Scene primitives: exact clearances; a link whose bounding sphere is clear by more than
+    // step·(its fastest sphere's bound) cannot shorten the step.
+    for (std::size_t oi = 0; oi < nprims; ++oi) {
+      if (m.prim_free[oi] >= s + step) continue;  // none of its pairs can shorten the step
+      const Prim& o = prims[oi];
+      double* const link_free = m.prim_link_free.data() + oi * nl;
+      double* const sphere_free = m.prim_sphere_free.data() + oi * ns;
+      double prim_until = kInf;
+      for (std::size_t li = 0; li < nl; ++li) {
+        if (link_free[li] >= s + step) {
+          prim_until = std::min(prim_until, link_free[li]);
+          continue;
+        }
+        const SphereLink& L = slinks[li];
+        const double dl = SphereDistance(o, bound(li), L.br);
+        if (dl > 0.0 && dl >= step * Dl[li]) {
+          link_free[li] = FreeUntil(s, dl, Dl[li]);
+          prim_until = std::min(prim_until, link_free[li]);
+          continue;
+        }
+        place(li);
+        double until = kInf;
+        for (int k = L.begin; k < L.end; ++k) {
+          if (sphere_free[k] < s + step) {
+            const double d = SphereDistance(o, &w[3 * k], sr[k]);
+            if (d <= 0.0) return false;
+            if (d < step * D[k]) step = d / D[k];
+            sphere_free[k] = FreeUntil(s, d, D[k]);
+          }
+          until = std::min(until, sphere_free[k]);
+        }
+        link_free[li] = until;
+        prim_until = std::min(prim_until, until);
+      }
+      m.prim_free[oi] = prim_until;
+    }
+    // Self pairs: the distance shrinks at most at PD_k + PD_l (unshared joints only).
+    for (std::size_t p = 0; p < np; ++p) {
+      if (m.self_free[p] >= s + step) continue;
+      const auto& pr = self_pairs[p];
+      const double* pa = m.PD.data() + self_pair_offset[p];
+      const double* pb = pa + (slinks[pr.first].end - slinks[pr.first].begin);
+      const SphereLink& A = slinks[pr.first];
+      const SphereLink& B = slinks[pr.second];
+      const double* ca = bound(pr.first);
+      const double* cb = bound(pr.second);
+      const double dl = std::sqrt((ca[0] - cb[0]) * (ca[0] - cb[0]) + (ca[1] - cb[1]) * (ca[1] - cb[1]) +
+                                  (ca[2] - cb[2]) * (ca[2] - cb[2])) -
+                        A.br - B.br;
+      const double vl = m.PDl[2 * p] + m.PDl[2 * p + 1];
+      if (dl > 0.0 && dl >= step * vl) {
+        m.self_free[p] = FreeUntil(s, dl, vl);
+        continue;
+      }
+      place(pr.first);
+      place(pr.second);
+      double* sphere_free = m.self_sphere_free.data() + self_pair_grid[p];
+      double until = kInf;
+      for (int i = A.begin; i < A.end; ++i) {
+        const double* xi = &w[3 * i];
+        for (int k = B.begin; k < B.end; ++k, ++sphere_free) {
+          if (*sphere_free < s + step) {
+            const double* xk = &w[3 * k];
+            const double e0 = xi[0] - xk[0], e1 = xi[1] - xk[1], e2 = xi[2] - xk[2];
+            // Self pairs are unpadded (padding keeps the robot from the scene only).
+            const double d = std::sqrt(e0 * e0 + e1 * e1 + e2 * e2) - sr[i] - sr[k] + 2.0 * options.padding;
+            if (d <= 0.0) return false;
+            const double v = pa[i - A.begin] + pb[k - B.begin];
+            if (d < step * v) step = d / v;
+            *sphere_free = FreeUntil(s, d, v);
+          }
+          until = std::min(until, *sphere_free);
+        }
+      }
+      m.self_free[p] = until;
+    }
+    // Occupancy grids: a lower bound m on the clearance — the sphere grown by m misses every
+    // occupied voxel — halving m from the last margin that held until it does.
+    for (const SceneGeom& g : scene_geoms) {
+      const detail::OccupancyGrid& grid = grids[g.grid];  // certifiable: every geom is a grid
+      if (grid.num_blocks() == 0) continue;
+      const double* gc = grid.center().data();
+      const UnitSet* allowed = Allowed(g.allowed);
+      for (std::size_t li = 0; li < nl; ++li) {
+        if (allowed != nullptr && allowed->Has(li)) continue;
+        const SphereLink& L = slinks[li];
+        const double* c = bound(li);
+        const double dg = std::sqrt((c[0] - gc[0]) * (c[0] - gc[0]) + (c[1] - gc[1]) * (c[1] - gc[1]) +
+                                    (c[2] - gc[2]) * (c[2] - gc[2])) -
+                          L.br - grid.radius();
+        if (dg > 0.0 && dg >= step * Dl[li]) continue;
+        if (Dl[li] > 0.0) {
+          const double ml = std::min(step * Dl[li], kMaxLinkGridMargin);
+          if (!grid.SphereHits(c, L.br + ml)) {
+            if (ml < step * Dl[li]) step = ml / Dl[li];
+            continue;
+          }
+        }
+        place(li);
+        for (int k = L.begin; k < L.end; ++k) {
+          const double* x = &w[3 * k];
+          const double need = step * D[k];
+          if (need <= 0.0) {  // this sphere does not move
+            if (grid.SphereHits(x, sr[k])) return false;
+            continue;
+          }
+          double& last = m.margin[static_cast<std::size_t>(g.grid) * ns + k];
+          double mk = std::min(need, 2.0 * last);
+          while (grid.SphereHits(x, sr[k] + mk)) {
+            if (mk < kMinGridMargin) {
+              if (grid.SphereHits(x, sr[k])) return false;
+              mk = 0.0;
+              break;
+            }
+            mk *= 0.5;
+          }
+          last = std::max(mk, kMinGridMargin);
+          if (mk < need) step = mk / D[k];
+        }
+      }
+    }
+    if (step >= 1.0 - s) return true;  // [s, 1] is clear
+    if (!(step >= kMinCertifiedStep)) return false;  // grazing (or NaN): reject conservatively
+    s += step;
+    if (s >= 1.0) return true;
+  }
+}
+
+bool CollisionChecker::certifies_motion() const { return impl_->certifiable; }
+
+bool CollisionChecker::IsMotionCertified(const Eigen::VectorXd& a, const Eigen::VectorXd& b,
+                                         CheckCounters* counters) const {
+  CheckSize(*robot_, a, "a");
+  CheckSize(*robot_, b, "b");
+  if (!impl_->certifiable) return IsMotionValid(a, b, 0.005, counters);
+  if (!IsValid(b, counters) || !IsValid(a, counters)) return false;
+  // The straight segment as a curve: IsCurveCertified's probes, then the advancement (a and b
+  // are finite here, inside the limits).
+  const Eigen::VectorXd delta = b - a;
+  return IsCurveCertified([&](double s, Eigen::VectorXd* q) { *q = a + s * delta; }, delta.cwiseAbs(), counters);
+}
+
+bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorXd& speed_bound,
+                                        CheckCounters* counters) const {
+  CheckSize(*robot_, speed_bound, "speed_bound");
+  for (int i = 0; i < speed_bound.size(); ++i) {
+    if (!std::isfinite(speed_bound[i]) || speed_bound[i] < 0.0) {
+      ThrowInvalid("speed_bound[" + std::to_string(i) + "] = " + FormatNumber(speed_bound[i]) +
+                   " must be finite and >= 0");
+    }
+  }
+  if (impl_->certifiable) {
+    // Probes first, in bisection order, until they are at most kProbeSpacing apart in every
+    // joint (by the speed bound), so a curve through an obstacle is rejected here rather than by
+    // the advancement creeping up to the contact. Shorter curves get none: they mostly certify
+    // (verification spans, shortcut pieces), where probes are pure overhead.
+    const double span = speed_bound.maxCoeff();
+    Eigen::VectorXd q(robot_->num_dofs());
+    for (int level = 1; level <= kMaxProbeDepth && span / (1 << (level - 1)) > kProbeSpacing; ++level) {
+      const int n = 1 << level;
+      for (int i = 1; i < n; i += 2) {
+        curve(static_cast<double>(i) / n, &q);
+        if (counters != nullptr) ++counters->state_checks;
+        if (!q.allFinite() || impl_->Collide(q, nullptr)) return false;
+      }
+    }
+    return impl_->CertifiedCurve(curve, speed_bound, counters);
+  }
+  // Discrete fallback: states no more than 0.005 apart in every joint, in order.
+  const double span = speed_bound.maxCoeff();
+  const double steps = std::ceil(span / 0.005);
+  if (steps > 1e9) ThrowInvalid("curve needs more than 1e9 checks at 0.005; split it");
+  const long n = std::max(1L, static_cast<long>(steps));
+  Eigen::VectorXd q(robot_->num_dofs());
+  for (long i = 0; i <= n; ++i) {
+    curve(static_cast<double>(i) / static_cast<double>(n), &q);
+    if (counters != nullptr) ++counters->state_checks;
+    if (!q.allFinite() || impl_->Collide(q, nullptr)) return false;
+  }
+  return true;
+}
+
+std::vector<double> CollisionChecker::SweepBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const {
+  CheckSize(*robot_, a, "a");
+  CheckSize(*robot_, b, "b");
+  if (!impl_->certifiable) return {};
+  std::vector<double> out(impl_->sx.size());
+  impl_->SweepBounds((b - a).cwiseAbs(), out.data());
+  return out;
+}
+
+}  // namespace chasles

@@ -1,0 +1,225 @@
+#pragma once
+/// \file
+/// Internal to chasles_collision: CollisionChecker::Impl (what a checker builds once and every
+/// query reads) and the small types it holds, shared by collision_checker.cc (construction, state
+/// checks, clearance), certified_motion.cc (lever bounds and the conservative advancement) and
+/// allowed_pairs.cc (the scene's allowed pairs resolved against a robot). See the design notes at
+/// the top of collision_checker.cc.
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <fcl/fcl.h>
+
+#include "chasles/collision/collision_checker.h"
+#include "fcl_geometry.h"
+#include "forward_kinematics.h"
+#include "occupancy_grid.h"
+#include "primitives.h"
+#include "simd.h"
+#include "sphere_cull.h"
+
+namespace chasles {
+namespace detail {
+
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+
+inline void ToRowMajor(const Eigen::Matrix3d& m, double* r) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r[3 * i + j] = m(i, j);
+}
+
+inline Eigen::Isometry3d ToIsometry(const Frame& f) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) t.linear()(i, j) = f.col[j][i];
+    t.translation()[i] = f.col[3][i];
+  }
+  return t;
+}
+
+/// Stack buffer with heap fallback for unusually large robots.
+template <typename T, std::size_t N>
+class Scratch {
+ public:
+  explicit Scratch(std::size_t n) {
+    if (n > N) {
+      heap_.resize(n);
+      data_ = heap_.data();
+    } else {
+      data_ = stack_;
+    }
+  }
+  T& operator[](std::size_t i) { return data_[i]; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
+
+ private:
+  T stack_[N];
+  std::vector<T> heap_;
+  T* data_;
+};
+
+
+/// A link that carries spheres (fast path).
+struct SphereLink {
+  int link;
+  int begin, end;    // range in the sphere arrays
+  double bc[3];      // bounding-sphere centre, link frame
+  double br;         // bounding-sphere radius (padding included)
+};
+
+struct RobotShape {  // FCL path: one link shape
+  int link;
+  FclGeom g;
+  Eigen::Isometry3d local;  // shape pose in the link frame
+};
+
+struct SceneGeom {  // an FCL scene object (world pose fixed)
+  std::string name;
+  FclGeom g;
+  Eigen::Isometry3d pose;
+  fcl::Transform3d tf;
+  Eigen::Vector3d center;  // bounding centre, world
+  double radius;
+  bool octree = false;
+  int grid = -1;  // fast path: index into Impl::grids when this map is gridded
+  int allowed = -1;  // index into Impl::allowed_sets of the links that may touch it, or -1
+};
+
+/// A set of robot units (sphere-link indices on the fast path, link indices on the FCL path) as
+/// 64-bit words: bit i of words[i / 64].
+struct UnitSet {
+  std::vector<std::uint64_t> words;
+  bool Has(std::size_t i) const { return ((words[i >> 6] >> (i & 63)) & 1u) != 0; }
+};
+
+inline bool SpheresOverlap(const Eigen::Vector3d& c1, double r1, const Eigen::Vector3d& c2, double r2) {
+  const double r = r1 + r2;
+  return (c1 - c2).squaredNorm() <= r * r;
+}
+
+/// The scene's allowed pairs resolved against a robot.
+struct SceneAllowances {
+  std::vector<char> self;                       // num_links² (1 = allowed); empty when no link–link pair
+  std::vector<std::vector<char>> objects, maps;  // per scene object / map: links (1/0); empty = none
+};
+
+/// \throws Error(kInvalidArgument) when q does not have one value per joint of the robot,
+///         naming `field`.
+void CheckSize(const RobotModel& robot, const Eigen::VectorXd& q, const char* field);
+
+/// Resolves scene.allowed_collisions against the robot.
+/// \throws Error(kInvalidArgument) naming the entry, when a name is not a link of the robot
+///         (link1) or neither a link nor an obstacle of the scene (link2).
+SceneAllowances ResolveSceneAllowances(const RobotModel& robot, const Scene& scene);
+
+}  // namespace detail
+
+struct CollisionChecker::Impl {
+  using Frame = detail::Frame;
+  using Prim = detail::Prim;
+  using SphereLink = detail::SphereLink;
+  using RobotShape = detail::RobotShape;
+  using SceneGeom = detail::SceneGeom;
+  using UnitSet = detail::UnitSet;
+
+  const RobotModel* robot = nullptr;
+  const Scene* scene = nullptr;
+  CollisionOptions options;
+  int num_links = 0;
+  detail::FkProgram fk;  // forward_kinematics.h
+  bool fast = false;
+
+  // Fast path.
+  std::vector<SphereLink> slinks;
+  // slinks[i].br, contiguous, padded with 0 to detail::CullPadded(slinks.size()) for the cull.
+  std::vector<double> link_bound_radius;
+  // Self pairs as bit sets: bit b % 64 of self_masks[a * ⌈n/64⌉ + b / 64] when (a, b), a < b,
+  // is in self_pairs (the cull visits them in the same order as the list).
+  std::vector<std::uint64_t> self_masks;
+  detail::SimdLevel simd = detail::BestSimdLevel();  // for the culls and the FK
+  std::vector<double> sx, sy, sz, sr;          // link-frame centres, radius + padding
+  std::vector<int> slink_of;                   // sphere -> index into slinks
+  std::vector<std::pair<int, int>> self_pairs;  // indices into slinks, not allowed by the ACM
+  std::vector<Prim> prims;
+  std::vector<double> prim_x, prim_y, prim_z, prim_bound;  // prims' bounding spheres, structure of arrays
+  std::vector<std::shared_ptr<fcl::Sphered>> fcl_spheres;  // per sphere, radius + padding
+  std::vector<std::shared_ptr<fcl::Sphered>> fcl_link_bounds;  // per sphere link, its bound
+  std::vector<detail::OccupancyGrid> grids;  // gridded occupancy maps
+  // Certified motion: lever[k * num_dofs + i] = R_ik, a bound on how far sphere k's centre
+  // moves per unit of q_i [m/rad, or 1 for prismatic]. certifiable = fast path and no scene
+  // geometry left to FCL (meshes, ungridded maps).
+  int num_dofs = 0;
+  std::vector<double> lever;
+  std::vector<std::vector<char>> slink_dofs;  // per sphere link: dofs in its chain (1/0)
+  // Self pairs in the advancement: pair p's per-sphere bounds start at self_pair_offset[p]
+  // (first link's spheres, then the second's; self_pair_spheres in all), and
+  // self_pair_unshared[2p + side] lists the dofs of that side's chain not in the other side's.
+  std::vector<std::size_t> self_pair_offset;
+  std::vector<std::vector<int>> self_pair_unshared;
+  std::size_t self_pair_spheres = 0;
+  // Pair p's |A|·|B| sphere pairs start at self_pair_grid[p] (self_pair_grid.back() in all).
+  std::vector<std::size_t> self_pair_grid;
+  bool certifiable = false;
+
+  // FCL path.
+  std::vector<RobotShape> shapes;
+  std::vector<std::pair<int, int>> shape_pairs;  // indices into shapes
+  // Scene objects that FCL handles: meshes and maps in the fast path, everything otherwise.
+  std::vector<SceneGeom> scene_geoms;
+
+  // Link–obstacle pairs the scene allows (see the design notes): Prim::allowed and
+  // SceneGeom::allowed index into this.
+  std::vector<UnitSet> allowed_sets;
+  const UnitSet* Allowed(int set) const { return set < 0 ? nullptr : &allowed_sets[set]; }
+
+  void BuildFk();
+  void ComputeFk(const Eigen::VectorXd& q, Frame* frames) const;
+  bool FastCollide(const Frame* frames, CollisionResult* report) const;
+  /// World centres of every sphere link's bounding sphere into lb (3 per link); marks every
+  /// link's spheres as not yet placed.
+  void PlaceLinkBounds(const Frame* frames, double* lb, char* placed) const {
+    for (std::size_t li = 0; li < slinks.size(); ++li) {
+      detail::Apply(frames[slinks[li].link], slinks[li].bc, &lb[3 * li]);
+      placed[li] = 0;
+    }
+  }
+  /// World centres of link li's spheres into w (3 per sphere), once per state.
+  void PlaceLinkSpheres(const Frame* frames, std::size_t li, double* w, char* placed) const {
+    if (placed[li]) return;
+    placed[li] = 1;
+    const SphereLink& L = slinks[li];
+    for (int k = L.begin; k < L.end; ++k) {
+      const double x[3] = {sx[k], sy[k], sz[k]};
+      detail::Apply(frames[L.link], x, &w[3 * k]);
+    }
+  }
+  /// The link bounding centres `lb` (3 per link) as structure of arrays: x, y, z rows of
+  /// detail::CullPadded(nl) each in `soa`, the lanes past the last link set to `fill`.
+  void LinkBoundsSoa(const double* lb, double fill, double* soa) const {
+    const std::size_t nl = slinks.size();
+    const std::size_t padded = detail::CullPadded(nl);
+    for (std::size_t li = 0; li < padded; ++li) {
+      for (std::size_t axis = 0; axis < 3; ++axis) soa[axis * padded + li] = li < nl ? lb[3 * li + axis] : fill;
+    }
+  }
+  double FastClearance(const Frame* frames) const;
+  bool FclCollide(const Frame* frames, CollisionResult* report) const;
+  double FclClearance(const Frame* frames) const;
+  bool Collide(const Eigen::VectorXd& q, CollisionResult* report) const;
+  void BuildLevers();
+  /// D_k = Σ_i w_i·R_ik: how far sphere k's centre can move per unit of the curve parameter
+  /// when |dq_i/ds| <= w_i.
+  void SweepBounds(const Eigen::VectorXd& w, double* out) const;
+  /// Conservative advancement along q(s), s ∈ [0, 1], with |dq_i/ds| <= w_i (see
+  /// IsCurveCertified); joint limits are the caller's.
+  bool CertifiedCurve(const CollisionChecker::Curve& curve, const Eigen::VectorXd& speed,
+                      CheckCounters* counters) const;
+};
+
+}  // namespace chasles
