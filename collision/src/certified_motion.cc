@@ -128,6 +128,7 @@ struct AdvancementScratch {
   std::vector<double> self_free;         // per self pair
   std::vector<double> self_sphere_free;  // per self pair and pair of its spheres
   std::vector<Frame> frames;
+  std::vector<std::uint32_t> near;  // broad phase: the prims near the whole motion
   Eigen::VectorXd q;
   bool in_use = false;
 };
@@ -215,13 +216,30 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
   m.placed.resize(nl);
   m.bound_placed.resize(nl);
   m.margin.assign(ns * grids.size(), kInitialGridMargin);
+  m.frames.resize(num_links);
+  m.q.resize(num_dofs);
+  Frame* const frames = m.frames.data();
+  // With the broad phase, only the prims near the whole motion: sphere k stays within D_k of
+  // where it starts, so within its link's bounding sphere grown by D_l; no other prim can come
+  // within any distance that limits a step, let alone touch.
+  std::size_t nprims = prims.size();
+  const std::uint32_t* near = nullptr;  // nullptr: every prim, in order
+  if (prim_broad_phase) {
+    curve(0.0, &m.q);
+    if (!m.q.allFinite()) return false;
+    ComputeFk(m.q, frames);
+    PlaceLinkBounds(frames, m.lb.data(), m.placed.data());
+    PrimsNear(m.lb.data(), Dl, 0.0, &m.near);
+    nprims = m.near.size();
+    near = m.near.data();
+  }
+  const auto prim_at = [&](std::size_t oi) -> const Prim& { return prims[near != nullptr ? near[oi] : oi]; };
   // -inf: evaluate at the first state; allowed link–primitive pairs are never evaluated.
-  const std::size_t nprims = prims.size();
   m.prim_free.assign(nprims, -kInf);
   m.prim_link_free.assign(nprims * nl, -kInf);
   m.prim_sphere_free.assign(nprims * ns, -kInf);
   for (std::size_t oi = 0; oi < nprims; ++oi) {
-    if (const UnitSet* allowed = Allowed(prims[oi].allowed)) {
+    if (const UnitSet* allowed = Allowed(prim_at(oi).allowed)) {
       for (std::size_t li = 0; li < nl; ++li) {
         if (allowed->Has(li)) m.prim_link_free[oi * nl + li] = kInf;
       }
@@ -229,9 +247,6 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
   }
   m.self_free.assign(np, -kInf);
   m.self_sphere_free.assign(self_pair_grid.back(), -kInf);
-  m.frames.resize(num_links);
-  m.q.resize(num_dofs);
-  Frame* const frames = m.frames.data();
   double* const w = m.w.data();
   double* const lb = m.lb.data();
   // World centres of link li's bounding sphere / of its spheres, once per state, when needed.
@@ -258,7 +273,7 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
     // step·(its fastest sphere's bound) cannot shorten the step.
     for (std::size_t oi = 0; oi < nprims; ++oi) {
       if (m.prim_free[oi] >= s + step) continue;  // none of its pairs can shorten the step
-      const Prim& o = prims[oi];
+      const Prim& o = prim_at(oi);
       double* const link_free = m.prim_link_free.data() + oi * nl;
       double* const sphere_free = m.prim_sphere_free.data() + oi * ns;
       double prim_until = kInf;

@@ -16,6 +16,7 @@
 #include <Eigen/Geometry>
 #include <fcl/fcl.h>
 
+#include "broad_phase.h"
 #include "chasles/collision/collision_checker.h"
 #include "fcl_geometry.h"
 #include "forward_kinematics.h"
@@ -148,6 +149,32 @@ struct CollisionChecker::Impl {
   std::vector<std::pair<int, int>> self_pairs;  // indices into slinks, not allowed by the ACM
   std::vector<Prim> prims;
   std::vector<double> prim_x, prim_y, prim_z, prim_bound;  // prims' bounding spheres, structure of arrays
+  // Broad phase (broad_phase.h) over the prims' bounding spheres, built when there are more than
+  // kBroadPhasePrims of them: the checks then visit only the prims whose bound's box overlaps
+  // the robot's (or a motion's swept) box; with fewer, scanning them all is cheaper.
+  static constexpr std::size_t kBroadPhasePrims = 32;
+  static constexpr double kClearanceSearchRadius = 0.25;  // [m] first radius Clearance searches
+  bool prim_broad_phase = false;
+  detail::SphereBvh prim_bvh;
+  /// *out = the prims whose bounding sphere's box overlaps the box around every sphere link's
+  /// bounding sphere (centres lb, 3 per link) grown by grow[li] (nullptr: 0) plus `margin`, in
+  /// scene order. Every prim within `margin` of some link's bounding sphere grown by grow[li] is
+  /// listed. Needs prim_broad_phase.
+  void PrimsNear(const double* lb, const double* grow, double margin, std::vector<std::uint32_t>* out) const {
+    detail::Box3 box;
+    for (int a = 0; a < 3; ++a) {
+      box.lo[a] = std::numeric_limits<double>::infinity();
+      box.hi[a] = -std::numeric_limits<double>::infinity();
+    }
+    for (std::size_t li = 0; li < slinks.size(); ++li) {
+      const double r = slinks[li].br + (grow != nullptr ? grow[li] : 0.0) + margin;
+      for (int a = 0; a < 3; ++a) {
+        box.lo[a] = std::min(box.lo[a], lb[3 * li + a] - r);
+        box.hi[a] = std::max(box.hi[a], lb[3 * li + a] + r);
+      }
+    }
+    prim_bvh.Overlapping(box, out);
+  }
   std::vector<std::shared_ptr<fcl::Sphered>> fcl_spheres;  // per sphere, radius + padding
   std::vector<std::shared_ptr<fcl::Sphered>> fcl_link_bounds;  // per sphere link, its bound
   std::vector<detail::OccupancyGrid> grids;  // gridded occupancy maps
@@ -209,6 +236,11 @@ struct CollisionChecker::Impl {
     }
   }
   double FastClearance(const Frame* frames) const;
+  /// The smallest distance between the link spheres (world centres placed on demand into w;
+  /// link bounds in soa, as LinkBoundsSoa) and the `count` prims listed in `which` (nullptr:
+  /// prims 0..count-1), by branch and bound; +inf when none.
+  double PrimClearance(const Frame* frames, const std::uint32_t* which, std::size_t count, const double* soa,
+                       double* w, char* placed) const;
   bool FclCollide(const Frame* frames, CollisionResult* report) const;
   double FclClearance(const Frame* frames) const;
   bool Collide(const Eigen::VectorXd& q, CollisionResult* report) const;

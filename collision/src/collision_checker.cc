@@ -37,6 +37,13 @@
 //   (against primitive bounds, and link against link for self pairs) are bit masks from one
 //   structure-of-arrays kernel (sphere_cull.h): AVX2 when the CPU has it (simd.h), SSE2 or
 //   plain C++ otherwise, all giving the same bits.
+// * Broad phase (broad_phase.h, CollisionOptions::broad_phase): with more than 32 primitives a
+//   static BVH over their bounding spheres is built with the checker. A state check gathers the
+//   primitives whose bound's box overlaps the box around the link bounds (a superset of those
+//   the cull would pass, in scene order, so the same first contact); the advancement gathers,
+//   once per motion, those near the link bounds grown by each link's whole sweep bound D_l (no
+//   other can ever limit a step); Clearance searches within 0.25 m of the link bounds, then 4×
+//   wider until the best distance is inside the searched radius. Same answers as scanning all.
 // * Fast-path order: primitives, occupancy maps (scene order), self, meshes. The FCL path checks
 //   scene objects, then maps, then self, so for a scene of maps only both paths report the same
 //   first contact.
@@ -128,7 +135,31 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
   // Robot vs scene primitives. The link-bound vs obstacle-bound cull (sphere_cull.h) gives, per
   // primitive, a bit mask over (up to) 64 links at a time; only the set bits are visited, in
   // link order.
-  const std::size_t nprims = prims.size();
+  // With the broad phase, only the prims near the robot's box, their bounds gathered.
+  std::size_t nprims = prims.size();
+  const std::uint32_t* near = nullptr;  // nullptr: every prim, in order
+  const double* px = prim_x.data();
+  const double* py = prim_y.data();
+  const double* pz = prim_z.data();
+  const double* pr = prim_bound.data();
+  thread_local std::vector<std::uint32_t> near_list;
+  thread_local std::vector<double> near_bounds;
+  if (prim_broad_phase) {
+    PrimsNear(&lb[0], nullptr, 0.0, &near_list);
+    nprims = near_list.size();
+    near = near_list.data();
+    near_bounds.resize(4 * nprims);
+    for (std::size_t j = 0; j < nprims; ++j) {
+      near_bounds[j] = prim_x[near[j]];
+      near_bounds[nprims + j] = prim_y[near[j]];
+      near_bounds[2 * nprims + j] = prim_z[near[j]];
+      near_bounds[3 * nprims + j] = prim_bound[near[j]];
+    }
+    px = near_bounds.data();
+    py = px + nprims;
+    pz = py + nprims;
+    pr = pz + nprims;
+  }
   const std::size_t chunks = (nl + 63) / 64;
   Scratch<std::uint64_t, 256> masks(std::max(nprims, nl) * chunks);
   const auto link_chunk = [&](std::size_t chunk) {
@@ -136,14 +167,14 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
     return detail::CullSpheres{bx + base, by + base, bz + base, br + base, std::min<std::size_t>(64, nl - base)};
   };
   for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
-    detail::OverlapMasks(simd, link_chunk(chunk), prim_x.data(), prim_y.data(), prim_z.data(),
-                         prim_bound.data(), nprims, &masks[chunk * nprims]);
+    detail::OverlapMasks(simd, link_chunk(chunk), px, py, pz, pr, nprims, &masks[chunk * nprims]);
   }
-  for (std::size_t oi = 0; oi < nprims; ++oi) {
+  for (std::size_t j = 0; j < nprims; ++j) {
+    const std::size_t oi = near != nullptr ? near[j] : j;
     const Prim& o = prims[oi];
     for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
       const std::size_t base = 64 * chunk;
-      std::uint64_t mask = masks[chunk * nprims + oi];
+      std::uint64_t mask = masks[chunk * nprims + j];
       if (o.allowed >= 0) mask &= ~allowed_sets[o.allowed].words[chunk];
       while (mask != 0) {
         const std::size_t li = base + static_cast<std::size_t>(__builtin_ctzll(mask));
@@ -255,6 +286,45 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
   return false;
 }
 
+double CollisionChecker::Impl::PrimClearance(const Frame* frames, const std::uint32_t* which, std::size_t count,
+                                             const double* soa, double* w, char* placed) const {
+  const std::size_t nl = slinks.size();
+  const std::size_t padded = detail::CullPadded(nl);
+  double best = kInf;
+  // A link's bounding sphere is at most as far from an obstacle as any of its spheres, so a
+  // (link, primitive) pair whose bound is no closer than the best distance so far cannot lower
+  // it. Branch and bound: the pair with the smallest bound first (it sets a tight `best`), then
+  // every other pair whose bound is below `best`.
+  // The bounds, one primitive against every link at once (primitives.h), in pair p·padded + li.
+  Scratch<double, 1024> bound(count * padded);
+  std::size_t first = 0;
+  const auto prim = [&](std::size_t p) -> const Prim& { return prims[which != nullptr ? which[p] : p]; };
+  for (std::size_t p = 0; p < count; ++p) {
+    double* b = &bound[p * padded];
+    detail::SphereDistances(simd, prim(p), &soa[0], &soa[padded], &soa[2 * padded], link_bound_radius.data(), nl, b);
+    const UnitSet* allowed = Allowed(prim(p).allowed);
+    for (std::size_t li = 0; li < nl; ++li) {
+      if (allowed != nullptr && allowed->Has(li)) b[li] = kInf;
+      if (b[li] < bound[first]) first = p * padded + li;
+    }
+  }
+  const auto exact = [&](std::size_t pair) {
+    const Prim& o = prim(pair / padded);
+    const std::size_t li = pair % padded;
+    const SphereLink& L = slinks[li];
+    PlaceLinkSpheres(frames, li, w, placed);
+    for (int k = L.begin; k < L.end; ++k) best = std::min(best, SphereDistance(o, &w[3 * k], sr[k]));
+  };
+  if (nl * count > 0 && bound[first] < kInf) exact(first);
+  for (std::size_t p = 0; p < count; ++p) {
+    for (std::size_t li = 0; li < nl; ++li) {
+      const std::size_t pair = p * padded + li;
+      if (pair != first && bound[pair] < best) exact(pair);
+    }
+  }
+  return best;
+}
+
 double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
   const std::size_t ns = sx.size();
   const std::size_t nl = slinks.size();
@@ -262,39 +332,20 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
   Scratch<double, 256> lb(3 * nl);
   Scratch<char, 256> placed(nl);
   PlaceLinkBounds(frames, &lb[0], &placed[0]);
-  double best = kInf;
-  // A link's bounding sphere is at most as far from an obstacle as any of its spheres, so a
-  // (link, primitive) pair whose bound is no closer than the best distance so far cannot lower
-  // it. Branch and bound: the pair with the smallest bound first (it sets a tight `best`), then
-  // every other pair whose bound is below `best`.
-  // The bounds, one primitive against every link at once (primitives.h), in pair p·padded + li.
-  const std::size_t np = prims.size();
   const std::size_t padded = detail::CullPadded(nl);
   Scratch<double, 256> soa(3 * padded);  // link bounding centres, structure of arrays
   LinkBoundsSoa(&lb[0], 0.0, &soa[0]);    // padding lanes finite (their distances are not read)
-  Scratch<double, 1024> bound(np * padded);
-  std::size_t first = 0;
-  for (std::size_t p = 0; p < np; ++p) {
-    double* b = &bound[p * padded];
-    detail::SphereDistances(simd, prims[p], &soa[0], &soa[padded], &soa[2 * padded], link_bound_radius.data(), nl, b);
-    const UnitSet* allowed = Allowed(prims[p].allowed);
-    for (std::size_t li = 0; li < nl; ++li) {
-      if (allowed != nullptr && allowed->Has(li)) b[li] = kInf;
-      if (b[li] < bound[first]) first = p * padded + li;
-    }
-  }
-  const auto exact = [&](std::size_t pair) {
-    const Prim& o = prims[pair / padded];
-    const std::size_t li = pair % padded;
-    const SphereLink& L = slinks[li];
-    PlaceLinkSpheres(frames, li, &w[0], &placed[0]);
-    for (int k = L.begin; k < L.end; ++k) best = std::min(best, SphereDistance(o, &w[3 * k], sr[k]));
-  };
-  if (nl * np > 0 && bound[first] < kInf) exact(first);
-  for (std::size_t p = 0; p < np; ++p) {
-    for (std::size_t li = 0; li < nl; ++li) {
-      const std::size_t pair = p * padded + li;
-      if (pair != first && bound[pair] < best) exact(pair);
+  double best = kInf;
+  if (!prim_broad_phase) {
+    best = PrimClearance(frames, nullptr, prims.size(), &soa[0], &w[0], &placed[0]);
+  } else {
+    // Prims within `radius` of the link bounds first; a prim outside that box is farther than
+    // `radius` from every link, so once the best distance is at most `radius` it is final.
+    thread_local std::vector<std::uint32_t> near;
+    for (double radius = kClearanceSearchRadius;; radius *= 4.0) {
+      PrimsNear(&lb[0], nullptr, radius, &near);
+      best = PrimClearance(frames, near.data(), near.size(), &soa[0], &w[0], &placed[0]);
+      if (best <= radius || near.size() == prims.size()) break;
     }
   }
   if (!scene_geoms.empty()) {
@@ -564,6 +615,11 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
     g.radius = g.g.radius;
     g.allowed = allowed_links;
     m.scene_geoms.push_back(std::move(g));
+  }
+  if (m.options.broad_phase && m.prims.size() > Impl::kBroadPhasePrims) {
+    m.prim_broad_phase = true;
+    m.prim_bvh = detail::SphereBvh(m.prim_x.data(), m.prim_y.data(), m.prim_z.data(), m.prim_bound.data(),
+                                   m.prims.size());
   }
   for (std::size_t mi = 0; mi < scene_->occupancy_maps().size(); ++mi) {
     const OccupancyMap& map = scene_->occupancy_maps()[mi];

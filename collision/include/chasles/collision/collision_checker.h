@@ -26,6 +26,11 @@ struct CollisionOptions {
   double padding = 0.0;
   /// Force the generic FCL path even when the fast sphere path applies (tests, reference).
   bool force_fcl = false;
+  /// Fast path: with more than 32 scene primitives, index their bounding spheres in a static
+  /// bounding-volume hierarchy built with the checker, so state checks, certified motions and
+  /// Clearance visit only the primitives near the robot (or near the whole motion). The answers
+  /// are the same either way; false scans every primitive (tests, benchmarks).
+  bool broad_phase = true;
   /// \throws Error(kInvalidArgument) naming the field.
   void Validate() const;
 };

@@ -1,0 +1,233 @@
+// The broad phase over scene primitives (CollisionOptions::broad_phase) must not change any
+// answer: the same checks on the same cluttered scenes, with it and without it (every primitive
+// scanned), agree exactly — state checks and their first contact, Clearance to the last bit, and
+// certified motions with the same states — including touching and just-separated obstacles.
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "chasles/collision/collision_checker.h"
+#include "test_util.h"
+#include "../../collision/src/broad_phase.h"
+
+namespace chasles {
+namespace {
+
+Eigen::Isometry3d RandomPose(std::mt19937_64& rng, double r_min, double r_max, double z_min, double z_max) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double angle = 2.0 * M_PI * u(rng);
+  const double radius = r_min + (r_max - r_min) * u(rng);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() << radius * std::cos(angle), radius * std::sin(angle), z_min + (z_max - z_min) * u(rng);
+  pose.linear() = Eigen::Quaterniond(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized().toRotationMatrix();
+  return pose;
+}
+
+/// n 5 cm boxes on a ring 1.6–3 m from the Panda's base, out of its reach.
+void AddFarRing(Scene* scene, int n, std::mt19937_64* rng) {
+  for (int i = 0; i < n; ++i) {
+    scene->AddObject({"far" + std::to_string(i), Shape::Box({0.05, 0.05, 0.05}, RandomPose(*rng, 1.6, 3.0, 0.0, 1.5))});
+  }
+}
+
+/// `near` primitives of every kind (sizes 0.01–max_size m) within the Panda's reach and `far`
+/// 5 cm boxes on a ring 1.6–3 m out (as the clutter), plus the table.
+std::shared_ptr<Scene> ClutteredScene(std::uint64_t seed, int near, int far, double max_size = 0.12) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> size(0.01, max_size);
+  auto scene = test::LoadScene("scenes/table.json");
+  for (int i = 0; i < near; ++i) {
+    const Eigen::Isometry3d pose = RandomPose(rng, 0.25, 0.9, 0.0, 1.1);
+    const std::string name = "near" + std::to_string(i);
+    switch (i % 4) {
+      case 0: scene->AddObject({name, Shape::Box({size(rng), size(rng), size(rng)}, pose)}); break;
+      case 1: scene->AddObject({name, Shape::Sphere(0.5 * size(rng), pose)}); break;
+      case 2: scene->AddObject({name, Shape::Cylinder(0.5 * size(rng), size(rng), pose)}); break;
+      default: scene->AddObject({name, Shape::Capsule(0.5 * size(rng), size(rng), pose)}); break;
+    }
+  }
+  AddFarRing(scene.get(), far, &rng);
+  return scene;
+}
+
+struct Pair {
+  std::unique_ptr<CollisionChecker> indexed, scanned;
+};
+
+Pair Checkers(const std::shared_ptr<const RobotModel>& robot, const std::shared_ptr<const Scene>& scene,
+              double padding = 0.0) {
+  CollisionOptions with, without;
+  with.padding = without.padding = padding;
+  without.broad_phase = false;
+  return {std::make_unique<CollisionChecker>(robot, scene, with),
+          std::make_unique<CollisionChecker>(robot, scene, without)};
+}
+
+void ExpectSameStateAnswers(const Pair& c, const Eigen::VectorXd& q, const std::string& where) {
+  const CollisionResult a = c.indexed->Check(q);
+  const CollisionResult b = c.scanned->Check(q);
+  EXPECT_EQ(a.in_collision, b.in_collision) << where;
+  EXPECT_EQ(a.self_collision, b.self_collision) << where;
+  EXPECT_EQ(a.link_a, b.link_a) << where;
+  EXPECT_EQ(a.other, b.other) << where;
+  EXPECT_EQ(c.indexed->IsValid(q), c.scanned->IsValid(q)) << where;
+  // Bit for bit: the same pairs' distances, the least of them.
+  const double da = c.indexed->Clearance(q), db = c.scanned->Clearance(q);
+  EXPECT_TRUE(da == db) << where << ": clearance " << da << " with the broad phase, " << db << " without";
+}
+
+TEST(BroadPhase, SameAnswersOnRandomClutteredScenesAndStates) {
+  auto panda = test::LoadRobot("panda");
+  int collisions = 0, free_states = 0, certified = 0, rejected = 0;
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    // Few large obstacles, or many small ones (then some lie near the edge of any query box).
+    const auto scene = seed % 2 == 1 ? ClutteredScene(seed, 40, 400) : ClutteredScene(seed, 400, 400, 0.04);
+    for (double padding : {0.0, 0.01}) {
+      const Pair c = Checkers(panda, scene, padding);
+      ASSERT_TRUE(c.indexed->certifies_motion());
+      std::mt19937_64 rng(100 + seed);
+      Eigen::VectorXd previous = test::RandomConfig(*panda, rng);
+      for (int i = 0; i < 150; ++i) {
+        const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
+        const std::string where = "seed " + std::to_string(seed) + " padding " + std::to_string(padding) +
+                                  " state " + std::to_string(i);
+        ExpectSameStateAnswers(c, q, where);
+        (c.scanned->IsValid(q) ? free_states : collisions) += 1;
+        // Certified motions between consecutive states: the same verdict from the same states.
+        CheckCounters ca, cb;
+        const bool ma = c.indexed->IsMotionCertified(previous, q, &ca);
+        const bool mb = c.scanned->IsMotionCertified(previous, q, &cb);
+        EXPECT_EQ(ma, mb) << where;
+        EXPECT_EQ(ca.state_checks, cb.state_checks) << where;
+        (mb ? certified : rejected) += 1;
+        previous = q;
+      }
+    }
+  }
+  // The scenes are neither empty nor full around the arm, and both verdicts occur.
+  EXPECT_GT(collisions, 100);
+  EXPECT_GT(free_states, 100);
+  EXPECT_GT(certified, 10);
+  EXPECT_GT(rejected, 100);
+}
+
+TEST(BroadPhase, TouchingAndJustSeparatedObstacles) {
+  // A ball just beyond a link (the hand, or the link farthest from the base: where the robot's
+  // query box ends), grown to exactly the clearance it had (touching) and a hair less or more,
+  // among 300 distant boxes: both checkers must agree on every one.
+  auto panda = test::LoadRobot("panda");
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int touching_collides = 0;
+  std::vector<Eigen::Isometry3d> poses;
+  for (int trial = 0; trial < 60; ++trial) {
+    const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
+    panda->ForwardKinematics(q, &poses);
+    std::size_t outer = 0;
+    for (std::size_t l = 0; l < poses.size(); ++l) {
+      if (poses[l].translation().norm() > poses[outer].translation().norm()) outer = l;
+    }
+    const Eigen::Vector3d tip = poses[outer].translation();
+    const Eigen::Vector3d out = trial % 3 == 0 ? Eigen::Vector3d(0.0, 0.0, 1.0) : Eigen::Vector3d(tip.normalized());
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = tip + (0.15 + 0.1 * u(rng)) * out;
+    const double r0 = 0.02;
+    auto probe = ClutteredScene(50 + trial, 0, 300);
+    probe->AddObject({"ball", Shape::Sphere(r0, pose)});
+    const double d = Checkers(panda, probe).scanned->Clearance(q);
+    if (!(d > 1e-6 && d < 1.0)) continue;  // in contact already, or the table is nearer
+    for (double grow : {d * (1.0 - 1e-12), d, d * (1.0 + 1e-12), d + 1e-9}) {
+      auto scene = ClutteredScene(50 + trial, 0, 300);
+      scene->AddObject({"ball", Shape::Sphere(r0 + grow, pose)});
+      const Pair c = Checkers(panda, scene);
+      ExpectSameStateAnswers(c, q, "trial " + std::to_string(trial) + " grow " + std::to_string(grow));
+      if (grow == d) touching_collides += c.scanned->IsValid(q) ? 0 : 1;
+    }
+  }
+  EXPECT_GT(touching_collides, 10) << "too few trials reached the touching case";
+}
+
+TEST(BroadPhase, FarClutterChangesNoAnswer) {
+  // 2000 boxes out of the arm's reach: every state check and certified motion answers as in the
+  // scene without them (the far boxes may only add advancement states on long motions, whose
+  // swept bound reaches them).
+  auto panda = test::LoadRobot("panda");
+  const auto table = test::LoadScene("scenes/table.json");
+  const auto cluttered = ClutteredScene(9, 0, 2000);
+  const CollisionChecker plain(panda, table);
+  const CollisionChecker indexed(panda, cluttered);
+  std::mt19937_64 rng(11);
+  for (int i = 0; i < 100; ++i) {
+    const Eigen::VectorXd a = test::RandomConfig(*panda, rng);
+    const Eigen::VectorXd b = test::RandomConfig(*panda, rng);
+    EXPECT_EQ(plain.IsValid(a), indexed.IsValid(a)) << i;
+    EXPECT_EQ(plain.Check(a).other, indexed.Check(a).other) << i;
+    EXPECT_EQ(plain.Clearance(a), indexed.Clearance(a)) << i;
+    EXPECT_EQ(plain.IsMotionCertified(a, b), indexed.IsMotionCertified(a, b)) << i;
+  }
+  // Only the far ring: the nearest box is beyond Clearance's first search radius, which must
+  // widen until it finds it.
+  auto ring = std::make_shared<Scene>();
+  std::mt19937_64 ring_rng(12);
+  AddFarRing(ring.get(), 500, &ring_rng);
+  const Pair c = Checkers(panda, ring);
+  for (int i = 0; i < 50; ++i) {
+    const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
+    const double d = c.scanned->Clearance(q);
+    EXPECT_GT(d, 0.3) << i;
+    EXPECT_TRUE(c.indexed->Clearance(q) == d) << i << ": " << c.indexed->Clearance(q) << " vs " << d;
+  }
+}
+
+TEST(SphereBvh, ListsExactlyTheOverlappingBoxesInOrder) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-5.0, 5.0), r(0.0, 0.5);
+  for (std::size_t n : {0u, 1u, 7u, 8u, 9u, 100u, 1000u}) {
+    std::vector<double> x(n), y(n), z(n), rad(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      x[i] = u(rng);
+      y[i] = u(rng);
+      z[i] = u(rng);
+      rad[i] = r(rng);
+    }
+    const detail::SphereBvh bvh(x.data(), y.data(), z.data(), rad.data(), n);
+    EXPECT_EQ(bvh.size(), n);
+    std::vector<std::uint32_t> got;
+    for (int t = 0; t < 200; ++t) {
+      detail::Box3 box;
+      for (int a = 0; a < 3; ++a) {
+        const double c = u(rng), h = 0.1 * std::abs(u(rng));
+        box.lo[a] = c - h;
+        box.hi[a] = c + h;
+      }
+      if (t == 0 && n > 0) {  // a box that only touches sphere 0's box
+        box.lo[0] = x[0] + rad[0];
+        box.hi[0] = box.lo[0] + 1.0;
+        box.lo[1] = y[0] - 0.1;
+        box.hi[1] = y[0] + 0.1;
+        box.lo[2] = z[0] - 0.1;
+        box.hi[2] = z[0] + 0.1;
+      }
+      bvh.Overlapping(box, &got);
+      std::vector<std::uint32_t> want;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (x[i] - rad[i] <= box.hi[0] && box.lo[0] <= x[i] + rad[i] && y[i] - rad[i] <= box.hi[1] &&
+            box.lo[1] <= y[i] + rad[i] && z[i] - rad[i] <= box.hi[2] && box.lo[2] <= z[i] + rad[i]) {
+          want.push_back(static_cast<std::uint32_t>(i));
+        }
+      }
+      EXPECT_EQ(got, want) << "n " << n << " query " << t;
+      if (t == 0 && n > 0) {
+        EXPECT_FALSE(got.empty() || got.front() != 0) << "touching boxes overlap";
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace chasles
