@@ -2,7 +2,7 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|pipeline|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|pipeline|clutter|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
@@ -47,6 +47,7 @@
 #include "chasles/server/convert_multi.h"
 #include "chasles/server/planning_server.h"
 #include "chasles/v1/chasles.grpc.pb.h"
+#include "bench_clutter.h"
 #include "bench_hardening.h"
 #include "bench_pipeline.h"
 
@@ -1064,7 +1065,7 @@ int Main(int argc, char** argv) {
     else if (arg == "--uploads") options.uploads = std::stoi(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|pipeline|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all]\n"
+                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all]\n"
                    "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
@@ -1091,6 +1092,12 @@ int Main(int argc, char** argv) {
     pipeline.budget = options.budget;
     pipeline.anytime_budget = options.anytime_budget;
     BenchPipeline(pipeline, MakeQueries);
+  }
+  if (options.section == "clutter" || options.section == "all") {
+    ClutterBenchOptions clutter;
+    clutter.examples_dir = examples_dir;
+    clutter.repeats = std::max(options.bench_repeats, 5);
+    BenchClutter(clutter);
   }
   if (options.section == "families" || options.section == "all") BenchFamilies(options);
   if (options.section == "grpc" || options.section == "all") BenchGrpc(options);

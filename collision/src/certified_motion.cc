@@ -106,6 +106,7 @@ constexpr int kMaxCertifiedStates = 20000;
 constexpr double kProbeSpacing = 0.25;       // [rad] probe states before advancing, at most this apart
 constexpr int kMaxProbeDepth = 10;           // (at most 1023 of them)
 constexpr double kMinCertifiedStep = 1e-7;   // in s
+constexpr double kChunkReach = 0.2;          // [m] broad phase: sweep bound of one chunk of a curve
 constexpr double kMinGridMargin = 1e-5;      // [m]
 constexpr double kMaxLinkGridMargin = 0.1;   // [m]
 constexpr double kInitialGridMargin = 0.02;  // [m]
@@ -128,7 +129,8 @@ struct AdvancementScratch {
   std::vector<double> self_free;         // per self pair
   std::vector<double> self_sphere_free;  // per self pair and pair of its spheres
   std::vector<Frame> frames;
-  std::vector<std::uint32_t> near;  // broad phase: the prims near the whole motion
+  std::vector<std::uint32_t> near;  // broad phase: the prims near the current chunk
+  std::vector<double> grow;          // broad phase: per sphere link, D_l times the chunk's length
   Eigen::VectorXd q;
   bool in_use = false;
 };
@@ -219,32 +221,43 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
   m.frames.resize(num_links);
   m.q.resize(num_dofs);
   Frame* const frames = m.frames.data();
-  // With the broad phase, only the prims near the whole motion: sphere k stays within D_k of
-  // where it starts, so within its link's bounding sphere grown by D_l; no other prim can come
-  // within any distance that limits a step, let alone touch.
+  // The prims the advancement visits, and their pair caches. Without the broad phase: all of
+  // them, for the whole curve. With it, the curve goes in chunks [s0, s1] over which no sphere
+  // moves more than kChunkReach: a chunk visits the prims near the link bounds at s0 grown by
+  // D_l·(s1 − s0) — any other is farther from sphere k than D_k·(s1 − s) at every s of the chunk,
+  // so it cannot limit a step that ends by s1, and steps are cut at s1.
   std::size_t nprims = prims.size();
   const std::uint32_t* near = nullptr;  // nullptr: every prim, in order
-  if (prim_broad_phase) {
-    curve(0.0, &m.q);
-    if (!m.q.allFinite()) return false;
-    ComputeFk(m.q, frames);
-    PlaceLinkBounds(frames, m.lb.data(), m.placed.data());
-    PrimsNear(m.lb.data(), Dl, 0.0, &m.near);
-    nprims = m.near.size();
-    near = m.near.data();
-  }
+  double chunk_end = 1.0;
+  double max_rate = 0.0;
+  for (std::size_t li = 0; li < nl; ++li) max_rate = std::max(max_rate, Dl[li]);
   const auto prim_at = [&](std::size_t oi) -> const Prim& { return prims[near != nullptr ? near[oi] : oi]; };
-  // -inf: evaluate at the first state; allowed link–primitive pairs are never evaluated.
-  m.prim_free.assign(nprims, -kInf);
-  m.prim_link_free.assign(nprims * nl, -kInf);
-  m.prim_sphere_free.assign(nprims * ns, -kInf);
-  for (std::size_t oi = 0; oi < nprims; ++oi) {
-    if (const UnitSet* allowed = Allowed(prim_at(oi).allowed)) {
-      for (std::size_t li = 0; li < nl; ++li) {
-        if (allowed->Has(li)) m.prim_link_free[oi * nl + li] = kInf;
+  const auto reset_prims = [&] {
+    // -inf: evaluate at the next state; allowed link–primitive pairs are never evaluated.
+    m.prim_free.assign(nprims, -kInf);
+    m.prim_link_free.assign(nprims * nl, -kInf);
+    m.prim_sphere_free.assign(nprims * ns, -kInf);
+    for (std::size_t oi = 0; oi < nprims; ++oi) {
+      if (const UnitSet* allowed = Allowed(prim_at(oi).allowed)) {
+        for (std::size_t li = 0; li < nl; ++li) {
+          if (allowed->Has(li)) m.prim_link_free[oi * nl + li] = kInf;
+        }
       }
     }
-  }
+  };
+  // At state s (frames computed): the chunk from s, its prims gathered.
+  const auto start_chunk = [&](double s) {
+    const double length = max_rate * (1.0 - s) <= kChunkReach ? 1.0 - s : kChunkReach / max_rate;
+    chunk_end = s + length;
+    m.grow.resize(nl);
+    for (std::size_t li = 0; li < nl; ++li) m.grow[li] = Dl[li] * length;
+    PlaceLinkBounds(frames, m.lb.data(), m.placed.data());
+    PrimsNear(m.lb.data(), m.grow.data(), 0.0, &m.near);
+    nprims = m.near.size();
+    near = m.near.data();
+    reset_prims();
+  };
+  if (!prim_broad_phase) reset_prims();
   m.self_free.assign(np, -kInf);
   m.self_sphere_free.assign(self_pair_grid.back(), -kInf);
   double* const w = m.w.data();
@@ -266,9 +279,12 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
     curve(s, &m.q);
     if (!m.q.allFinite()) return false;
     ComputeFk(m.q, frames);
+    // A new chunk when this state ends the last one (or nearly: a last step shorter than twice
+    // the smallest step allowed is not taken).
+    if (prim_broad_phase && (state == 0 || s >= chunk_end - 2.0 * kMinCertifiedStep)) start_chunk(s);
     std::fill(m.placed.begin(), m.placed.end(), 0);
     std::fill(m.bound_placed.begin(), m.bound_placed.end(), 0);
-    double step = 1.0 - s;
+    double step = (prim_broad_phase ? chunk_end : 1.0) - s;
     // Scene primitives: exact clearances; a link whose bounding sphere is clear by more than
     // step·(its fastest sphere's bound) cannot shorten the step.
     for (std::size_t oi = 0; oi < nprims; ++oi) {
@@ -390,7 +406,7 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
         }
       }
     }
-    if (step >= 1.0 - s) return true;  // [s, 1] is clear
+    if (step >= 1.0 - s) return true;  // [s, 1] is clear (the last chunk ends at 1)
     if (!(step >= kMinCertifiedStep)) return false;  // grazing (or NaN): reject conservatively
     s += step;
     if (s >= 1.0) return true;
