@@ -8,6 +8,7 @@
 #include <fcl/geometry/octree/octree.h>
 #include <octomap/OcTree.h>
 
+#include "broad_phase.h"
 #include "chasles/robot/error.h"
 #include "fcl_geometry.h"
 
@@ -55,6 +56,13 @@ struct Obstacle {
 struct ObstacleProximity::Impl {
   std::vector<std::vector<LinkShape>> link_shapes;  // parallel to links_
   std::vector<Obstacle> obstacles;
+  // With more than kBroadPhaseObstacles obstacles, their bounding spheres in a BVH
+  // (broad_phase.h): a link shape then visits only the obstacles whose bound's box overlaps its
+  // own bound grown by max_distance — the others fail the bounding-sphere test anyway, so the
+  // answers are the same.
+  static constexpr std::size_t kBroadPhaseObstacles = 32;
+  bool broad_phase = false;
+  detail::SphereBvh obstacle_bvh;
 
   /// Distance from one placed link shape to one obstacle, if below `bound`: fills d and the
   /// points (link, obstacle) and returns true.
@@ -112,7 +120,8 @@ ObstacleProximity::ObstacleProximity(std::shared_ptr<const CollisionChecker> che
   checker_ = std::move(checker);
 }
 
-ObstacleProximity::ObstacleProximity(std::shared_ptr<const RobotModel> robot, std::shared_ptr<const Scene> scene)
+ObstacleProximity::ObstacleProximity(std::shared_ptr<const RobotModel> robot, std::shared_ptr<const Scene> scene,
+                                     bool broad_phase)
     : robot_(std::move(robot)), scene_(std::move(scene)), impl_(std::make_unique<Impl>()) {
   if (!robot_) ThrowInvalid("obstacle proximity: robot is null");
   if (!scene_) scene_ = std::make_shared<Scene>();
@@ -168,6 +177,17 @@ ObstacleProximity::ObstacleProximity(std::shared_ptr<const RobotModel> robot, st
       ob.allowed_links[link] = 1;
     }
   }
+  if (broad_phase && m.obstacles.size() > Impl::kBroadPhaseObstacles) {
+    std::vector<double> x, y, z, r;
+    for (const Obstacle& o : m.obstacles) {
+      x.push_back(o.center.x());
+      y.push_back(o.center.y());
+      z.push_back(o.center.z());
+      r.push_back(o.radius);
+    }
+    m.obstacle_bvh = detail::SphereBvh(x.data(), y.data(), z.data(), r.data(), m.obstacles.size());
+    m.broad_phase = true;
+  }
 }
 
 ObstacleProximity::~ObstacleProximity() = default;
@@ -183,6 +203,7 @@ void ObstacleProximity::Query(const Eigen::VectorXd& q, double max_distance, std
   std::vector<Eigen::Isometry3d> poses;
   robot_->ForwardKinematics(q, &poses);
   const Impl& m = *impl_;
+  std::vector<std::uint32_t> near_list;
   out->assign(links_.size(), LinkProximity{});
   for (std::size_t i = 0; i < links_.size(); ++i) {
     LinkProximity& best = (*out)[i];
@@ -192,7 +213,20 @@ void ObstacleProximity::Query(const Eigen::VectorXd& q, double max_distance, std
       const Eigen::Isometry3d pose = poses[links_[i]] * s.local;
       const fcl::Transform3d& tf = pose;
       const Eigen::Vector3d c = pose * s.g.center;
-      for (const Obstacle& o : m.obstacles) {
+      std::size_t count = m.obstacles.size();
+      const std::uint32_t* near = nullptr;  // nullptr: every obstacle, in order
+      if (m.broad_phase) {
+        detail::Box3 box;
+        for (int a = 0; a < 3; ++a) {
+          box.lo[a] = c[a] - s.g.radius - max_distance;
+          box.hi[a] = c[a] + s.g.radius + max_distance;
+        }
+        m.obstacle_bvh.Overlapping(box, &near_list);
+        count = near_list.size();
+        near = near_list.data();
+      }
+      for (std::size_t j = 0; j < count; ++j) {
+        const Obstacle& o = m.obstacles[near != nullptr ? near[j] : j];
         if (!o.allowed_links.empty() && o.allowed_links[links_[i]]) continue;
         if ((c - o.center).norm() - s.g.radius - o.radius >= bound) continue;
         double d;

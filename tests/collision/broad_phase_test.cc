@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -13,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "chasles/collision/collision_checker.h"
+#include "chasles/collision/proximity.h"
 #include "test_util.h"
 #include "../../collision/src/broad_phase.h"
 
@@ -236,6 +238,41 @@ TEST(BroadPhase, CertifiedMotionMeetsAnObstacleOnlyItsSweepReaches) {
     ++caught;
   }
   EXPECT_GE(caught, 20);
+}
+
+TEST(BroadPhase, ObstacleProximityGivesTheSameNearestObstacles) {
+  // The potential field's distance queries: per link, the same nearest obstacle, distance and
+  // points with the broad phase as without, for short, medium and unbounded reach.
+  auto panda = test::LoadRobot("panda");
+  int found = 0;
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    const auto scene = ClutteredScene(seed, 60, 500);
+    const ObstacleProximity indexed(panda, scene);
+    const ObstacleProximity scanned(panda, scene, /*broad_phase=*/false);
+    std::mt19937_64 rng(300 + seed);
+    std::vector<LinkProximity> a, b;
+    for (int i = 0; i < 40; ++i) {
+      const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
+      for (double reach : {0.05, 0.3, std::numeric_limits<double>::infinity()}) {
+        indexed.Query(q, reach, &a);
+        scanned.Query(q, reach, &b);
+        ASSERT_EQ(a.size(), b.size());
+        for (std::size_t k = 0; k < a.size(); ++k) {
+          const std::string where = "seed " + std::to_string(seed) + " state " + std::to_string(i) + " reach " +
+                                    std::to_string(reach) + " link " + std::to_string(a[k].link);
+          EXPECT_EQ(a[k].obstacle, b[k].obstacle) << where;
+          EXPECT_TRUE(a[k].distance == b[k].distance || (std::isnan(a[k].distance) && std::isnan(b[k].distance)))
+              << where << ": " << a[k].distance << " vs " << b[k].distance;
+          if (a[k].obstacle >= 0 && a[k].obstacle == b[k].obstacle) {
+            EXPECT_TRUE(a[k].link_point == b[k].link_point) << where;
+            EXPECT_TRUE(a[k].obstacle_point == b[k].obstacle_point) << where;
+            ++found;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(found, 500);
 }
 
 TEST(SphereBvh, ListsExactlyTheOverlappingBoxesInOrder) {

@@ -42,8 +42,12 @@ struct LinkProximity {
 /// (Scene::allowed_collisions) does not see that obstacle.
 class ObstacleProximity {
  public:
+  /// With more than 32 obstacles and broad_phase (the default), their bounding spheres are
+  /// indexed in a bounding-volume hierarchy so a query visits only the obstacles within reach of
+  /// each link shape; the answers are the same either way (false: tests, benchmarks).
   /// \throws Error(kInvalidArgument) when robot is null. A null scene is an empty one.
-  ObstacleProximity(std::shared_ptr<const RobotModel> robot, std::shared_ptr<const Scene> scene);
+  ObstacleProximity(std::shared_ptr<const RobotModel> robot, std::shared_ptr<const Scene> scene,
+                    bool broad_phase = true);
   /// The checker's robot and scene (the checker is kept alive by this object).
   /// \throws Error(kInvalidArgument) when checker is null.
   explicit ObstacleProximity(std::shared_ptr<const CollisionChecker> checker);
@@ -58,7 +62,8 @@ class ObstacleProximity {
 
   /// For configuration q, one entry per link of links() (same order): its nearest obstacle at a
   /// distance < max_distance [m], or an entry with obstacle = -1 (none) beyond it.
-  /// max_distance may be +inf. Thread-safe; allocates only `out`'s storage and FK poses.
+  /// max_distance may be +inf. Thread-safe; allocates only `out`'s storage, FK poses and the
+  /// broad phase's list of nearby obstacles.
   /// \throws Error(kInvalidArgument) when q.size() != num_dofs() or max_distance is nan or <= 0.
   void Query(const Eigen::VectorXd& q, double max_distance, std::vector<LinkProximity>* out) const;
   std::vector<LinkProximity> Query(const Eigen::VectorXd& q,
