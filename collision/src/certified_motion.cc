@@ -11,20 +11,8 @@
 // CollisionChecker::IsMotionCertified / IsCurveCertified.
 
 namespace chasles {
-namespace {
 
 using detail::kInf;
-using detail::CheckSize;
-using detail::SceneGeom;
-using detail::SphereLink;
-using detail::UnitSet;
-using detail::Apply;
-using detail::Frame;
-using detail::Prim;
-using detail::SphereDistance;
-using detail::SphereHits;
-
-}  // namespace
 
 // Lever arms. A revolute joint turns everything below it about an axis through its child
 // frame's origin, so a point x moves at most |x − o| per radian of that joint; |x − o| is
@@ -128,7 +116,7 @@ struct AdvancementScratch {
   std::vector<double> prim_sphere_free;  // per primitive and sphere
   std::vector<double> self_free;         // per self pair
   std::vector<double> self_sphere_free;  // per self pair and pair of its spheres
-  std::vector<Frame> frames;
+  std::vector<detail::Frame> frames;
   std::vector<std::uint32_t> near;  // broad phase: the prims near the current chunk
   std::vector<double> grow;          // broad phase: per sphere link, D_l times the chunk's length
   Eigen::VectorXd q;
@@ -266,7 +254,7 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
   const auto bound = [&](std::size_t li) {
     if (!m.bound_placed[li]) {
       m.bound_placed[li] = 1;
-      Apply(frames[slinks[li].link], slinks[li].bc, &lb[3 * li]);
+      detail::Apply(frames[slinks[li].link], slinks[li].bc, &lb[3 * li]);
     }
     return &lb[3 * li];
   };
@@ -299,7 +287,7 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
           continue;
         }
         const SphereLink& L = slinks[li];
-        const double dl = SphereDistance(o, bound(li), L.br);
+        const double dl = detail::SphereDistance(o, bound(li), L.br);
         if (dl > 0.0 && dl >= step * Dl[li]) {
           link_free[li] = FreeUntil(s, dl, Dl[li]);
           prim_until = std::min(prim_until, link_free[li]);
@@ -309,7 +297,7 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
         double until = kInf;
         for (int k = L.begin; k < L.end; ++k) {
           if (sphere_free[k] < s + step) {
-            const double d = SphereDistance(o, &w[3 * k], sr[k]);
+            const double d = detail::SphereDistance(o, &w[3 * k], sr[k]);
             if (d <= 0.0) return false;
             if (d < step * D[k]) step = d / D[k];
             sphere_free[k] = FreeUntil(s, d, D[k]);
@@ -417,8 +405,8 @@ bool CollisionChecker::certifies_motion() const { return impl_->certifiable; }
 
 bool CollisionChecker::IsMotionCertified(const Eigen::VectorXd& a, const Eigen::VectorXd& b,
                                          CheckCounters* counters) const {
-  CheckSize(*robot_, a, "a");
-  CheckSize(*robot_, b, "b");
+  detail::CheckSize(*robot_, a, "a");
+  detail::CheckSize(*robot_, b, "b");
   if (!impl_->certifiable) return IsMotionValid(a, b, 0.005, counters);
   if (!IsValid(b, counters) || !IsValid(a, counters)) return false;
   // The straight segment as a curve: IsCurveCertified's probes, then the advancement (a and b
@@ -429,7 +417,7 @@ bool CollisionChecker::IsMotionCertified(const Eigen::VectorXd& a, const Eigen::
 
 bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorXd& speed_bound,
                                         CheckCounters* counters) const {
-  CheckSize(*robot_, speed_bound, "speed_bound");
+  detail::CheckSize(*robot_, speed_bound, "speed_bound");
   for (int i = 0; i < speed_bound.size(); ++i) {
     if (!std::isfinite(speed_bound[i]) || speed_bound[i] < 0.0) {
       ThrowInvalid("speed_bound[" + std::to_string(i) + "] = " + FormatNumber(speed_bound[i]) +
@@ -468,8 +456,8 @@ bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorX
 }
 
 std::vector<double> CollisionChecker::SweepBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const {
-  CheckSize(*robot_, a, "a");
-  CheckSize(*robot_, b, "b");
+  detail::CheckSize(*robot_, a, "a");
+  detail::CheckSize(*robot_, b, "b");
   if (!impl_->certifiable) return {};
   std::vector<double> out(impl_->sx.size());
   impl_->SweepBounds((b - a).cwiseAbs(), out.data());
