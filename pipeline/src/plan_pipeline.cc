@@ -242,7 +242,10 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
   }
   out.trajectory = std::move(timed.trajectory);
   out.quality = timed.quality;
+  out.seconds.quality = timed.quality_seconds;
+  const auto t_sample = Clock::now();
   out.samples = SampleTrajectory(out.trajectory, checker.robot(), query.sample_period, query.gravity, query.sample_cap);
+  out.seconds.sample = SecondsSince(t_sample);
   const RobotModel& robot = checker.robot();
   if (query.pose_goal) {
     out.goal_manipulability = Manipulability(SpaceJacobian(robot, out.goal, query.pose_goal->link));

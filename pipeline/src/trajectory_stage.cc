@@ -177,7 +177,9 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
     out.message = "the trajectory failed dense verification: " + out.verification.reason;
     return out;
   }
+  t = Clock::now();
   out.quality = MeasureTrajectory(chosen, limits, path, &checker, std::max(max_joint_step, 0.01));
+  out.quality_seconds = SecondsSince(t);
   out.trajectory = std::move(chosen);
   out.code = TrajectoryStageCode::kSuccess;
   return out;
@@ -285,8 +287,10 @@ OptimizeOutcome OptimizePath(const OptimizeQuery& query, const Termination& term
   out.stage = RunTrajectoryStage(query.path, checker, query.trajectory, std::min(0.005, query.collision_resolution),
                                  termination);
   if (out.stage.code != TrajectoryStageCode::kSuccess) return finish(out.stage.code, out.stage.message);
+  const auto t_sample = Clock::now();
   out.samples =
       SampleTrajectory(out.stage.trajectory, robot, query.sample_period, query.trajectory.gravity, query.sample_cap);
+  out.sample_seconds = SecondsSince(t_sample);
   std::string message = std::string(ToString(out.stage.optimizer.used)) + " trajectory of " +
                         FormatNumber(out.stage.trajectory.duration()) + " s, verified at " +
                         std::to_string(out.stage.verification.states_checked) + " states";

@@ -902,6 +902,8 @@ void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery&
   timings->set_parameterize(stage.parameterize_seconds);
   timings->set_optimize(stage.optimize_seconds);
   timings->set_verify(stage.verify_seconds);
+  timings->set_quality(stage.quality_seconds);
+  timings->set_sample(outcome.sample_seconds);
   timings->set_total(outcome.total_seconds);
   VerificationToProto(stage.verification, std::min(0.005, query.collision_resolution), response->mutable_verification());
   OptimizerToProto(stage.optimizer, response->mutable_optimizer());
@@ -941,6 +943,8 @@ void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::
   timings->set_parameterize(outcome.seconds.parameterize);
   timings->set_verify(outcome.seconds.verify);
   timings->set_optimize(outcome.seconds.optimize);
+  timings->set_quality(outcome.seconds.quality);
+  timings->set_sample(outcome.seconds.sample);
   timings->set_total(outcome.seconds.total);
 
   v1::PlannerStatistics* stats = response->mutable_statistics();

@@ -97,6 +97,14 @@ void ExpectVerifiedTrajectory(const v1::PlanRequest& request, const v1::PlanResp
   EXPECT_EQ(response.scene_id().size(), 32u);
   EXPECT_GT(response.statistics().collision_checks(), 0u);
   EXPECT_GE(response.timings().total(), response.timings().plan());
+  // Every stage of a successful plan is timed, the quality figures and the samples included,
+  // and the named stages add up to no more than the total.
+  const v1::StageTimings& t = response.timings();
+  EXPECT_GT(t.quality(), 0.0);
+  EXPECT_GT(t.sample(), 0.0);
+  EXPECT_LE(t.validate() + t.plan() + t.shortcut() + t.parameterize() + t.optimize() + t.verify() + t.quality() +
+                t.sample(),
+            t.total());
 }
 
 class ExampleRequest : public SharedServerTest<::testing::TestWithParam<std::string>> {};

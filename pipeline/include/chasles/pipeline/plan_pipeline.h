@@ -78,6 +78,8 @@ const char* ToString(PlanOutcomeCode code);
 
 struct StageSeconds {
   double validate = 0, plan = 0, shortcut = 0, parameterize = 0, optimize = 0, verify = 0, total = 0;
+  double quality = 0;  ///< the trajectory's quality figures (MeasureTrajectory: min_clearance bound, deviation)
+  double sample = 0;   ///< samples at sample_period, with torques
 };
 
 struct PlanOutcome {

@@ -81,6 +81,7 @@ struct TrajectoryStageResult {
   double parameterize_seconds = 0.0;  ///< the exact parameterisation
   double optimize_seconds = 0.0;      ///< collocation / spline
   double verify_seconds = 0.0;
+  double quality_seconds = 0.0;       ///< MeasureTrajectory: the quality figures (min_clearance bound)
 };
 
 /// Runs the stage on `path` (start … goal, collision-free segments expected): the exact
@@ -135,6 +136,7 @@ struct OptimizeOutcome {
   std::string message;
   TrajectoryStageResult stage;
   std::vector<TrajectorySample> samples;  ///< at sample_period (efforts when computed)
+  double sample_seconds = 0.0;            ///< SampleTrajectory (with torques)
   double total_seconds = 0.0;
 };
 
