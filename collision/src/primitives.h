@@ -43,6 +43,16 @@ inline void ToLocal(const Prim& o, const double* x, double* l) {
   l[2] = o.rt[6] * d0 + o.rt[7] * d1 + o.rt[8] * d2;
 }
 
+/// Box o: the squared distance from world point x to the box (0 inside).
+inline double BoxExcessSquared(const Prim& o, const double* x) {
+  double l[3];
+  ToLocal(o, x, l);
+  const double e0 = std::max(std::abs(l[0]) - o.a, 0.0);
+  const double e1 = std::max(std::abs(l[1]) - o.b, 0.0);
+  const double e2 = std::max(std::abs(l[2]) - o.c, 0.0);
+  return e0 * e0 + e1 * e1 + e2 * e2;
+}
+
 /// True when a sphere (world centre x, radius r) touches or overlaps primitive o.
 inline bool SphereHits(const Prim& o, const double* x, double r) {
   switch (o.kind) {
@@ -51,14 +61,8 @@ inline bool SphereHits(const Prim& o, const double* x, double r) {
       const double rr = r + o.a;
       return d0 * d0 + d1 * d1 + d2 * d2 <= rr * rr;
     }
-    case kPrimBox: {
-      double l[3];
-      ToLocal(o, x, l);
-      const double e0 = std::max(std::abs(l[0]) - o.a, 0.0);
-      const double e1 = std::max(std::abs(l[1]) - o.b, 0.0);
-      const double e2 = std::max(std::abs(l[2]) - o.c, 0.0);
-      return e0 * e0 + e1 * e1 + e2 * e2 <= r * r;
-    }
+    case kPrimBox:
+      return BoxExcessSquared(o, x) <= r * r;
     case kPrimCylinder: {
       double l[3];
       ToLocal(o, x, l);
@@ -86,14 +90,8 @@ inline double SphereDistance(const Prim& o, const double* x, double r) {
       const double d0 = x[0] - o.p[0], d1 = x[1] - o.p[1], d2 = x[2] - o.p[2];
       return std::sqrt(d0 * d0 + d1 * d1 + d2 * d2) - r - o.a;
     }
-    case kPrimBox: {
-      double l[3];
-      ToLocal(o, x, l);
-      const double e0 = std::max(std::abs(l[0]) - o.a, 0.0);
-      const double e1 = std::max(std::abs(l[1]) - o.b, 0.0);
-      const double e2 = std::max(std::abs(l[2]) - o.c, 0.0);
-      return std::sqrt(e0 * e0 + e1 * e1 + e2 * e2) - r;
-    }
+    case kPrimBox:
+      return std::sqrt(BoxExcessSquared(o, x)) - r;
     case kPrimCylinder: {
       double l[3];
       ToLocal(o, x, l);

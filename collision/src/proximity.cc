@@ -203,7 +203,7 @@ void ObstacleProximity::Query(const Eigen::VectorXd& q, double max_distance, std
   std::vector<Eigen::Isometry3d> poses;
   robot_->ForwardKinematics(q, &poses);
   const Impl& m = *impl_;
-  std::vector<std::uint32_t> near_list;
+  thread_local std::vector<std::uint32_t> near_list;  // reused: queries run in the field's loop
   out->assign(links_.size(), LinkProximity{});
   for (std::size_t i = 0; i < links_.size(); ++i) {
     LinkProximity& best = (*out)[i];

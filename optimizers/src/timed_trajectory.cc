@@ -56,18 +56,18 @@ void Roots(const std::vector<double>& p, double lo, double hi, std::vector<doubl
 
 }  // namespace
 
-double Eval(const double* c, int size, double x) {
+double Eval(const double* c, int size, double x, int stride) {
   double value = 0.0;
-  for (int i = size - 1; i >= 0; --i) value = value * x + c[i];
+  for (int i = size - 1; i >= 0; --i) value = value * x + c[i * stride];
   return value;
 }
 
-double EvalDerivative(const double* c, int size, int k, double x) {
+double EvalDerivative(const double* c, int size, int k, double x, int stride) {
   double value = 0.0;
   for (int i = size - 1; i >= k; --i) {
     double factor = 1.0;
     for (int j = 0; j < k; ++j) factor *= static_cast<double>(i - j);
-    value = value * x + factor * c[i];
+    value = value * x + factor * c[i * stride];
   }
   return value;
 }
@@ -151,8 +151,8 @@ int TimedTrajectory::degree() const {
 }
 
 double TimedTrajectory::Piece::Derivative(int joint, int order, double tau) const {
-  const Eigen::VectorXd c = coefficients.row(joint).transpose();
-  return poly::EvalDerivative(c.data(), static_cast<int>(c.size()), order, tau);
+  return poly::EvalDerivative(coefficients.data() + joint, static_cast<int>(coefficients.cols()), order, tau,
+                              static_cast<int>(coefficients.rows()));
 }
 
 TrajectorySample TimedTrajectory::Piece::State(double tau) const {
@@ -164,22 +164,15 @@ TrajectorySample TimedTrajectory::Piece::State(double tau) const {
   out.qd.resize(n);
   out.qdd.resize(n);
   out.jerk.resize(n);
-  // Horner's rule on each row in place (the rows are strided in the column-major matrix); the
-  // same operations in the same order as poly::Eval / poly::EvalDerivative.
+  // Each row in place: in the column-major matrix its coefficients are n apart.
   const double* const c = coefficients.data();
+  const int stride = static_cast<int>(n);
   for (Eigen::Index i = 0; i < n; ++i) {
-    double value = 0.0, d1 = 0.0, d2 = 0.0, d3 = 0.0;
-    for (int k = size - 1; k >= 0; --k) {
-      const double ck = c[i + k * n];
-      value = value * tau + ck;
-      if (k >= 1) d1 = d1 * tau + static_cast<double>(k) * ck;
-      if (k >= 2) d2 = d2 * tau + static_cast<double>(k) * static_cast<double>(k - 1) * ck;
-      if (k >= 3) d3 = d3 * tau + static_cast<double>(k) * static_cast<double>(k - 1) * static_cast<double>(k - 2) * ck;
-    }
-    out.q[i] = tau == 0.0 ? c[i] : value;
-    out.qd[i] = d1;
-    out.qdd[i] = d2;
-    out.jerk[i] = d3;
+    const double* row = c + i;
+    out.q[i] = tau == 0.0 ? row[0] : poly::Eval(row, size, tau, stride);
+    out.qd[i] = poly::EvalDerivative(row, size, 1, tau, stride);
+    out.qdd[i] = poly::EvalDerivative(row, size, 2, tau, stride);
+    out.jerk[i] = poly::EvalDerivative(row, size, 3, tau, stride);
   }
   return out;
 }

@@ -62,8 +62,8 @@ class ObstacleProximity {
 
   /// For configuration q, one entry per link of links() (same order): its nearest obstacle at a
   /// distance < max_distance [m], or an entry with obstacle = -1 (none) beyond it.
-  /// max_distance may be +inf. Thread-safe; allocates only `out`'s storage, FK poses and the
-  /// broad phase's list of nearby obstacles.
+  /// max_distance may be +inf. Thread-safe; allocates only `out`'s storage and FK poses (the
+  /// broad phase's list of nearby obstacles is reused per thread).
   /// \throws Error(kInvalidArgument) when q.size() != num_dofs() or max_distance is nan or <= 0.
   void Query(const Eigen::VectorXd& q, double max_distance, std::vector<LinkProximity>* out) const;
   std::vector<LinkProximity> Query(const Eigen::VectorXd& q,

@@ -112,10 +112,11 @@ TimedTrajectory::Piece LinePiece(double t0, double duration, const Eigen::Vector
 
 /// Polynomial helpers on coefficient vectors, lowest power first.
 namespace poly {
-/// p(x) by Horner's rule.
-double Eval(const double* c, int size, double x);
-/// The k-th derivative's value at x.
-double EvalDerivative(const double* c, int size, int k, double x);
+/// p(x) by Horner's rule; coefficient i is c[i·stride] (stride > 1: a row of a column-major
+/// matrix, read in place).
+double Eval(const double* c, int size, double x, int stride = 1);
+/// The k-th derivative's value at x (coefficients as for Eval).
+double EvalDerivative(const double* c, int size, int k, double x, int stride = 1);
 /// max |p^(k)(x)| over x ∈ [0, length], exact up to the root finder (bisection to ~1e-15
 /// relative): the extremes are at the interval's ends or at real roots of p^(k+1).
 /// `where` (optional) receives an x at which the maximum is attained.
