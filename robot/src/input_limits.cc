@@ -26,6 +26,7 @@ void InputLimits::Validate() const {
   RequirePositive(max_mesh_files, "max_mesh_files");
   RequirePositive(max_octomap_nodes, "max_octomap_nodes");
   RequirePositive(max_cloud_points, "max_cloud_points");
+  RequirePositive(max_scene_objects, "max_scene_objects");
 }
 
 }  // namespace chasles

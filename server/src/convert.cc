@@ -481,6 +481,21 @@ PointCloudInsertion PointCloudInsertionFromProto(const v1::UpdateSceneRequest& r
 }
 
 std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::string& field, const InputLimits& limits) {
+  // Counted before anything is built: every object costs a record in the scene, the checker
+  // and the broad phase.
+  const std::size_t objects = static_cast<std::size_t>(proto.boxes_size()) + proto.spheres_size() +
+                              proto.cylinders_size() + proto.capsules_size() + proto.meshes_size() +
+                              proto.octomaps_size();
+  if (objects > limits.max_scene_objects) {
+    ThrowResourceExhausted(field + " holds " + std::to_string(objects) + " objects (" +
+                           std::to_string(proto.boxes_size()) + " boxes, " + std::to_string(proto.spheres_size()) +
+                           " spheres, " + std::to_string(proto.cylinders_size()) + " cylinders, " +
+                           std::to_string(proto.capsules_size()) + " capsules, " +
+                           std::to_string(proto.meshes_size()) + " meshes, " + std::to_string(proto.octomaps_size()) +
+                           " octomaps), more than the cap of " + std::to_string(limits.max_scene_objects) +
+                           " (InputLimits::max_scene_objects, --max-scene-objects); merge objects into meshes or "
+                           "an OctoMap, or raise the server's cap");
+  }
   auto scene = std::make_shared<Scene>();
   ForEachPrimitive(proto, field,
                    [&scene](Shape shape, const std::string& f, const std::string& name, const char* kind, int i) {

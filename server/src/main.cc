@@ -52,6 +52,9 @@ void AddFlags(CLI::App& app, chasles::ServerOptions& o, std::size_t& document_mb
       ->capture_default_str()->group(caps);
   app.add_option("--max-cloud-points", o.limits.max_cloud_points, "points of one UpdateScene point cloud")
       ->capture_default_str()->group(caps);
+  app.add_option("--max-scene-objects", o.limits.max_scene_objects,
+                 "objects of one scene: primitives, meshes and OctoMaps together")
+      ->capture_default_str()->group(caps);
 
   auto* fair = "Fairness (per-client queues served round-robin)";
   app.add_option("--max-budget", o.max_budget, "largest time budget a call may ask for [s], in (0, 600]")

@@ -1,12 +1,14 @@
 // A server that hostile or careless clients cannot crash, starve or fill: caps checked before
 // the work, per-request memory, malformed messages, budgets, fair queueing, log escaping.
 #include <atomic>
+#include <cmath>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
 #include <fstream>
 #include <future>
 #include <mutex>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -339,6 +341,45 @@ std::string BinaryStl(int triangles) {
     bytes.append(2, '\0');
   }
   return bytes;
+}
+
+TEST(SceneCap, ASceneBeyondItIsRefusedByNameAndAScatteredOneUnderItPlans) {
+  ServerOptions options = LoopbackServer::QuietOptions(2);
+  options.limits.max_scene_objects = 20000;
+  options.request_memory_mb = 256;
+  LoopbackServer server(options);
+  // 20,000 5 cm boxes in a ring 1.6–3 m from the arm: within both caps, so it plans.
+  v1::PlanRequest request = LoadRequest("panda_table");
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int i = request.scene().boxes_size(); i < 20000; ++i) {
+    v1::Box* box = request.mutable_scene()->add_boxes();
+    const double r = 1.6 + 1.4 * unit(rng), a = 6.283185307179586 * unit(rng);
+    box->mutable_pose()->mutable_position()->set_x(r * std::cos(a));
+    box->mutable_pose()->mutable_position()->set_y(r * std::sin(a));
+    box->mutable_pose()->mutable_position()->set_z(2.0 * unit(rng));
+    box->mutable_pose()->mutable_orientation()->set_w(1.0);
+    box->mutable_size()->set_x(0.05);
+    box->mutable_size()->set_y(0.05);
+    box->mutable_size()->set_z(0.05);
+  }
+  v1::PlanResponse response;
+  grpc::Status status = server.Plan(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  // One more object: refused before anything is built, naming the count and the cap.
+  request.mutable_scene()->add_spheres()->set_radius(0.05);
+  status = server.Plan(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << status.error_message();
+  EXPECT_NE(status.error_message().find("scene holds 20001 objects (20000 boxes, 1 spheres,"), std::string::npos)
+      << status.error_message();
+  EXPECT_NE(status.error_message().find("more than the cap of 20000 (InputLimits::max_scene_objects, "
+                                        "--max-scene-objects)"),
+            std::string::npos)
+      << status.error_message();
+  const grpc::Status after = server.Plan(LoadRequest("panda_table"), &response);
+  ASSERT_TRUE(after.ok()) << after.error_message();
+  EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
 }
 
 TEST(MemoryCap, ARequestBeyondItIsAbandonedAndTheServerServesOn) {

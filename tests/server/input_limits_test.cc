@@ -37,6 +37,28 @@ TEST(ConvertInputLimits, MeshFilesAreCountedBeforeAnyIsParsed) {
                   "merge meshes or raise the server's cap");
 }
 
+TEST(ConvertInputLimits, SceneObjectsAreCountedBeforeAnyIsBuilt) {
+  InputLimits limits;
+  limits.max_scene_objects = 4;
+  v1::Scene scene;
+  for (int i = 0; i < 2; ++i) scene.add_boxes();  // zero-sized: never converted
+  scene.add_spheres();
+  scene.add_cylinders();
+  scene.add_meshes()->set_data("v 0 0 0\n");  // never parsed
+  ExpectExhausted([&] { SceneFromProto(scene, "scene", limits); },
+                  "scene holds 5 objects (2 boxes, 1 spheres, 1 cylinders, 0 capsules, 1 meshes, 0 octomaps), more "
+                  "than the cap of 4 (InputLimits::max_scene_objects, --max-scene-objects); merge objects into "
+                  "meshes or an OctoMap, or raise the server's cap");
+  // At the cap, the scene is read (and its first bad field reported, as without a cap).
+  scene.mutable_meshes()->Clear();
+  try {
+    SceneFromProto(scene, "scene", limits);
+    ADD_FAILURE() << "a zero-sized box was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << e.what();
+  }
+}
+
 TEST(ConvertInputLimits, LimitsReachTheUrdfParser) {
   InputLimits limits;
   limits.max_xml_depth = 2;

@@ -36,6 +36,10 @@ struct InputLimits {
   std::size_t max_octomap_nodes = 10'000'000;
   /// [points] of one point-cloud insertion (one ray each). Default 2,000,000.
   std::size_t max_cloud_points = 2'000'000;
+  /// [objects] of one scene: primitives, meshes and OctoMaps together. A primitive costs about
+  /// 0.5 KB once checked (scene record, checker record, broad-phase node); 1,000,000 of them
+  /// arrive in a ~100 MB message. Default 1,000,000.
+  std::size_t max_scene_objects = 1'000'000;
 
   /// \throws Error(kInvalidArgument) naming the first field that is not > 0, e.g.
   ///         `input_limits.max_xml_depth = 0 must be > 0`.
