@@ -13,6 +13,9 @@ struct ClutterBenchOptions {
   std::string examples_dir;  ///< holds requests/panda_table.json and scenes/table.json
   std::vector<int> distant = {0, 100, 1000, 10000, 100000};  ///< extra boxes out of reach
   std::vector<int> near = {0, 10, 30, 100, 300};  ///< extra 2 cm boxes in the arm's workspace
+  /// distant 5 cm cubes as meshes (FCL geometry: FCL's broad phase); at most the server's
+  /// max_mesh_files per scene
+  std::vector<int> distant_meshes = {1, 100, 1000};
   int repeats = 5;  ///< Plan calls per scene; medians
 };
 

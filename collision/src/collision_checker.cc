@@ -46,6 +46,10 @@
 //   chunk's end, and steps are cut there); Clearance searches within 0.25 m of the link
 //   bounds, then 2× wider until the best distance is inside the searched radius. Same answers
 //   as scanning all (certified motions: the same verdicts, a few more states at chunk ends).
+//   Objects FCL handles (meshes and ungridded maps on the fast path, every object on the FCL
+//   path) go into FCL's own broad phase, a DynamicAABBTreeCollisionManager over their world
+//   AABBs, when there are more than 32: a check lists those whose AABB overlaps the robot's box
+//   (sorted, so the same first contact) and Clearance widens that box as it does for primitives.
 // * Fast-path order: primitives, occupancy maps (scene order), self, meshes. The FCL path checks
 //   scene objects, then maps, then self, so for a scene of maps only both paths report the same
 //   first contact.
@@ -219,9 +223,14 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
     }
     return false;
   };
+  // Meshes and maps near the robot (FCL's broad phase when there are many), in scene order.
+  thread_local std::vector<std::uint32_t> geoms_near;
+  geoms_near.clear();
+  if (!scene_geoms.empty()) GeomsNear(LinkBoundsBox(&lb[0], nullptr, 0.0), &geoms_near);
   // Occupancy maps, in scene order: link bounding sphere against the map's bound, then against
   // the voxel grid, then every sphere of the link.
-  for (const SceneGeom& g : scene_geoms) {
+  for (const std::uint32_t gi : geoms_near) {
+    const SceneGeom& g = scene_geoms[gi];
     if (!g.octree) continue;
     if (g.grid < 0) {
       if (fcl_geom_hit(g)) return true;
@@ -282,8 +291,8 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
     }
   }
   // Meshes through FCL.
-  for (const SceneGeom& g : scene_geoms) {
-    if (!g.octree && fcl_geom_hit(g)) return true;
+  for (const std::uint32_t gi : geoms_near) {
+    if (!scene_geoms[gi].octree && fcl_geom_hit(scene_geoms[gi])) return true;
   }
   return false;
 }
@@ -353,7 +362,7 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
   if (!scene_geoms.empty()) {
     for (std::size_t li = 0; li < nl; ++li) PlaceLinkSpheres(frames, li, &w[0], &placed[0]);
     fcl::DistanceRequestd request;
-    for (const SceneGeom& g : scene_geoms) {
+    const auto geom_clearance = [&](const SceneGeom& g) {
       const UnitSet* allowed = Allowed(g.allowed);
       for (std::size_t k = 0; k < ns; ++k) {
         if (allowed != nullptr && allowed->Has(slink_of[k])) continue;
@@ -366,7 +375,10 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
         const double d = fcl::distance(fcl_spheres[k].get(), tf, g.g.geom.get(), g.tf, request, result);
         best = std::min(best, d);
       }
-    }
+    };
+    thread_local std::vector<std::uint32_t> geoms_near;
+    SearchGeomsNear([&](double radius) { return LinkBoundsBox(&lb[0], nullptr, radius); }, &best, &geoms_near,
+                    geom_clearance);
   }
   return best <= 0.0 ? 0.0 : best;
 }
@@ -400,7 +412,10 @@ bool CollisionChecker::Impl::FclCollide(const Frame* frames, CollisionResult* re
     }
     return true;
   };
-  for (const SceneGeom& g : scene_geoms) {
+  thread_local std::vector<std::uint32_t> geoms_near;
+  GeomsNear(ShapesBox(center.data(), 0.0), &geoms_near);
+  for (const std::uint32_t gi : geoms_near) {
+    const SceneGeom& g = scene_geoms[gi];
     const UnitSet* allowed = Allowed(g.allowed);
     for (std::size_t i = 0; i < n; ++i) {
       if (allowed != nullptr && allowed->Has(shapes[i].link)) continue;
@@ -425,19 +440,28 @@ bool CollisionChecker::Impl::FclCollide(const Frame* frames, CollisionResult* re
 }
 
 double CollisionChecker::Impl::FclClearance(const Frame* frames) const {
+  const std::size_t n = shapes.size();
+  Scratch<fcl::Transform3d, 128> tf(n);
+  Scratch<Eigen::Vector3d, 128> center(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    tf[i] = ToIsometry(frames[shapes[i].link]) * shapes[i].local;
+    center[i] = tf[i] * shapes[i].g.center;
+  }
   double best = kInf;
   fcl::DistanceRequestd request;
-  for (const RobotShape& s : shapes) {
-    const fcl::Transform3d tf = ToIsometry(frames[s.link]) * s.local;
-    const Eigen::Vector3d c = tf * s.g.center;
-    for (const SceneGeom& g : scene_geoms) {
+  const auto geom_clearance = [&](const SceneGeom& g) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const RobotShape& s = shapes[i];
       if (g.allowed >= 0 && allowed_sets[g.allowed].Has(s.link)) continue;
-      if ((c - g.center).norm() - s.g.radius - g.radius - options.padding >= best) continue;
+      if ((center[i] - g.center).norm() - s.g.radius - g.radius - options.padding >= best) continue;
       fcl::DistanceResultd result;
-      const double d = fcl::distance(s.g.geom.get(), tf, g.g.geom.get(), g.tf, request, result);
+      const double d = fcl::distance(s.g.geom.get(), tf[i], g.g.geom.get(), g.tf, request, result);
       best = std::min(best, d - options.padding);
     }
-  }
+  };
+  thread_local std::vector<std::uint32_t> geoms_near;
+  SearchGeomsNear([&](double radius) { return ShapesBox(center.data(), radius); }, &best, &geoms_near,
+                  geom_clearance);
   return best <= 0.0 ? 0.0 : best;
 }
 
@@ -663,10 +687,68 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
     m.scene_geoms.push_back(std::move(g));
   }
 
+  if (m.options.broad_phase && m.scene_geoms.size() > Impl::kBroadPhasePrims) m.BuildGeomBroadPhase();
+
   if (m.fast) {
     m.certifiable = true;
     for (const SceneGeom& g : m.scene_geoms) m.certifiable = m.certifiable && g.octree && g.grid >= 0;
   }
+}
+
+void CollisionChecker::Impl::BuildGeomBroadPhase() {
+  geom_broad_phase = true;
+  if (fast) {
+    std::vector<double> x, y, z, r;
+    for (const SceneGeom& g : scene_geoms) {
+      x.push_back(g.center.x());
+      y.push_back(g.center.y());
+      z.push_back(g.center.z());
+      r.push_back(g.radius);
+    }
+    geom_bvh = detail::SphereBvh(x.data(), y.data(), z.data(), r.data(), scene_geoms.size());
+    return;
+  }
+  std::vector<fcl::CollisionObjectd*> objects;
+  for (std::size_t i = 0; i < scene_geoms.size(); ++i) {
+    const SceneGeom& g = scene_geoms[i];
+    geom_objects.push_back(std::make_unique<fcl::CollisionObjectd>(g.g.geom, g.tf));  // computes its AABB
+    geom_objects.back()->setUserData(reinterpret_cast<void*>(static_cast<std::uintptr_t>(i + 1)));
+    objects.push_back(geom_objects.back().get());
+  }
+  geom_manager = std::make_unique<fcl::DynamicAABBTreeCollisionManagerd>();
+  geom_manager->registerObjects(objects);
+  geom_manager->setup();
+}
+
+void CollisionChecker::Impl::GeomsNear(const detail::Box3& box, std::vector<std::uint32_t>* out) const {
+  out->clear();
+  if (!geom_broad_phase) {
+    for (std::size_t i = 0; i < scene_geoms.size(); ++i) out->push_back(static_cast<std::uint32_t>(i));
+    return;
+  }
+  if (!(box.lo[0] <= box.hi[0] && box.lo[1] <= box.hi[1] && box.lo[2] <= box.hi[2])) return;  // no robot shape
+  if (geom_manager == nullptr) {
+    geom_bvh.Overlapping(box, out);
+    return;
+  }
+  // The query is an axis-aligned box object: FCL's tree reports the leaves whose AABB overlaps
+  // the query's, with the leaf first. One box per thread, resized per query.
+  thread_local const std::shared_ptr<fcl::Boxd> shape = std::make_shared<fcl::Boxd>(1.0, 1.0, 1.0);
+  thread_local fcl::CollisionObjectd query(shape);
+  shape->side = fcl::Vector3d(box.hi[0] - box.lo[0], box.hi[1] - box.lo[1], box.hi[2] - box.lo[2]);
+  shape->computeLocalAABB();
+  query.setTransform(fcl::Matrix3d::Identity(), fcl::Vector3d(0.5 * (box.lo[0] + box.hi[0]),
+                                                              0.5 * (box.lo[1] + box.hi[1]),
+                                                              0.5 * (box.lo[2] + box.hi[2])));
+  query.computeAABB();
+  const fcl::CollisionCallBack<double> collect = [](fcl::CollisionObjectd* leaf, fcl::CollisionObjectd*,
+                                                    void* data) {
+    static_cast<std::vector<std::uint32_t>*>(data)->push_back(
+        static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(leaf->getUserData()) - 1));
+    return false;  // all of them
+  };
+  geom_manager->collide(&query, out, collect);
+  std::sort(out->begin(), out->end());
 }
 
 CollisionChecker::~CollisionChecker() = default;

@@ -275,6 +275,113 @@ TEST(BroadPhase, ObstacleProximityGivesTheSameNearestObstacles) {
   EXPECT_GT(found, 500);
 }
 
+/// A cube of half side h as a triangle mesh at `pose`.
+SceneObject MeshCube(const std::string& name, double h, const Eigen::Isometry3d& pose) {
+  auto mesh = std::make_shared<TriangleMesh>();
+  for (int i = 0; i < 8; ++i) mesh->vertices.emplace_back(i & 1 ? h : -h, i & 2 ? h : -h, i & 4 ? h : -h);
+  const int faces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                            {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& f : faces) mesh->triangles.emplace_back(f[0], f[1], f[2]);
+  Shape shape;
+  shape.type = ShapeType::kMesh;
+  shape.mesh = mesh;
+  shape.pose = pose;
+  return {name, shape};
+}
+
+TEST(BroadPhase, FclBroadPhaseGivesTheSameAnswersForMeshesAndOnTheFclPath) {
+  // Objects FCL handles: meshes on the fast path, and every object on the FCL path (force_fcl).
+  // With more than 32 of them FCL's dynamic AABB tree lists those near the robot; the answers
+  // (first contact, validity, Clearance to the last bit) must be those of visiting them all.
+  auto panda = test::LoadRobot("panda");
+  int collisions = 0, free_states = 0;
+  for (std::uint64_t seed = 1; seed <= 2; ++seed) {
+    std::mt19937_64 rng(400 + seed);
+    std::uniform_real_distribution<double> half(0.01, 0.06);
+    auto scene = ClutteredScene(seed, 12, 150);  // primitives: geoms on the FCL path
+    for (int i = 0; i < 30; ++i) scene->AddObject(MeshCube("mesh" + std::to_string(i), half(rng),
+                                                           RandomPose(rng, 0.25, 0.9, 0.0, 1.1)));
+    for (int i = 0; i < 60; ++i) scene->AddObject(MeshCube("farmesh" + std::to_string(i), 0.03,
+                                                           RandomPose(rng, 1.6, 3.0, 0.0, 1.5)));
+    for (const bool force_fcl : {false, true}) {
+      for (const double padding : {0.0, 0.01}) {
+        CollisionOptions with, without;
+        with.padding = without.padding = padding;
+        with.force_fcl = without.force_fcl = force_fcl;
+        without.broad_phase = false;
+        const Pair c{std::make_unique<CollisionChecker>(panda, scene, with),
+                     std::make_unique<CollisionChecker>(panda, scene, without)};
+        ASSERT_EQ(c.indexed->uses_fast_path(), !force_fcl);
+        std::mt19937_64 qrng(500 + seed);
+        for (int i = 0; i < (force_fcl ? 40 : 80); ++i) {
+          const Eigen::VectorXd q = test::RandomConfig(*panda, qrng);
+          ExpectSameStateAnswers(c, q, "seed " + std::to_string(seed) + (force_fcl ? " fcl" : " fast") +
+                                           " padding " + std::to_string(padding) + " state " + std::to_string(i));
+          (c.scanned->IsValid(q) ? free_states : collisions) += 1;
+        }
+      }
+    }
+    // Only the far meshes: Clearance must widen its search until it meets the nearest one.
+    auto ring = std::make_shared<Scene>();
+    for (int i = 0; i < 60; ++i) ring->AddObject(MeshCube("far" + std::to_string(i), 0.03,
+                                                          RandomPose(rng, 1.6, 3.0, 0.0, 1.5)));
+    const Pair r = Checkers(panda, ring);
+    for (int i = 0; i < 20; ++i) {
+      const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
+      const double d = r.scanned->Clearance(q);
+      EXPECT_GT(d, 0.3) << i;
+      EXPECT_TRUE(r.indexed->Clearance(q) == d) << i << ": " << r.indexed->Clearance(q) << " vs " << d;
+    }
+  }
+  EXPECT_GT(collisions, 50);
+  EXPECT_GT(free_states, 50);
+}
+
+TEST(BroadPhase, FclObjectsJustWithinAndBeyondThePadding) {
+  // A mesh cube just beyond the link farthest from the base (where the robot's query box ends),
+  // among 60 far mesh cubes, with the padding set to exactly its clearance (touching) and a hair
+  // less or more: with and without FCL's broad phase, fast path and FCL path, the same answers.
+  auto panda = test::LoadRobot("panda");
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Eigen::Isometry3d> poses;
+  int touching_collides = 0;
+  for (int trial = 0; trial < 30; ++trial) {
+    const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
+    panda->ForwardKinematics(q, &poses);
+    std::size_t outer = 0;
+    for (std::size_t l = 0; l < poses.size(); ++l) {
+      if (poses[l].translation().norm() > poses[outer].translation().norm()) outer = l;
+    }
+    const Eigen::Vector3d tip = poses[outer].translation();
+    const Eigen::Vector3d out = trial % 3 == 0 ? Eigen::Vector3d(0.0, 0.0, 1.0) : Eigen::Vector3d(tip.normalized());
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = tip + (0.1 + 0.1 * u(rng)) * out;
+    auto scene = std::make_shared<Scene>();
+    std::mt19937_64 far_rng(900 + trial);
+    for (int i = 0; i < 60; ++i) scene->AddObject(MeshCube("far" + std::to_string(i), 0.03,
+                                                           RandomPose(far_rng, 1.6, 3.0, 0.0, 1.5)));
+    scene->AddObject(MeshCube("cube", 0.02, pose));
+    for (const bool force_fcl : {false, true}) {
+      CollisionOptions plain;
+      plain.force_fcl = force_fcl;
+      const double d = CollisionChecker(panda, scene, plain).Clearance(q);
+      if (!(d > 1e-4 && d < 0.5)) continue;  // in contact already
+      for (const double padding : {d * (1.0 - 1e-9), d, d * (1.0 + 1e-9)}) {
+        CollisionOptions with = plain, without = plain;
+        with.padding = without.padding = padding;
+        without.broad_phase = false;
+        const Pair c{std::make_unique<CollisionChecker>(panda, scene, with),
+                     std::make_unique<CollisionChecker>(panda, scene, without)};
+        ExpectSameStateAnswers(c, q, "trial " + std::to_string(trial) + (force_fcl ? " fcl" : " fast") +
+                                         " padding " + std::to_string(padding));
+        if (padding > d) touching_collides += c.scanned->IsValid(q) ? 0 : 1;
+      }
+    }
+  }
+  EXPECT_GT(touching_collides, 20) << "too few trials reached the touching case";
+}
+
 TEST(SphereBvh, ListsExactlyTheOverlappingBoxesInOrder) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-5.0, 5.0), r(0.0, 0.5);

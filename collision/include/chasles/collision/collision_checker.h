@@ -30,7 +30,9 @@ struct CollisionOptions {
   /// bounding-volume hierarchy built with the checker, so state checks, certified motions and
   /// Clearance visit only the primitives near the robot (or near the motion, in chunks of at
   /// most 0.2 m of sweep). The answers are the same either way (a certified motion may take a
-  /// few more states, cut at chunk ends); false scans every primitive (tests, benchmarks).
+  /// few more states, cut at chunk ends). Likewise, with more than 32 objects that FCL handles
+  /// (meshes, ungridded maps; every object on the FCL path), FCL's DynamicAABBTreeCollisionManager
+  /// over their AABBs lists the ones near the robot. false scans every object (tests, benchmarks).
   bool broad_phase = true;
   /// \throws Error(kInvalidArgument) naming the field.
   void Validate() const;
