@@ -250,7 +250,7 @@ void BenchClutter(const ClutterBenchOptions& options) {
   }
   print(rows, "near boxes");
   std::printf("Distant mesh clutter: the table plus N 5 cm cubes as STL meshes on the same ring. Meshes are FCL "
-              "geometry, checked through FCL's dynamic AABB tree when there are more than 32 (a scene with a mesh "
+              "geometry, listed by the checker's broad phase when there are more than 32 (a scene with a mesh "
               "is checked state by state, so the baseline is N = 1, not the empty scene).\n\n");
   rows.clear();
   for (int n : options.distant_meshes) {
@@ -266,8 +266,8 @@ void BenchClutter(const ClutterBenchOptions& options) {
   // FCL path (force_fcl: every object is FCL geometry, FCL's dynamic AABB tree).
   std::printf("Per check, in-process: CollisionChecker::IsValid and Clearance on 2000 seeded random Panda states "
               "(median of 5 passes), the table plus N distant objects, with the broad phase and without "
-              "(CollisionOptions::broad_phase = false scans every object); 'FCL path' is force_fcl, where every "
-              "object is FCL geometry listed by FCL's DynamicAABBTreeCollisionManager.\n\n");
+              "(CollisionOptions::broad_phase = false scans every object); 'FCL' is the FCL path (force_fcl), where "
+              "every object is FCL geometry listed by FCL's DynamicAABBTreeCollisionManager.\n\n");
   std::printf("| path | distant objects | N | state check [µs] | without broad phase [µs] | ratio | Clearance [µs] | "
               "without [µs] | ratio |\n|---|---|---|---|---|---|---|---|---|\n");
   std::mt19937_64 qrng(31);
