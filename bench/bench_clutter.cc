@@ -265,10 +265,10 @@ void BenchClutter(const ClutterBenchOptions& options) {
   // the per-pass means), with the broad phase and without, on the fast (sphere) path and on the
   // FCL path (force_fcl: every object is FCL geometry, FCL's dynamic AABB tree).
   std::printf("Per check, in-process: CollisionChecker::IsValid and Clearance on 2000 seeded random Panda states "
-              "(median of 5 passes), the table plus N distant objects, with the broad phase and without "
+              "(median of 9 passes, the two checkers' passes interleaved), the table plus N objects (distant, or near the arm as above), with the broad phase and without "
               "(CollisionOptions::broad_phase = false scans every object); 'FCL' is the FCL path (force_fcl), where "
               "every object is FCL geometry listed by FCL's DynamicAABBTreeCollisionManager.\n\n");
-  std::printf("| path | distant objects | N | state check [µs] | without broad phase [µs] | ratio | Clearance [µs] | "
+  std::printf("| path | objects | N | state check [µs] | without broad phase [µs] | ratio | Clearance [µs] | "
               "without [µs] | ratio |\n|---|---|---|---|---|---|---|---|---|\n");
   std::mt19937_64 qrng(31);
   std::vector<Eigen::VectorXd> states;
@@ -280,36 +280,52 @@ void BenchClutter(const ClutterBenchOptions& options) {
     states.push_back(q);
   }
   for (const bool fcl_path : {false, true}) {
-    for (const bool meshes : {false, true}) {
-      for (const int n : {1, 100, 1000, 10000}) {
-        if (meshes && n > 1000) continue;  // the server's max_mesh_files
+    for (const int kind : {0, 1, 2}) {  // distant boxes, distant meshes, near boxes
+      const bool meshes = kind == 1;
+      for (const int n : {1, 40, 100, 300, 1000, 10000}) {
+        if (kind == 1 && n > 1000) continue;  // the server's max_mesh_files
+        if (kind == 2 && (n > 300 || fcl_path)) continue;
+        if (kind != 2 && n == 300) continue;
         v1::Scene scene = table;
-        meshes ? AddDistantMeshes(&scene, n) : AddDistantBoxes(&scene, n);
+        if (kind == 2) {
+          AddNearBoxes(&scene, n, robot, start, goal);
+        } else {
+          meshes ? AddDistantMeshes(&scene, n) : AddDistantBoxes(&scene, n);
+        }
         const auto model = SceneFromProto(scene);
-        double cost[2][2];  // [broad phase][state, clearance]
-        for (const bool broad : {true, false}) {
+        // Both checkers built first, then their passes interleaved (this machine is shared and
+        // noisy: a slow spell then hits both alike).
+        std::unique_ptr<CollisionChecker> checkers[2];  // [broad phase]
+        for (const bool broad : {false, true}) {
           CollisionOptions collision;
           collision.broad_phase = broad;
           collision.force_fcl = fcl_path;
-          const CollisionChecker checker(robot, model, collision);
-          std::vector<double> state_us, clearance_us;
-          int valid = 0;
-          for (int pass = 0; pass < 5; ++pass) {
+          checkers[broad ? 1 : 0] = std::make_unique<CollisionChecker>(robot, model, collision);
+        }
+        std::vector<double> state_us[2], clearance_us[2];
+        int valid = 0;
+        double sum = 0.0;
+        for (int pass = 0; pass < 9; ++pass) {
+          for (const int b : {pass % 2, 1 - pass % 2}) {
+            const CollisionChecker& checker = *checkers[b];
             auto t0 = Clock::now();
             for (const Eigen::VectorXd& q : states) valid += checker.IsValid(q) ? 1 : 0;
-            state_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count() / states.size());
-            double sum = 0.0;
+            state_us[b].push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count() /
+                                  states.size());
             t0 = Clock::now();
             for (std::size_t i = 0; i < states.size(); i += 4) sum += checker.Clearance(states[i]);
-            clearance_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count() /
-                                   ((states.size() + 3) / 4));
-            if (!(sum >= 0.0) || valid < 0) throw std::runtime_error("clutter bench: impossible clearance");
+            clearance_us[b].push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count() /
+                                      ((states.size() + 3) / 4));
           }
-          cost[broad ? 1 : 0][0] = Median(state_us);
-          cost[broad ? 1 : 0][1] = Median(clearance_us);
+        }
+        if (!(sum >= 0.0) || valid < 0) throw std::runtime_error("clutter bench: impossible clearance");
+        double cost[2][2];  // [broad phase][state, clearance]
+        for (int b = 0; b < 2; ++b) {
+          cost[b][0] = Median(state_us[b]);
+          cost[b][1] = Median(clearance_us[b]);
         }
         std::printf("| %s | %s | %d | %.3f | %.3f | %.2f× | %.3f | %.3f | %.2f× |\n", fcl_path ? "FCL" : "sphere",
-                    meshes ? "5 cm mesh cubes" : "5 cm boxes", n, cost[1][0], cost[0][0], cost[1][0] / cost[0][0],
+                    kind == 2 ? "2 cm boxes near the arm" : meshes ? "5 cm mesh cubes" : "5 cm boxes", n, cost[1][0], cost[0][0], cost[1][0] / cost[0][0],
                     cost[1][1], cost[0][1], cost[1][1] / cost[0][1]);
         std::fflush(stdout);
       }

@@ -155,6 +155,25 @@ struct CollisionChecker::Impl {
   // the robot's (or a motion's swept) box; with fewer, scanning them all is cheaper.
   static constexpr std::size_t kBroadPhasePrims = 32;
   static constexpr double kClearanceSearchRadius = 0.25;  // [m] first radius Clearance searches
+  // When a gather lists at least 1/8 of the prims (clutter all around the robot), scanning them
+  // all (one SIMD cull) costs less than the hierarchy's walk and the sort: the thread then scans
+  // for this checker's next kScanStates queries of that kind before it gathers again. Either
+  // way the same prims are met in the same order, so the answers do not change.
+  static constexpr int kScanStates = 63;
+  struct GatherHistory {
+    const Impl* checker = nullptr;
+    int scan = 0;  // queries left to scan
+  };
+  /// Whether this query should scan every prim instead of gathering (see kScanStates).
+  bool ScanInstead(GatherHistory* h) const {
+    if (h->checker != this) *h = {this, 0};
+    if (h->scan == 0) return false;
+    --h->scan;
+    return true;
+  }
+  void Gathered(GatherHistory* h, std::size_t listed) const {
+    if (8 * listed >= prims.size()) h->scan = kScanStates;
+  }
   bool prim_broad_phase = false;
   detail::SphereBvh prim_bvh;
   /// *out = the prims whose bounding sphere's box overlaps the box around every sphere link's
@@ -247,12 +266,21 @@ struct CollisionChecker::Impl {
       for (const SceneGeom& g : scene_geoms) visit(g);
       return;
     }
+    // Each wider round visits only the geoms a narrower one did not (both lists ascending).
+    thread_local std::vector<std::uint32_t> done;
+    done.clear();
     for (double radius = *best < detail::kInf ? *best : kClearanceSearchRadius;; radius *= 2.0) {
       const detail::Box3 box = box_at(radius);
       if (!(box.lo[0] <= box.hi[0])) return;  // no robot shape
       GeomsNear(box, near);
-      for (const std::uint32_t gi : *near) visit(scene_geoms[gi]);
+      std::size_t d = 0;
+      for (const std::uint32_t gi : *near) {
+        while (d < done.size() && done[d] < gi) ++d;
+        if (d < done.size() && done[d] == gi) continue;
+        visit(scene_geoms[gi]);
+      }
       if (*best <= radius || near->size() == scene_geoms.size()) return;
+      done.swap(*near);
     }
   }
 
@@ -294,9 +322,10 @@ struct CollisionChecker::Impl {
   double FastClearance(const Frame* frames) const;
   /// The smallest distance between the link spheres (world centres placed on demand into w;
   /// link bounds in soa, as LinkBoundsSoa) and the `count` prims listed in `which` (nullptr:
-  /// prims 0..count-1), by branch and bound; +inf when none.
+  /// prims 0..count-1), by branch and bound, or `best` when none of them is nearer (pairs
+  /// whose bound is not below it are skipped); +inf when none and best = +inf.
   double PrimClearance(const Frame* frames, const std::uint32_t* which, std::size_t count, const double* soa,
-                       double* w, char* placed) const;
+                       double* w, char* placed, double best = detail::kInf) const;
   bool FclCollide(const Frame* frames, CollisionResult* report) const;
   double FclClearance(const Frame* frames) const;
   bool Collide(const Eigen::VectorXd& q, CollisionResult* report) const;

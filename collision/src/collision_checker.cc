@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -150,8 +151,10 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
   const double* pr = prim_bound.data();
   thread_local std::vector<std::uint32_t> near_list;
   thread_local std::vector<double> near_bounds;
-  if (prim_broad_phase) {
+  thread_local GatherHistory history;
+  if (prim_broad_phase && !ScanInstead(&history)) {
     PrimsNear(&lb[0], nullptr, 0.0, &near_list);
+    Gathered(&history, near_list.size());
     nprims = near_list.size();
     near = near_list.data();
     near_bounds.resize(4 * nprims);
@@ -298,10 +301,9 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
 }
 
 double CollisionChecker::Impl::PrimClearance(const Frame* frames, const std::uint32_t* which, std::size_t count,
-                                             const double* soa, double* w, char* placed) const {
+                                             const double* soa, double* w, char* placed, double best) const {
   const std::size_t nl = slinks.size();
   const std::size_t padded = detail::CullPadded(nl);
-  double best = kInf;
   // A link's bounding sphere is at most as far from an obstacle as any of its spheres, so a
   // (link, primitive) pair whose bound is no closer than the best distance so far cannot lower
   // it. Branch and bound: the pair with the smallest bound first (it sets a tight `best`), then
@@ -326,7 +328,7 @@ double CollisionChecker::Impl::PrimClearance(const Frame* frames, const std::uin
     PlaceLinkSpheres(frames, li, w, placed);
     for (int k = L.begin; k < L.end; ++k) best = std::min(best, SphereDistance(o, &w[3 * k], sr[k]));
   };
-  if (nl * count > 0 && bound[first] < kInf) exact(first);
+  if (nl * count > 0 && bound[first] < best) exact(first);
   for (std::size_t p = 0; p < count; ++p) {
     for (std::size_t li = 0; li < nl; ++li) {
       const std::size_t pair = p * padded + li;
@@ -347,16 +349,23 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
   Scratch<double, 256> soa(3 * padded);  // link bounding centres, structure of arrays
   LinkBoundsSoa(&lb[0], 0.0, &soa[0]);    // padding lanes finite (their distances are not read)
   double best = kInf;
-  if (!prim_broad_phase) {
+  thread_local GatherHistory history;
+  if (!prim_broad_phase || ScanInstead(&history)) {
     best = PrimClearance(frames, nullptr, prims.size(), &soa[0], &w[0], &placed[0]);
   } else {
     // Prims within `radius` of the link bounds first; a prim outside that box is farther than
     // `radius` from every link, so once the best distance is at most `radius` it is final.
-    thread_local std::vector<std::uint32_t> near;
+    // Each wider round evaluates only the prims a narrower one did not (both lists ascending).
+    thread_local std::vector<std::uint32_t> near, done, fresh;
+    done.clear();
     for (double radius = kClearanceSearchRadius;; radius *= 2.0) {
       PrimsNear(&lb[0], nullptr, radius, &near);
-      best = PrimClearance(frames, near.data(), near.size(), &soa[0], &w[0], &placed[0]);
+      if (done.empty()) Gathered(&history, near.size());
+      fresh.clear();
+      std::set_difference(near.begin(), near.end(), done.begin(), done.end(), std::back_inserter(fresh));
+      best = PrimClearance(frames, fresh.data(), fresh.size(), &soa[0], &w[0], &placed[0], best);
       if (best <= radius || near.size() == prims.size()) break;
+      done.swap(near);
     }
   }
   if (!scene_geoms.empty()) {
