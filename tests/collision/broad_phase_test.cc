@@ -240,6 +240,39 @@ TEST(BroadPhase, CertifiedMotionMeetsAnObstacleOnlyItsSweepReaches) {
   EXPECT_GE(caught, 20);
 }
 
+TEST(BroadPhase, CertifiedSlideMeetsABallAnywhereAlongIt) {
+  // A 1 cm ball on a prismatic slider, sliding 1 m along x, past a 5 mm ball on its line at
+  // x = X (X from 0.02 to 0.98), among 40 far boxes that turn the broad phase on: the slide
+  // collides for every X, so no checker may certify it — a ball that the box around the slider
+  // at a chunk's start misses (not grown by the chunk's sweep), or that lies past a chunk's end
+  // (a step not cut there), would be stepped over. With the ball 1e-6 m off the line the slide
+  // is free and both certify it.
+  const auto slider = test::SliderRobot(Shape::Sphere(0.01, Eigen::Isometry3d::Identity()));
+  Eigen::VectorXd a(1), b(1);
+  a << 0.0;
+  b << 1.0;
+  int refused = 0, certified = 0;
+  for (int i = 2; i <= 98; ++i) {
+    const double x = 0.01 * i;
+    for (const double gap : {-1e-4, 1e-6}) {
+      auto scene = std::make_shared<Scene>();
+      std::mt19937_64 rng(70 + i);
+      AddFarRing(scene.get(), 40, &rng);
+      Eigen::Isometry3d at = Eigen::Isometry3d::Identity();
+      at.translation() << x, 0.015 + gap, 0.0;  // touching at gap 0
+      scene->AddObject({"ball", Shape::Sphere(0.005, at)});
+      const Pair c = Checkers(slider, scene);
+      ASSERT_TRUE(c.indexed->certifies_motion());
+      const bool expected = gap > 0.0;
+      EXPECT_EQ(c.scanned->IsMotionCertified(a, b), expected) << "x " << x << " gap " << gap;
+      EXPECT_EQ(c.indexed->IsMotionCertified(a, b), expected) << "x " << x << " gap " << gap;
+      (expected ? certified : refused) += 1;
+    }
+  }
+  EXPECT_EQ(refused, 97);
+  EXPECT_EQ(certified, 97);
+}
+
 TEST(BroadPhase, ObstacleProximityGivesTheSameNearestObstacles) {
   // The potential field's distance queries: per link, the same nearest obstacle, distance and
   // points with the broad phase as without, for short, medium and unbounded reach.
