@@ -55,7 +55,7 @@ const char kUsage[] =
     "                                  --out and --method as for plan\n"
     "  ik REQUEST.json                 send a chasles.v1.InverseKinematicsRequest (protobuf JSON); print\n"
     "                                  each solution with its manipulability; exit 0 only when solved\n"
-    "  upload-robot FILE.urdf [--srdf FILE.srdf] [--mesh NAME=FILE]...\n"
+    "  upload-robot FILE.urdf [--srdf FILE.srdf [--strict-srdf]] [--mesh NAME=FILE]...\n"
     "  upload-robot --dh FILE.json | --poe FILE.json\n"
     "                                  store a robot (URDF, or a chasles.v1.DhRobot / PoeRobot in\n"
     "                                  protobuf JSON) on the server; prints its robot_id\n"
@@ -116,6 +116,7 @@ struct Options {
   double timeout = 0.0;  // 0 = per command default
   std::string out;
   std::string srdf;
+  bool strict_srdf = false;
   std::string dh;   // DhRobot JSON file
   std::string poe;  // PoeRobot JSON file
   std::vector<std::string> meshes;  // NAME=FILE
@@ -394,6 +395,7 @@ int Plan(const Options& options) {
   std::printf("request     %s\n", response.request_id().c_str());
   std::printf("outcome     %s\n", v1::PlanOutcome_Name(response.outcome()).c_str());
   std::printf("message     %s\n", response.message().c_str());
+  for (const std::string& warning : response.warnings()) std::printf("warning     %s\n", warning.c_str());
   std::printf("robot/scene %s / %s\n", response.robot_id().c_str(), response.scene_id().c_str());
   std::printf("duration    %.4f s\n", response.duration());
   std::printf("waypoints   %d (planner returned %u)\n", response.path_size(), response.statistics().raw_waypoints());
@@ -506,6 +508,7 @@ int UploadRobot(const Options& options) {
     v1::UrdfRobot* urdf = request.mutable_robot()->mutable_urdf();
     urdf->set_urdf(ReadFileOrExit(options.positional[1], "URDF"));
     if (!options.srdf.empty()) urdf->set_srdf(ReadFileOrExit(options.srdf, "SRDF"));
+    urdf->set_strict_srdf(options.strict_srdf);
     for (const std::string& mesh : options.meshes) {
       const auto eq = mesh.find('=');
       if (eq == std::string::npos || eq == 0 || eq + 1 == mesh.size()) {
@@ -521,6 +524,7 @@ int UploadRobot(const Options& options) {
   const grpc::Status status = stub->UploadRobot(&context, request, &response);
   if (!status.ok()) return ReportRpcError("UploadRobot", options, status);
   std::printf("robot_id %s\n", response.robot_id().c_str());
+  for (const std::string& warning : response.warnings()) std::printf("warning  %s\n", warning.c_str());
   for (int i = 0; i < response.joint_names_size(); ++i) {
     std::printf("  %-24s [%.4f, %.4f]  v_max %.4f\n", response.joint_names(i).c_str(), response.lower_limits(i),
                 response.upper_limits(i), response.velocity_limits(i));
@@ -779,6 +783,7 @@ int CommitTrajectory(const Options& options) {
     v1::UrdfRobot* urdf = request.mutable_robot()->mutable_urdf();
     urdf->set_urdf(ReadFileOrExit(options.robot, "URDF"));
     if (!options.srdf.empty()) urdf->set_srdf(ReadFileOrExit(options.srdf, "SRDF"));
+    urdf->set_strict_srdf(options.strict_srdf);
   } else if (!options.robot.empty()) {
     *request.mutable_robot() = ParseJsonFileOrExit<v1::RobotModel>(options.robot);
   } else if (!options.robot_id.empty()) {
@@ -873,6 +878,8 @@ int main(int argc, char** argv) {
       options.out = value();
     } else if (arg == "--srdf") {
       options.srdf = value();
+    } else if (arg == "--strict-srdf") {
+      options.strict_srdf = true;
     } else if (arg == "--dh") {
       options.dh = value();
     } else if (arg == "--poe") {

@@ -764,6 +764,10 @@ v1::PlanRequest ImportMotionPlanRequest(const std::string& scene_yaml, const std
     }
   }
   joint_goal->set_tolerance(tolerance);
+  // A goal value outside a joint limit by no more than the goal's own tolerance (published
+  // Fetch goals sit µrad beyond ±π) is clamped onto the limit by the server, which reports it:
+  // bounds_tolerance (it covers the start too; capped at its 0.01 maximum).
+  if (tolerance > 0.0) request.set_bounds_tolerance(std::min(tolerance, 0.01));
 
   if (auto path = root.Find("path_constraints")) {
     for (const char* key :

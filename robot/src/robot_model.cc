@@ -60,7 +60,8 @@ std::string JointLabel(const std::string& robot, size_t index, const std::string
 
 std::shared_ptr<const RobotModel> RobotModel::FromTree(
     std::string name, std::vector<Link> links, std::vector<Joint> joints,
-    const std::vector<std::pair<std::string, std::string>>& allowed_pairs, MotionModel motion) {
+    const std::vector<std::pair<std::string, std::string>>& allowed_pairs, MotionModel motion,
+    std::vector<std::string> load_warnings) {
   const int num_links = static_cast<int>(links.size());
   if (num_links == 0) ThrowInvalid("robot '" + name + "': has no links");
 
@@ -169,6 +170,7 @@ std::shared_ptr<const RobotModel> RobotModel::FromTree(
   model->joints_ = std::move(joints);
   model->root_ = root;
   model->motion_ = motion;
+  model->load_warnings_ = std::move(load_warnings);
   model->Finalize(allowed_pairs);
   return model;
 }
@@ -392,9 +394,10 @@ void RobotModel::ValidateConfiguration(const Eigen::VectorXd& q, const std::stri
       ThrowInvalid(field + "[" + std::to_string(i) + "] = " + FormatNumber(x) + " must be finite");
     }
     if (x < lower_[i] || x > upper_[i]) {
+      // The limits exactly (a rounded limit can make an outside value look inside).
       ThrowInvalid(field + "[" + std::to_string(i) + "] = " + FormatNumber(x) + " must be within [" +
-                   FormatNumber(lower_[i], 5) + ", " + FormatNumber(upper_[i], 5) + "] (joint '" +
-                   dof_names_[i] + "')");
+                   FormatNumber(lower_[i]) + ", " + FormatNumber(upper_[i]) + "] (joint '" + dof_names_[i] +
+                   "')");
     }
   }
 }

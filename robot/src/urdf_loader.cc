@@ -194,7 +194,8 @@ void CheckJointGraph(const TiXmlElement& robot) {
 
 std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
     std::string_view urdf_text, std::string_view srdf_text,
-    const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes, const InputLimits& limits) {
+    const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes, const InputLimits& limits,
+    bool strict_srdf) {
   // 0. Sizes first, before any parser (tinyxml recurses once per nesting level): document
   //    bytes, element nesting, and the links, joints and moving joints the document declares.
   const robot_internal::XmlScan scan =
@@ -396,8 +397,10 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
     stack.push_back({child.get(), children_of(*child)});
   }
 
-  // 5. SRDF: pairs of links whose collisions are never checked.
+  // 5. SRDF: pairs of links whose collisions are never checked. A pair naming a link the URDF
+  //    lacks is skipped with a warning (an error when strict_srdf).
   std::vector<std::pair<std::string, std::string>> allowed_pairs;
+  std::vector<std::string> warnings;
   if (!srdf_text.empty()) {
     TiXmlDocument srdf_doc;
     ParseXmlOrThrow(std::string(srdf_text), "srdf", &srdf_doc);
@@ -410,21 +413,27 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
     for (const TiXmlElement* e = root->FirstChildElement("disable_collisions"); e != nullptr;
          e = e->NextSiblingElement("disable_collisions"), ++index) {
       std::string names[2];
+      std::string unknown;
       for (int k = 0; k < 2; ++k) {
         const std::string attribute = k == 0 ? "link1" : "link2";
         const std::string where = "srdf: disable_collisions[" + std::to_string(index) + "] " + attribute;
         const char* value = e->Attribute(attribute.c_str());
         if (value == nullptr) ThrowInvalid(where + " is missing");
         names[k] = value;
-        if (link_index.find(names[k]) == link_index.end()) {
-          ThrowInvalid(where + " = '" + names[k] + "' is not a link of robot '" + robot_name + "'");
+        if (unknown.empty() && link_index.find(names[k]) == link_index.end()) {
+          unknown = where + " = '" + names[k] + "' is not a link of robot '" + robot_name + "'";
         }
+      }
+      if (!unknown.empty()) {
+        if (strict_srdf) ThrowInvalid(unknown);
+        warnings.push_back(unknown + "; the pair is skipped");
+        continue;
       }
       allowed_pairs.emplace_back(names[0], names[1]);
     }
   }
 
-  return FromTree(robot_name, std::move(links), std::move(joints), allowed_pairs);
+  return FromTree(robot_name, std::move(links), std::move(joints), allowed_pairs, {}, std::move(warnings));
 }
 
 }  // namespace chasles

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -397,7 +398,7 @@ std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, co
     meshes[name] = ParseMesh(*bytes, Eigen::Vector3d::Ones(), field + ".urdf.mesh_files['" + name + "']", limits);
   }
   try {
-    return RobotModel::FromUrdf(urdf.urdf(), urdf.srdf(), meshes, limits);
+    return RobotModel::FromUrdf(urdf.urdf(), urdf.srdf(), meshes, limits, urdf.strict_srdf());
   } catch (const Error& e) {
     const std::string what = e.what();
     // Prefix the proto field unless the robot module already named it.
@@ -613,6 +614,34 @@ double PaddingFromProto(double padding, const std::string& field) {
   return padding;
 }
 
+std::vector<std::string> RobotWarnings(const RobotModel& robot, const std::string& field) {
+  std::vector<std::string> out;
+  for (const std::string& warning : robot.load_warnings()) {
+    const bool from_file = warning.rfind("urdf", 0) == 0 || warning.rfind("srdf", 0) == 0;
+    out.push_back(from_file ? field + ".urdf." + warning : field + ": " + warning);
+  }
+  return out;
+}
+
+void ClampOntoLimits(const RobotModel& robot, double tolerance, const std::string& field, Eigen::VectorXd* q,
+                     std::vector<std::string>* warnings) {
+  for (int i = 0; i < q->size() && i < robot.num_dofs(); ++i) {
+    double& x = (*q)[i];
+    const double lo = robot.lower_limits()[i], hi = robot.upper_limits()[i];
+    const bool below = x < lo && x >= lo - tolerance;
+    const bool above = x > hi && x <= hi + tolerance;
+    if (!below && !above) continue;  // inside, NaN, or too far out: ValidateConfiguration decides
+    const double limit = below ? lo : hi;
+    char by[32];  // how far out, to 3 digits (the value and the limit are exact)
+    std::snprintf(by, sizeof by, "%.3g", below ? lo - x : x - hi);
+    warnings->push_back(field + "[" + std::to_string(i) + "] = " + FormatNumber(x) + " is " + by +
+                        (below ? " below its lower" : " above its upper") +
+                        " limit " + FormatNumber(limit) + " (joint '" + robot.dof_names()[i] +
+                        "'), within bounds_tolerance " + FormatNumber(tolerance) + ": clamped onto the limit");
+    x = limit;
+  }
+}
+
 PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<const CollisionChecker> checker,
                              const PlannerRegistry& registry, RequestSettings* settings) {
   const RobotModel& robot = checker->robot();
@@ -627,14 +656,18 @@ PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<con
   }
   settings->time_budget = budget;
 
+  const double bounds_tolerance = request.bounds_tolerance() == 0.0 ? kDefaultBoundsTolerance : request.bounds_tolerance();
+  RequireInRange(request.bounds_tolerance(), 0.0, 0.01, "bounds_tolerance");
   RequireJointCount(request.start().positions_size(), robot, "start.positions");
   query.start = PositionsFromProto(request.start().positions(), "start.positions");
+  ClampOntoLimits(robot, bounds_tolerance, "start.positions", &query.start, &settings->warnings);
   robot.ValidateConfiguration(query.start, "start.positions");
   if (request.target_case() == v1::PlanRequest::kPoseGoal) {
     query.pose_goal = PoseGoalFromProto(request.pose_goal(), robot, "pose_goal");
   } else {
     RequireJointCount(request.goal().positions_size(), robot, "goal.positions");
     query.goal = PositionsFromProto(request.goal().positions(), "goal.positions");
+    ClampOntoLimits(robot, bounds_tolerance, "goal.positions", &query.goal, &settings->warnings);
     robot.ValidateConfiguration(query.goal, "goal.positions");
 
     const double tolerance = request.goal().tolerance();

@@ -298,6 +298,7 @@ class PlanningService final : public RawService {
           const StoredRobot robot = store_->AddRobot(call.request.robot(), "robot");
           call.response.set_robot_id(robot.id);
           const RobotModel& model = *robot.model;
+          for (const std::string& warning : RobotWarnings(model, "robot")) call.response.add_warnings(warning);
           for (int i = 0; i < model.num_dofs(); ++i) {
             call.response.add_joint_names(model.dof_names()[i]);
             call.response.add_lower_limits(model.lower_limits()[i]);
@@ -782,6 +783,10 @@ class PlanningService final : public RawService {
                           {"optimize", outcome.seconds.optimize},   {"verify", outcome.seconds.verify}};
     outcome.seconds.total = SecondsSince(call.arrival);
     PlanOutcomeToProto(outcome, query, &response);
+    if (request.has_robot()) {
+      for (const std::string& warning : RobotWarnings(*robot.model, "robot")) response.add_warnings(warning);
+    }
+    for (const std::string& warning : settings.warnings) response.add_warnings(warning);
     grpc::Status status = StatusFromOutcome(outcome.code, outcome.message);
     if (status.ok() && (call.cancelled() || termination.Reason() == StopReason::kCancelled) &&
         outcome.code != PlanOutcomeCode::kSuccess) {

@@ -271,7 +271,7 @@ TEST(IkTest, ValidateNamesEveryRule) {
   expect([](IkRequest& r) { r.initial_guess = Eigen::VectorXd::Zero(5); },
          "ik.initial_guess has 5 values, robot 'ur5' has 6 joints");
   expect([](IkRequest& r) { r.initial_guess = Eigen::VectorXd::Constant(6, 4.0); },
-         "ik.initial_guess[2] = 4 must be within [-3.1416, 3.1416] (joint 'elbow_joint')");
+         "ik.initial_guess[2] = 4 must be within [-3.141592653589793, 3.141592653589793] (joint 'elbow_joint')");
 }
 
 }  // namespace

@@ -235,7 +235,7 @@ TEST(RobotModelTest, ValidateConfigurationMessages) {
                 "goal.positions[2] = -inf must be finite");
   q[2] = 3.5;  // elbow limited to ±π
   ExpectInvalid([&] { robot->ValidateConfiguration(q, "start.positions"); },
-                "start.positions[2] = 3.5 must be within [-3.1416, 3.1416] (joint 'elbow_joint')");
+                "start.positions[2] = 3.5 must be within [-3.141592653589793, 3.141592653589793] (joint 'elbow_joint')");
   q[2] = M_PI;  // the limit itself is inside
   robot->ValidateConfiguration(q, "start.positions");
 }

@@ -192,10 +192,25 @@ TEST(UrdfLoaderTest, SrdfDisablesPairsAndRejectsUnknownLinks) {
   <disable_collisions link1="base" link2="b"/>
   <disable_collisions link1="a" link2="hand"/>
 </robot>)";
-  ExpectInvalid([&] { RobotModel::FromUrdf(urdf, srdf); },
+  // A pair naming a link the URDF lacks (published SRDFs keep them): skipped with a warning,
+  // the other pairs honoured; strict_srdf makes it the error it names.
+  const auto lenient = RobotModel::FromUrdf(urdf, srdf);
+  ASSERT_EQ(lenient->load_warnings().size(), 1u);
+  EXPECT_EQ(lenient->load_warnings()[0],
+            "srdf: disable_collisions[3] link2 = 'hand' is not a link of robot 'panda'; the pair is skipped");
+  EXPECT_TRUE(lenient->allowed_collisions().IsAllowed(0, 2));
+  EXPECT_TRUE(robot->load_warnings().empty());
+  ExpectInvalid([&] { RobotModel::FromUrdf(urdf, srdf, {}, {}, /*strict_srdf=*/true); },
                 "srdf: disable_collisions[3] link2 = 'hand' is not a link of robot 'panda'");
+  const auto both_unknown =
+      RobotModel::FromUrdf(urdf, R"(<robot><disable_collisions link1="arm" link2="leg"/></robot>)");
+  ASSERT_EQ(both_unknown->load_warnings().size(), 1u);  // one warning per skipped pair
+  EXPECT_EQ(both_unknown->load_warnings()[0],
+            "srdf: disable_collisions[0] link1 = 'arm' is not a link of robot 'panda'; the pair is skipped");
   ExpectInvalid(
-      [&] { RobotModel::FromUrdf(urdf, R"(<robot><disable_collisions link1="arm" link2="b"/></robot>)"); },
+      [&] {
+        RobotModel::FromUrdf(urdf, R"(<robot><disable_collisions link1="arm" link2="b"/></robot>)", {}, {}, true);
+      },
       "srdf: disable_collisions[0] link1 = 'arm' is not a link of robot 'panda'");
   ExpectInvalid([&] { RobotModel::FromUrdf(urdf, R"(<robot><disable_collisions link1="a"/></robot>)"); },
                 "srdf: disable_collisions[0] link2 is missing");

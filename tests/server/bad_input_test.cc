@@ -58,6 +58,15 @@ TEST_F(BadInput, SrdfNamingAnUnknownLink) {
   v1::PlanRequest request = Planar();
   request.mutable_robot()->mutable_urdf()->set_srdf(
       "<robot name='planar_2r'><disable_collisions link1='link1' link2='no_such_link' reason='Never'/></robot>");
+  // By default the pair is skipped and reported (as MoveIt does); the plan goes ahead.
+  v1::PlanResponse response;
+  const grpc::Status lenient = server_->Plan(request, &response);
+  ASSERT_TRUE(lenient.ok()) << lenient.error_message();
+  ASSERT_EQ(response.warnings_size(), 1);
+  EXPECT_EQ(response.warnings(0), "robot.urdf.srdf: disable_collisions[0] link2 = 'no_such_link' is not a link of "
+                                  "robot 'planar_2r'; the pair is skipped");
+  // strict_srdf: the error, naming the field and the link.
+  request.mutable_robot()->mutable_urdf()->set_strict_srdf(true);
   ExpectPlanError(request, grpc::StatusCode::INVALID_ARGUMENT, {"robot.urdf.srdf", "no_such_link"});
 
   // Upload reports the same error.

@@ -193,13 +193,15 @@ class Client:
 
     def upload_robot(self, urdf: Union[str, os.PathLike, Message, Mapping[str, Any]], srdf: Union[str, os.PathLike] = "",
                      meshes: Optional[Mapping[str, Union[bytes, str, os.PathLike]]] = None, *,
-                     name: str = "", timeout: Optional[float] = None) -> str:
+                     name: str = "", strict_srdf: bool = False, timeout: Optional[float] = None) -> str:
         """Stores a robot on the server and returns its id (a content hash) for ``robot_id``.
 
         Args:
             urdf: URDF XML text or a path to a .urdf file; or a whole RobotModel (message or dict,
                 e.g. a DH or mobile robot from ``examples/robots/*.json``), then srdf/meshes unused.
-            srdf: SRDF XML text or a path to a .srdf file; its disabled collision pairs are honoured.
+            srdf: SRDF XML text or a path to a .srdf file; its disabled collision pairs are honoured
+                (pairs naming links the URDF lacks are skipped, listed in
+                ``robot_info(robot_id).warnings``; ``strict_srdf=True`` makes them an error).
             meshes: mesh files the URDF references, keyed by the exact ``filename`` of its
                 ``<mesh>`` tags: bytes, or a path to read.
             name: default robot name used in messages.
@@ -214,6 +216,7 @@ class Client:
             model = pb.RobotModel(name=name)
             model.urdf.urdf = _text(urdf)
             model.urdf.srdf = _text(srdf) if srdf else ""
+            model.urdf.strict_srdf = strict_srdf
             for filename, data in (meshes or {}).items():
                 model.urdf.mesh_files[filename] = data if isinstance(data, bytes) else Path(data).read_bytes()
         if name:

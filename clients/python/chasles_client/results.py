@@ -21,6 +21,8 @@ class RobotInfo:
         joint_names: the n joint names in the robot's joint order.
         lower_limits, upper_limits: position limits, shape (n,) [rad] or [m].
         velocity_limits: shape (n,) [rad/s] or [m/s].
+        warnings: what the server skipped while reading the description (e.g. SRDF pairs naming
+            links the URDF lacks), one sentence each.
     """
 
     robot_id: str
@@ -28,13 +30,15 @@ class RobotInfo:
     lower_limits: np.ndarray
     upper_limits: np.ndarray
     velocity_limits: np.ndarray
+    warnings: List[str] = field(default_factory=list)
 
     @classmethod
     def from_response(cls, response: pb.UploadRobotResponse) -> "RobotInfo":
         return cls(robot_id=response.robot_id, joint_names=list(response.joint_names),
                    lower_limits=np.array(response.lower_limits, dtype=float),
                    upper_limits=np.array(response.upper_limits, dtype=float),
-                   velocity_limits=np.array(response.velocity_limits, dtype=float))
+                   velocity_limits=np.array(response.velocity_limits, dtype=float),
+                   warnings=list(response.warnings))
 
 
 @dataclass
@@ -140,6 +144,8 @@ class PlanResult:
             the response's ``limits`` (TrajectoryLimits); from a server that sends none, the
             client's own reckoning when it knows the model (see ``limits_used``); else None.
         reached_goal: for a pose goal, the IK solution reached (else None).
+        warnings: what the server adjusted or skipped (start/goal values clamped onto a limit
+            within ``bounds_tolerance``, an inline robot's SRDF pairs skipped), one sentence each.
         response: the raw chasles.v1.PlanResponse.
     """
 
@@ -161,6 +167,7 @@ class PlanResult:
     goal_manipulability: float = 0.0
     velocity_limits: Optional[np.ndarray] = None
     acceleration_limits: Optional[np.ndarray] = None
+    warnings: List[str] = field(default_factory=list)
     response: pb.PlanResponse = field(default_factory=pb.PlanResponse, repr=False)
 
     @classmethod
@@ -173,7 +180,7 @@ class PlanResult:
             **common, path=_path_array(response.path, dof), statistics=message_to_dict(response.statistics),
             reached_goal=(np.array(response.reached_goal.positions, dtype=float)
                           if len(response.reached_goal.positions) > 0 else None),
-            goal_manipulability=response.goal_manipulability)
+            goal_manipulability=response.goal_manipulability, warnings=list(response.warnings))
 
 
 @dataclass

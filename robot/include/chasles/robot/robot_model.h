@@ -107,15 +107,18 @@ class RobotModel {
   /// max_xml_depth) and the URDF's <link>/<joint> elements are counted (max_links for each,
   /// max_dofs for joints that are not fixed).
   /// \throws Error(kInvalidArgument) naming the element for malformed URDF/SRDF (unparsable XML,
-  ///         a NUL byte, SRDF naming an unknown link, a mesh that is not in `meshes`, limits with
+  ///         a NUL byte, SRDF naming an unknown link when strict_srdf, a mesh that is not in `meshes`, limits with
   ///         lower > upper, velocity <= 0, non-finite numbers, negative mass, an inertia with a
   ///         negative principal moment, planar/floating joints).
   /// \throws Error(kResourceExhausted) when a text is beyond `limits`, e.g.
   ///         `urdf nests XML elements 100000 deep, more than the cap of 64 (InputLimits::max_xml_depth); …`.
+  /// SRDF entries that name a link the URDF lacks (published SRDFs routinely keep pairs of
+  /// links a variant of the robot no longer has) are skipped, each reported in load_warnings(),
+  /// as MoveIt does; with `strict_srdf` they are an error instead.
   static std::shared_ptr<const RobotModel> FromUrdf(
       std::string_view urdf, std::string_view srdf = {},
       const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes = {},
-      const InputLimits& limits = {});
+      const InputLimits& limits = {}, bool strict_srdf = false);
 
   const std::string& name() const { return name_; }
   int num_dofs() const { return static_cast<int>(dof_joints_.size()); }
@@ -159,16 +162,22 @@ class RobotModel {
   /// Validates a configuration supplied by a caller.
   /// \throws Error(kInvalidArgument), e.g. `start.positions has 6 values, robot 'ur5' has 7 joints`,
   ///         `start.positions[2] = nan must be finite`,
-  ///         `start.positions[1] = 3.5 must be within [-3.1416, 3.1416] (joint 'shoulder')`.
+  ///         `start.positions[1] = 3.5 must be within [-3.141592653589793, 3.141592653589793] (joint 'shoulder')`.
   void ValidateConfiguration(const Eigen::VectorXd& q, const std::string& field) const;
 
   /// Builds a model directly from links and joints (used by URDF/DH/PoE front ends and tests).
   /// Joints must be in topological order (a joint's parent link is the root or the child of an
   /// earlier joint). \throws Error(kInvalidArgument) when the tree is malformed.
+  /// `load_warnings`: what the front end skipped while reading the description (load_warnings()).
   static std::shared_ptr<const RobotModel> FromTree(std::string name, std::vector<Link> links,
                                                     std::vector<Joint> joints,
                                                     const std::vector<std::pair<std::string, std::string>>& allowed_pairs = {},
-                                                    MotionModel motion = {});
+                                                    MotionModel motion = {},
+                                                    std::vector<std::string> load_warnings = {});
+
+  /// What was skipped while reading the description, one sentence each (e.g. SRDF pairs naming
+  /// links the URDF lacks); empty for a description read in full.
+  const std::vector<std::string>& load_warnings() const { return load_warnings_; }
 
  private:
   RobotModel() = default;
@@ -190,6 +199,7 @@ class RobotModel {
   std::vector<Eigen::Vector3d> screw_w_cross_v_;  ///< ω × v of each dof (FK hot path)
   std::vector<char> dof_prismatic_;               ///< 1 for prismatic dofs
   int root_ = 0;
+  std::vector<std::string> load_warnings_;
 };
 
 }  // namespace chasles

@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -80,7 +81,22 @@ void SamplesToProto(const std::vector<TrajectorySample>& samples, const RobotMod
 /// Request settings that are not part of PlanQuery.
 struct RequestSettings {
   double time_budget = 5.0;  ///< [s], in (0, 600]
+  /// What the conversion adjusted, one sentence each (start/goal values clamped onto a limit).
+  std::vector<std::string> warnings;
 };
+
+/// A robot's load warnings as the proto names them: the loader's "srdf: …" become
+/// "<field>.urdf.srdf: …".
+std::vector<std::string> RobotWarnings(const RobotModel& robot, const std::string& field);
+
+/// PlanRequest.bounds_tolerance's default [rad or m].
+inline constexpr double kDefaultBoundsTolerance = 1e-6;
+
+/// Values of q at most `tolerance` outside a joint limit are set onto it, each reported in
+/// *warnings naming `field`, the index, the value, the limit and the joint. Values farther out
+/// (and NaN) are left for RobotModel::ValidateConfiguration to refuse.
+void ClampOntoLimits(const RobotModel& robot, double tolerance, const std::string& field, Eigen::VectorXd* q,
+                     std::vector<std::string>* warnings);
 
 /// A request's safety margin around every robot shape [m] (PlanRequest/OptimizeRequest
 /// `padding`; 0 = none): the value, checked to be in [0, 0.5].

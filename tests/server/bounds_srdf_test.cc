@@ -1,0 +1,117 @@
+// Robots as people ship them (issue 25): published SRDFs whose entries name links the URDF
+// lacks load with warnings (an error only when asked), and start/goal values a hair outside a
+// joint limit are clamped onto it within a documented tolerance, reported in the response;
+// farther out they are refused, the message printing the value and the limit exactly.
+
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "server_fixture.h"
+
+namespace chasles::testing {
+namespace {
+
+class RobotsAsShipped : public SharedServerTest<> {
+ protected:
+  static v1::UploadRobotRequest PandaWithStaleSrdf(bool strict) {
+    v1::UploadRobotRequest request;
+    v1::UrdfRobot* urdf = request.mutable_robot()->mutable_urdf();
+    urdf->set_urdf(ReadText(ExamplePath("robots/panda.urdf")));
+    std::string srdf = ReadText(ExamplePath("robots/panda.srdf"));
+    // Two entries for links this URDF does not have (as Fetch's SRDF names bellows_link2).
+    const std::string stale =
+        "  <disable_collisions link1=\"panda_link0\" link2=\"bellows_link2\" reason=\"Never\"/>\n"
+        "  <disable_collisions link1=\"collision_head_link\" link2=\"panda_link1\" reason=\"Never\"/>\n";
+    srdf.insert(srdf.rfind("</robot>"), stale);
+    urdf->set_srdf(srdf);
+    urdf->set_strict_srdf(strict);
+    return request;
+  }
+  static grpc::Status Upload(const v1::UploadRobotRequest& request, v1::UploadRobotResponse* response) {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    return server_->stub().UploadRobot(&context, request, response);
+  }
+};
+
+TEST_F(RobotsAsShipped, AnSrdfNamingUnknownLinksLoadsWithAWarningPerSkippedPair) {
+  v1::UploadRobotResponse response;
+  const grpc::Status status = Upload(PandaWithStaleSrdf(false), &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(response.warnings_size(), 2);
+  EXPECT_NE(response.warnings(0).find("robot.urdf.srdf: disable_collisions["), std::string::npos) << response.warnings(0);
+  EXPECT_NE(response.warnings(0).find("link2 = 'bellows_link2' is not a link of robot 'panda'; the pair is skipped"),
+            std::string::npos)
+      << response.warnings(0);
+  EXPECT_NE(response.warnings(1).find("link1 = 'collision_head_link' is not a link of robot 'panda'; the pair is "
+                                      "skipped"),
+            std::string::npos)
+      << response.warnings(1);
+  // The uploaded robot plans, and the pairs that do name its links are honoured (the folded
+  // start of the example is free only with the SRDF's adjacent-link pairs disabled).
+  v1::PlanRequest plan = LoadRequest("panda_table");
+  plan.set_robot_id(response.robot_id());
+  v1::PlanResponse planned;
+  const grpc::Status planned_status = server_->Plan(plan, &planned);
+  ASSERT_TRUE(planned_status.ok()) << planned_status.error_message();
+  EXPECT_EQ(planned.outcome(), v1::SUCCESS) << planned.message();
+  EXPECT_EQ(planned.warnings_size(), 0);  // reported at upload, not again per request
+  // Inline, the same robot's warnings come with the plan.
+  *plan.mutable_robot() = PandaWithStaleSrdf(false).robot();
+  ASSERT_TRUE(server_->Plan(plan, &planned).ok());
+  EXPECT_EQ(planned.outcome(), v1::SUCCESS) << planned.message();
+  EXPECT_EQ(planned.warnings_size(), 2);
+
+  // strict_srdf: the first such entry is the error.
+  const grpc::Status strict = Upload(PandaWithStaleSrdf(true), &response);
+  EXPECT_EQ(strict.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(strict.error_message().find("robot.urdf.srdf: disable_collisions["), std::string::npos)
+      << strict.error_message();
+  EXPECT_NE(strict.error_message().find("link2 = 'bellows_link2' is not a link of robot 'panda'"), std::string::npos)
+      << strict.error_message();
+}
+
+TEST_F(RobotsAsShipped, ValuesJustOutsideALimitAreClampedWithinTheToleranceAndRefusedBeyondIt) {
+  // panda_joint7 is limited to ±2.8973 rad.
+  v1::PlanRequest request = LoadRequest("panda_table");
+  request.mutable_goal()->set_positions(6, 2.8973 + 2.7e-6);
+  v1::PlanResponse response;
+  grpc::Status status = server_->Plan(request, &response);
+  ASSERT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  // Exact numbers: the value is visibly above the limit.
+  EXPECT_EQ(status.error_message(), "goal.positions[6] = 2.8973027 must be within [-2.8973, 2.8973] (joint 'panda_joint7')");
+
+  request.set_bounds_tolerance(1e-5);
+  request.mutable_start()->set_positions(6, -2.8973 - 5e-7);
+  status = server_->Plan(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  ASSERT_EQ(response.warnings_size(), 2);
+  EXPECT_EQ(response.warnings(0), "start.positions[6] = -2.8973005 is 5e-07 below its lower limit -2.8973 (joint "
+                                  "'panda_joint7'), within bounds_tolerance 1e-05: clamped onto the limit");
+  EXPECT_NE(response.warnings(1).find("goal.positions[6] = 2.8973027 is "), std::string::npos) << response.warnings(1);
+  EXPECT_NE(response.warnings(1).find(" above its upper limit 2.8973 (joint 'panda_joint7'), within bounds_tolerance "
+                                      "1e-05: clamped onto the limit"),
+            std::string::npos)
+      << response.warnings(1);
+  // The trajectory starts and ends on the limits, not outside them.
+  ASSERT_GT(response.trajectory().points_size(), 1);
+  EXPECT_EQ(response.trajectory().points(0).positions(6), -2.8973);
+  EXPECT_EQ(response.trajectory().points(response.trajectory().points_size() - 1).positions(6), 2.8973);
+
+  // The default tolerance (1e-6) absorbs 5e-7 with no request field.
+  request = LoadRequest("panda_table");
+  request.mutable_start()->set_positions(6, -2.8973 - 5e-7);
+  status = server_->Plan(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.warnings_size(), 1);
+
+  request.set_bounds_tolerance(0.02);
+  status = server_->Plan(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message(), "bounds_tolerance = 0.02 must be within [0, 0.01]");
+}
+
+}  // namespace
+}  // namespace chasles::testing
