@@ -48,14 +48,24 @@ void AddBox(v1::Scene* scene, const std::string& name, double size, double x, do
   box->mutable_pose()->mutable_position()->set_z(z);
 }
 
-/// n 5 cm boxes on a ring 1.6–3 m from the base, 0–1.5 m high (seeded: the same every run).
-void AddDistantBoxes(v1::Scene* scene, int n) {
+/// visit(i, x, y, z) for n seeded points on a ring 1.6–3 m from the base, 0–1.5 m high (the
+/// same points every run, for boxes and meshes alike).
+template <typename Visit>
+void ForEachRingPoint(int n, const Visit& visit) {
   std::mt19937_64 rng(24);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int i = 0; i < n; ++i) {
     const double angle = 2.0 * M_PI * u(rng), radius = 1.6 + 1.4 * u(rng);
-    AddBox(scene, "far" + std::to_string(i), 0.05, radius * std::cos(angle), radius * std::sin(angle), 1.5 * u(rng));
+    const double z = 1.5 * u(rng);
+    visit(i, radius * std::cos(angle), radius * std::sin(angle), z);
   }
+}
+
+/// n 5 cm boxes on a ring 1.6–3 m from the base, 0–1.5 m high (seeded: the same every run).
+void AddDistantBoxes(v1::Scene* scene, int n) {
+  ForEachRingPoint(n, [&](int i, double x, double y, double z) {
+    AddBox(scene, "far" + std::to_string(i), 0.05, x, y, z);
+  });
 }
 
 /// A 5 cm cube as binary STL bytes (12 triangles).
@@ -82,17 +92,14 @@ std::string CubeStl() {
 /// n 5 cm mesh cubes on the distant ring (the same seeded placement as AddDistantBoxes).
 void AddDistantMeshes(v1::Scene* scene, int n) {
   const std::string stl = CubeStl();
-  std::mt19937_64 rng(24);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  for (int i = 0; i < n; ++i) {
-    const double angle = 2.0 * M_PI * u(rng), radius = 1.6 + 1.4 * u(rng);
+  ForEachRingPoint(n, [&](int i, double x, double y, double z) {
     v1::Mesh* mesh = scene->add_meshes();
     mesh->set_name("farmesh" + std::to_string(i));
     mesh->set_data(stl);
-    mesh->mutable_pose()->mutable_position()->set_x(radius * std::cos(angle));
-    mesh->mutable_pose()->mutable_position()->set_y(radius * std::sin(angle));
-    mesh->mutable_pose()->mutable_position()->set_z(1.5 * u(rng));
-  }
+    mesh->mutable_pose()->mutable_position()->set_x(x);
+    mesh->mutable_pose()->mutable_position()->set_y(y);
+    mesh->mutable_pose()->mutable_position()->set_z(z);
+  });
 }
 
 /// n 2 cm boxes 0.2–0.8 m from the base, 0.05–1.0 m high, none touching the robot at the
@@ -231,38 +238,28 @@ void BenchClutter(const ClutterBenchOptions& options) {
               "the scene's collision checker, is not counted; 'checker build' times that construction "
               "in-process (best of 3) and 'of which broad phase' is its excess over a checker built with "
               "CollisionOptions::broad_phase = false.\n\n");
-  std::vector<Row> rows;
-  for (int n : options.distant) {
-    v1::Scene scene = table;
-    AddDistantBoxes(&scene, n);
-    rows.push_back(run(scene, n));
-    std::fflush(stdout);
-  }
-  print(rows, "distant boxes");
+  // One table per kind of clutter: the table plus `add`(scene, N) for each N.
+  const auto series = [&](const std::vector<int>& sizes, const char* what, const auto& add) {
+    std::vector<Row> rows;
+    for (int n : sizes) {
+      v1::Scene scene = table;
+      add(&scene, n);
+      rows.push_back(run(scene, n));
+      std::fflush(stdout);
+    }
+    print(rows, what);
+  };
+  series(options.distant, "distant boxes", AddDistantBoxes);
   std::printf("Near clutter: the table plus N 2 cm boxes 0.2–0.8 m from the base, 0.05–1 m high, none touching "
               "the arm at start or goal (the problem gets harder as N grows).\n\n");
-  rows.clear();
-  for (int n : options.near) {
-    v1::Scene scene = table;
-    AddNearBoxes(&scene, n, robot, start, goal);
-    rows.push_back(run(scene, n));
-    std::fflush(stdout);
-  }
-  print(rows, "near boxes");
+  series(options.near, "near boxes", [&](v1::Scene* scene, int n) { AddNearBoxes(scene, n, robot, start, goal); });
   std::printf("Distant mesh clutter: the table plus N 5 cm cubes as STL meshes on the same ring. Meshes are FCL "
               "geometry, listed by the checker's broad phase when there are more than 32 (a scene with a mesh "
               "is checked state by state, so the baseline is N = 1, not the empty scene).\n\n");
-  rows.clear();
-  for (int n : options.distant_meshes) {
-    v1::Scene scene = table;
-    AddDistantMeshes(&scene, n);
-    rows.push_back(run(scene, n));
-    std::fflush(stdout);
-  }
-  print(rows, "distant meshes");
+  series(options.distant_meshes, "distant meshes", AddDistantMeshes);
 
-  // Per check, in-process: the checker alone on 2000 seeded random states (5 passes; median of
-  // the per-pass means), with the broad phase and without, on the fast (sphere) path and on the
+  // Per check, in-process: the checker alone on 2000 seeded random states (9 passes, the two
+  // checkers' interleaved; median of the per-pass means), with the broad phase and without, on the fast (sphere) path and on the
   // FCL path (force_fcl: every object is FCL geometry, FCL's dynamic AABB tree).
   std::printf("Per check, in-process: CollisionChecker::IsValid and Clearance on 2000 seeded random Panda states "
               "(median of 9 passes, the two checkers' passes interleaved), the table plus N objects (distant, or near the arm as above), with the broad phase and without "

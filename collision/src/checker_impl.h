@@ -326,6 +326,13 @@ struct CollisionChecker::Impl {
   /// whose bound is not below it are skipped); +inf when none and best = +inf.
   double PrimClearance(const Frame* frames, const std::uint32_t* which, std::size_t count, const double* soa,
                        double* w, char* placed, double best = detail::kInf) const;
+  /// Each FCL-path robot shape's world transform and bounding centre (n = shapes.size() each).
+  void PlaceShapes(const Frame* frames, fcl::Transform3d* tf, Eigen::Vector3d* center) const {
+    for (std::size_t i = 0; i < shapes.size(); ++i) {
+      tf[i] = detail::ToIsometry(frames[shapes[i].link]) * shapes[i].local;
+      center[i] = tf[i] * shapes[i].g.center;
+    }
+  }
   bool FclCollide(const Frame* frames, CollisionResult* report) const;
   double FclClearance(const Frame* frames) const;
   bool Collide(const Eigen::VectorXd& q, CollisionResult* report) const;

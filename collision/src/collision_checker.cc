@@ -396,10 +396,7 @@ bool CollisionChecker::Impl::FclCollide(const Frame* frames, CollisionResult* re
   const std::size_t n = shapes.size();
   Scratch<fcl::Transform3d, 128> tf(n);
   Scratch<Eigen::Vector3d, 128> center(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    tf[i] = ToIsometry(frames[shapes[i].link]) * shapes[i].local;
-    center[i] = tf[i] * shapes[i].g.center;
-  }
+  PlaceShapes(frames, &tf[0], &center[0]);
   const double pad = options.padding;
   const auto pair_hits = [&](const fcl::CollisionGeometryd* a, const fcl::Transform3d& ta,
                              const fcl::CollisionGeometryd* b, const fcl::Transform3d& tb) {
@@ -452,10 +449,7 @@ double CollisionChecker::Impl::FclClearance(const Frame* frames) const {
   const std::size_t n = shapes.size();
   Scratch<fcl::Transform3d, 128> tf(n);
   Scratch<Eigen::Vector3d, 128> center(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    tf[i] = ToIsometry(frames[shapes[i].link]) * shapes[i].local;
-    center[i] = tf[i] * shapes[i].g.center;
-  }
+  PlaceShapes(frames, &tf[0], &center[0]);
   double best = kInf;
   fcl::DistanceRequestd request;
   const auto geom_clearance = [&](const SceneGeom& g) {

@@ -68,18 +68,7 @@ Eigen::VectorXd Q(double left, double right) {
 SceneObject Slab(const std::string& name, double x) { return {name, Shape::Box({0.2, 1.0, 1.0}, At(x, 0, 0))}; }
 
 /// A 0.2 m cube as a triangle mesh centred at x.
-SceneObject CubeMesh(const std::string& name, double x) {
-  auto mesh = std::make_shared<TriangleMesh>();
-  for (int i = 0; i < 8; ++i) mesh->vertices.emplace_back(i & 1 ? 0.1 : -0.1, i & 2 ? 0.1 : -0.1, i & 4 ? 0.1 : -0.1);
-  const int faces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                            {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-  for (const auto& f : faces) mesh->triangles.emplace_back(f[0], f[1], f[2]);
-  Shape shape;
-  shape.type = ShapeType::kMesh;
-  shape.mesh = mesh;
-  shape.pose = At(x, 0, 0);
-  return {name, shape};
-}
+SceneObject CubeMesh(const std::string& name, double x) { return {name, test::CubeMeshShape(0.1, At(x, 0, 0))}; }
 
 /// An occupancy map whose occupied voxels fill x ∈ [1, 1.1], y ∈ [−0.1, 0.1], z ∈ [−0.1, 0.2]:
 /// 0.1 m voxels, or with `far` 1 cm voxels plus one more 7 m away, so that the map is too large

@@ -58,6 +58,22 @@ std::shared_ptr<Scene> ClutteredScene(std::uint64_t seed, int near, int far, dou
   return scene;
 }
 
+/// A point `distance` beyond the link origin farthest from the base at q (where the robot's
+/// query box ends): straight up from it, or outward along its direction from the base.
+Eigen::Isometry3d BeyondTheOuterLink(const RobotModel& robot, const Eigen::VectorXd& q, bool up, double distance) {
+  std::vector<Eigen::Isometry3d> poses;
+  robot.ForwardKinematics(q, &poses);
+  std::size_t outer = 0;
+  for (std::size_t l = 0; l < poses.size(); ++l) {
+    if (poses[l].translation().norm() > poses[outer].translation().norm()) outer = l;
+  }
+  const Eigen::Vector3d tip = poses[outer].translation();
+  const Eigen::Vector3d out = up ? Eigen::Vector3d(0.0, 0.0, 1.0) : Eigen::Vector3d(tip.normalized());
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = tip + distance * out;
+  return pose;
+}
+
 struct Pair {
   std::unique_ptr<CollisionChecker> indexed, scanned;
 };
@@ -133,18 +149,9 @@ TEST(BroadPhase, TouchingAndJustSeparatedObstacles) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int touching_collides = 0;
-  std::vector<Eigen::Isometry3d> poses;
   for (int trial = 0; trial < 60; ++trial) {
     const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
-    panda->ForwardKinematics(q, &poses);
-    std::size_t outer = 0;
-    for (std::size_t l = 0; l < poses.size(); ++l) {
-      if (poses[l].translation().norm() > poses[outer].translation().norm()) outer = l;
-    }
-    const Eigen::Vector3d tip = poses[outer].translation();
-    const Eigen::Vector3d out = trial % 3 == 0 ? Eigen::Vector3d(0.0, 0.0, 1.0) : Eigen::Vector3d(tip.normalized());
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.translation() = tip + (0.15 + 0.1 * u(rng)) * out;
+    const Eigen::Isometry3d pose = BeyondTheOuterLink(*panda, q, trial % 3 == 0, 0.15 + 0.1 * u(rng));
     const double r0 = 0.02;
     auto probe = ClutteredScene(50 + trial, 0, 300);
     probe->AddObject({"ball", Shape::Sphere(r0, pose)});
@@ -310,16 +317,7 @@ TEST(BroadPhase, ObstacleProximityGivesTheSameNearestObstacles) {
 
 /// A cube of half side h as a triangle mesh at `pose`.
 SceneObject MeshCube(const std::string& name, double h, const Eigen::Isometry3d& pose) {
-  auto mesh = std::make_shared<TriangleMesh>();
-  for (int i = 0; i < 8; ++i) mesh->vertices.emplace_back(i & 1 ? h : -h, i & 2 ? h : -h, i & 4 ? h : -h);
-  const int faces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                            {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-  for (const auto& f : faces) mesh->triangles.emplace_back(f[0], f[1], f[2]);
-  Shape shape;
-  shape.type = ShapeType::kMesh;
-  shape.mesh = mesh;
-  shape.pose = pose;
-  return {name, shape};
+  return {name, test::CubeMeshShape(h, pose)};
 }
 
 TEST(BroadPhase, FclBroadPhaseGivesTheSameAnswersForMeshesAndOnTheFclPath) {
@@ -377,19 +375,10 @@ TEST(BroadPhase, FclObjectsJustWithinAndBeyondThePadding) {
   auto panda = test::LoadRobot("panda");
   std::mt19937_64 rng(8);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<Eigen::Isometry3d> poses;
   int touching_collides = 0;
   for (int trial = 0; trial < 30; ++trial) {
     const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
-    panda->ForwardKinematics(q, &poses);
-    std::size_t outer = 0;
-    for (std::size_t l = 0; l < poses.size(); ++l) {
-      if (poses[l].translation().norm() > poses[outer].translation().norm()) outer = l;
-    }
-    const Eigen::Vector3d tip = poses[outer].translation();
-    const Eigen::Vector3d out = trial % 3 == 0 ? Eigen::Vector3d(0.0, 0.0, 1.0) : Eigen::Vector3d(tip.normalized());
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.translation() = tip + (0.1 + 0.1 * u(rng)) * out;
+    const Eigen::Isometry3d pose = BeyondTheOuterLink(*panda, q, trial % 3 == 0, 0.1 + 0.1 * u(rng));
     auto scene = std::make_shared<Scene>();
     std::mt19937_64 far_rng(900 + trial);
     for (int i = 0; i < 60; ++i) scene->AddObject(MeshCube("far" + std::to_string(i), 0.03,

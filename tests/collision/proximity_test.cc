@@ -206,20 +206,7 @@ TEST(ProximityTest, SphereLinkToOccupancyMapOfABox) {
 }
 
 /// A 0.4 m cube as a triangle mesh centred on its origin.
-Shape CubeMesh(const Eigen::Isometry3d& pose) {
-  auto mesh = std::make_shared<TriangleMesh>();
-  for (int i = 0; i < 8; ++i) {
-    mesh->vertices.emplace_back(i & 1 ? 0.2 : -0.2, i & 2 ? 0.2 : -0.2, i & 4 ? 0.2 : -0.2);
-  }
-  const int faces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                            {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-  for (const auto& f : faces) mesh->triangles.emplace_back(f[0], f[1], f[2]);
-  Shape shape;
-  shape.type = ShapeType::kMesh;
-  shape.mesh = mesh;
-  shape.pose = pose;
-  return shape;
-}
+Shape CubeMesh(const Eigen::Isometry3d& pose) { return test::CubeMeshShape(0.2, pose); }
 
 TEST(ProximityTest, MeshObstacleMatchesTheBox) {
   // The 0.4 m crate as a mesh: same distance and points as the primitive (world frame).

@@ -104,6 +104,22 @@ inline Eigen::VectorXd Ur5Up() {
   return q;
 }
 
+/// A cube of half side `half` [m] as a 12-triangle mesh at `pose` (centred on its origin).
+inline Shape CubeMeshShape(double half, const Eigen::Isometry3d& pose) {
+  auto mesh = std::make_shared<TriangleMesh>();
+  for (int i = 0; i < 8; ++i) {
+    mesh->vertices.emplace_back(i & 1 ? half : -half, i & 2 ? half : -half, i & 4 ? half : -half);
+  }
+  const int faces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                            {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& f : faces) mesh->triangles.emplace_back(f[0], f[1], f[2]);
+  Shape shape;
+  shape.type = ShapeType::kMesh;
+  shape.mesh = mesh;
+  shape.pose = pose;
+  return shape;
+}
+
 /// A one-link robot: a fixed base link with one prismatic joint along x carrying `shape`.
 inline std::shared_ptr<const RobotModel> SliderRobot(const Shape& shape) {
   Link base;
