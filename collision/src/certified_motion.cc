@@ -54,23 +54,32 @@ void CollisionChecker::Impl::BuildLevers() {
       self_pair_spheres += static_cast<std::size_t>(slinks[li].end - slinks[li].begin);
     }
   }
+  // Walking up from the sphere's link, in the child frame F of each joint J the centre is
+  // x = t + v: t the translation of the joint below (its origin in F; at the sphere's own link, t
+  // = the centre itself and v = 0), |v| <= reach (the bound on the centre's distance from that
+  // joint's origin). J turns x about its axis a through F's origin at |a × x| <= |a × t| + reach
+  // per radian: no more than the distance bound |t| + reach, and less where t runs along a (the
+  // Panda's base joint over the 0.333 m column, the hand over its flange).
   for (const SphereLink& L : slinks) {
     for (int k = L.begin; k < L.end; ++k) {
       double* r = lever.data() + static_cast<std::size_t>(k) * num_dofs;
-      double dist = std::sqrt(sx[k] * sx[k] + sy[k] * sy[k] + sz[k] * sz[k]);
+      Eigen::Vector3d t(sx[k], sy[k], sz[k]);
+      double reach = 0.0;
       int link = L.link;
       while (robot->links()[link].parent_joint >= 0) {
         const Joint& j = robot->joints()[robot->links()[link].parent_joint];
+        double dist = t.norm() + reach;  // bound on the centre's distance from F's origin
         if (j.dof >= 0 && j.type != JointType::kFixed) {
           if (j.type == JointType::kPrismatic) {
             r[j.dof] += 1.0;
-            const double reach = std::max(std::abs(j.limits.lower), std::abs(j.limits.upper));
-            dist += std::isfinite(reach) ? reach : kInf;
+            const double travel = std::max(std::abs(j.limits.lower), std::abs(j.limits.upper));
+            dist += std::isfinite(travel) ? travel : kInf;
           } else {
-            r[j.dof] += dist;
+            r[j.dof] += std::min(dist, j.axis.normalized().cross(t).norm() + reach);
           }
         }
-        dist += j.origin.translation().norm();
+        t = j.origin.translation();
+        reach = dist;
         link = j.parent_link;
       }
     }
