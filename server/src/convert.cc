@@ -642,6 +642,21 @@ void ClampOntoLimits(const RobotModel& robot, double tolerance, const std::strin
   }
 }
 
+double BoundsToleranceFromProto(double value) {
+  RequireInRange(value, 0.0, 0.01, "bounds_tolerance");
+  return value == 0.0 ? kDefaultBoundsTolerance : value;
+}
+
+Eigen::VectorXd LimitedConfigurationFromProto(const google::protobuf::RepeatedField<double>& values,
+                                              const RobotModel& robot, double tolerance, const std::string& field,
+                                              std::vector<std::string>* warnings) {
+  RequireJointCount(values.size(), robot, field);
+  Eigen::VectorXd q = PositionsFromProto(values, field);
+  ClampOntoLimits(robot, tolerance, field, &q, warnings);
+  robot.ValidateConfiguration(q, field);
+  return q;
+}
+
 PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<const CollisionChecker> checker,
                              const PlannerRegistry& registry, RequestSettings* settings) {
   const RobotModel& robot = checker->robot();
@@ -656,19 +671,14 @@ PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<con
   }
   settings->time_budget = budget;
 
-  const double bounds_tolerance = request.bounds_tolerance() == 0.0 ? kDefaultBoundsTolerance : request.bounds_tolerance();
-  RequireInRange(request.bounds_tolerance(), 0.0, 0.01, "bounds_tolerance");
-  RequireJointCount(request.start().positions_size(), robot, "start.positions");
-  query.start = PositionsFromProto(request.start().positions(), "start.positions");
-  ClampOntoLimits(robot, bounds_tolerance, "start.positions", &query.start, &settings->warnings);
-  robot.ValidateConfiguration(query.start, "start.positions");
+  const double bounds_tolerance = BoundsToleranceFromProto(request.bounds_tolerance());
+  query.start = LimitedConfigurationFromProto(request.start().positions(), robot, bounds_tolerance,
+                                              "start.positions", &settings->warnings);
   if (request.target_case() == v1::PlanRequest::kPoseGoal) {
     query.pose_goal = PoseGoalFromProto(request.pose_goal(), robot, "pose_goal");
   } else {
-    RequireJointCount(request.goal().positions_size(), robot, "goal.positions");
-    query.goal = PositionsFromProto(request.goal().positions(), "goal.positions");
-    ClampOntoLimits(robot, bounds_tolerance, "goal.positions", &query.goal, &settings->warnings);
-    robot.ValidateConfiguration(query.goal, "goal.positions");
+    query.goal = LimitedConfigurationFromProto(request.goal().positions(), robot, bounds_tolerance,
+                                               "goal.positions", &settings->warnings);
 
     const double tolerance = request.goal().tolerance();
     RequireInRange(tolerance, 0.0, 0.1, "goal.tolerance");

@@ -100,7 +100,8 @@ CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& reques
 }
 
 CoordinationQuery WorkcellPlanQuery(const v1::PlanRequest& request, std::shared_ptr<const RobotModel> robot,
-                                    std::shared_ptr<const Scene> scene, const PlannerRegistry& registry) {
+                                    std::shared_ptr<const Scene> scene, const PlannerRegistry& registry,
+                                    std::vector<std::string>* warnings) {
   const RobotModel& model = *robot;
   const v1::TrajectoryOptions& options = request.trajectory();
   const auto refuse = [](const std::string& what) {
@@ -123,11 +124,14 @@ CoordinationQuery WorkcellPlanQuery(const v1::PlanRequest& request, std::shared_
   if (request.workcell().has_base_pose()) {
     spec.placement.base_pose = PoseFromProto(request.workcell().base_pose(), "workcell.base_pose");
   }
-  spec.start = ConfigurationFromProto(request.start().positions(), model, "start.positions");
+  const double bounds_tolerance = BoundsToleranceFromProto(request.bounds_tolerance());
+  spec.start = LimitedConfigurationFromProto(request.start().positions(), model, bounds_tolerance, "start.positions",
+                                             warnings);
   if (request.target_case() == v1::PlanRequest::kPoseGoal) {
     spec.pose_goal = PoseGoalFromProto(request.pose_goal(), model, "pose_goal");
   } else {
-    spec.goal = ConfigurationFromProto(request.goal().positions(), model, "goal.positions");
+    spec.goal = LimitedConfigurationFromProto(request.goal().positions(), model, bounds_tolerance, "goal.positions",
+                                              warnings);
   }
   spec.max_velocity = OptionalLimits(options.max_velocity());
   if (spec.max_velocity.size() == model.num_dofs()) spec.max_velocity = spec.max_velocity.cwiseMin(model.velocity_limits());

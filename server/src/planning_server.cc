@@ -741,7 +741,8 @@ class PlanningService final : public RawService {
       }
       // A team of one among the workcell's committed trajectories.
       call.record.fields.front().second = "workcell:" + planner;
-      CoordinationQuery query = WorkcellPlanQuery(request, robot.model, scene.scene, registry_);
+      std::vector<std::string> warnings;
+      CoordinationQuery query = WorkcellPlanQuery(request, robot.model, scene.scene, registry_, &warnings);
       ApplyReplyCap(&query.sample_cap);
       query.sample_cap.field = "trajectory.sample_period";
       const double origin =
@@ -752,6 +753,10 @@ class PlanningService final : public RawService {
       const Termination termination = call.Start(BudgetEnd(query.time_budget, call.deadline), call.deadline);
       const CoordinationOutcome outcome = chasles::Coordinate(query, registry_, termination);
       WorkcellPlanToProto(outcome, query, &response);
+      if (request.has_robot()) {
+        for (const std::string& warning : RobotWarnings(*robot.model, "robot")) response.add_warnings(warning);
+      }
+      for (const std::string& warning : warnings) response.add_warnings(warning);
       call.record.outcome = v1::PlanOutcome_Name(response.outcome());
       if (outcome.code == CoordinationCode::kCancelled) {
         throw StatusError{grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client")};

@@ -113,5 +113,31 @@ TEST_F(RobotsAsShipped, ValuesJustOutsideALimitAreClampedWithinTheToleranceAndRe
   EXPECT_EQ(status.error_message(), "bounds_tolerance = 0.02 must be within [0, 0.01]");
 }
 
+TEST_F(RobotsAsShipped, AWorkcellPlanClampsWithinTheToleranceToo) {
+  // The same PlanRequest field on the workcell path (a team of one among committed motions).
+  v1::CreateWorkcellRequest create;
+  create.set_name("bounds_cell");
+  v1::CreateWorkcellResponse created;
+  {
+    grpc::ClientContext context;
+    ASSERT_TRUE(server_->stub().CreateWorkcell(&context, create, &created).ok());
+  }
+  v1::PlanRequest request = LoadRequest("panda_table");
+  request.mutable_workcell()->set_name("bounds_cell");
+  request.mutable_goal()->set_positions(6, 2.8973 + 2.7e-6);
+  v1::PlanResponse response;
+  grpc::Status status = server_->Plan(request, &response);
+  ASSERT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  EXPECT_EQ(status.error_message(), "goal.positions[6] = 2.8973027 must be within [-2.8973, 2.8973] (joint 'panda_joint7')");
+  request.set_bounds_tolerance(1e-5);
+  status = server_->Plan(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  ASSERT_EQ(response.warnings_size(), 1);
+  EXPECT_NE(response.warnings(0).find("goal.positions[6] = 2.8973027 is "), std::string::npos) << response.warnings(0);
+  ASSERT_GT(response.trajectory().points_size(), 1);
+  EXPECT_EQ(response.trajectory().points(response.trajectory().points_size() - 1).positions(6), 2.8973);
+}
+
 }  // namespace
 }  // namespace chasles::testing

@@ -92,6 +92,17 @@ std::vector<std::string> RobotWarnings(const RobotModel& robot, const std::strin
 /// PlanRequest.bounds_tolerance's default [rad or m].
 inline constexpr double kDefaultBoundsTolerance = 1e-6;
 
+/// PlanRequest.bounds_tolerance with its default: 0 = kDefaultBoundsTolerance.
+/// \throws Error(kInvalidArgument) `bounds_tolerance = 0.02 must be within [0, 0.01]`.
+double BoundsToleranceFromProto(double value);
+
+/// Joint positions of `robot` from a request (one per joint, finite, within the limits once
+/// values at most `tolerance` outside are clamped onto them, each reported in *warnings).
+/// \throws Error(kInvalidArgument) naming `field`, the index, the value and the rule.
+Eigen::VectorXd LimitedConfigurationFromProto(const google::protobuf::RepeatedField<double>& values,
+                                              const RobotModel& robot, double tolerance, const std::string& field,
+                                              std::vector<std::string>* warnings);
+
 /// Values of q at most `tolerance` outside a joint limit are set onto it, each reported in
 /// *warnings naming `field`, the index, the value, the limit and the joint. Values farther out
 /// (and NaN) are left for RobotModel::ValidateConfiguration to refuse.

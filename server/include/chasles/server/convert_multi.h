@@ -25,9 +25,11 @@ CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& reques
 
 /// A Plan request with a WorkcellContext as a team of one (PRIORITIZED: its path, a roadmap and
 /// the space-time search around the committed motions). Trajectory options beyond the velocity
-/// and acceleration limits and the sample period are refused with INVALID_ARGUMENT.
+/// and acceleration limits and the sample period are refused with INVALID_ARGUMENT. Start and
+/// goal values within `bounds_tolerance` outside a limit are clamped, each reported in *warnings.
 CoordinationQuery WorkcellPlanQuery(const v1::PlanRequest& request, std::shared_ptr<const RobotModel> robot,
-                                    std::shared_ptr<const Scene> scene, const PlannerRegistry& registry);
+                                    std::shared_ptr<const Scene> scene, const PlannerRegistry& registry,
+                                    std::vector<std::string>* warnings);
 
 v1::PlanOutcome CoordinationCodeToProto(CoordinationCode code);
 
