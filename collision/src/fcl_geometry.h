@@ -18,6 +18,8 @@ struct FclGeom {
 };
 
 /// The FCL geometry of `s` (primitive, or a BVHModel<OBBRSS> for a mesh); `s.pose` is not applied.
+/// A mesh's BVH is built once per TriangleMesh object and kept while that mesh lives (every
+/// checker of a robot, or of a scene, shares its meshes' BVHs). Thread-safe.
 FclGeom MakeGeom(const Shape& s);
 
 }  // namespace chasles
