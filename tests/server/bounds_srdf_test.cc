@@ -28,6 +28,20 @@ class RobotsAsShipped : public SharedServerTest<> {
     urdf->set_strict_srdf(strict);
     return request;
   }
+  /// panda_table with its goal 2.7e-6 rad above panda_joint7's limit of 2.8973 (in `workcell`
+  /// unless empty), after checking that the default tolerance refuses it, printing the value
+  /// and the limit exactly (the value is visibly above the limit).
+  static v1::PlanRequest GoalJustAboveTheLimit(const std::string& workcell) {
+    v1::PlanRequest request = LoadRequest("panda_table");
+    if (!workcell.empty()) request.mutable_workcell()->set_name(workcell);
+    request.mutable_goal()->set_positions(6, 2.8973 + 2.7e-6);
+    v1::PlanResponse response;
+    const grpc::Status status = server_->Plan(request, &response);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+    EXPECT_EQ(status.error_message(),
+              "goal.positions[6] = 2.8973027 must be within [-2.8973, 2.8973] (joint 'panda_joint7')");
+    return request;
+  }
   static grpc::Status Upload(const v1::UploadRobotRequest& request, v1::UploadRobotResponse* response) {
     grpc::ClientContext context;
     context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
@@ -73,14 +87,9 @@ TEST_F(RobotsAsShipped, AnSrdfNamingUnknownLinksLoadsWithAWarningPerSkippedPair)
 }
 
 TEST_F(RobotsAsShipped, ValuesJustOutsideALimitAreClampedWithinTheToleranceAndRefusedBeyondIt) {
-  // panda_joint7 is limited to ±2.8973 rad.
-  v1::PlanRequest request = LoadRequest("panda_table");
-  request.mutable_goal()->set_positions(6, 2.8973 + 2.7e-6);
+  v1::PlanRequest request = GoalJustAboveTheLimit("");
   v1::PlanResponse response;
-  grpc::Status status = server_->Plan(request, &response);
-  ASSERT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
-  // Exact numbers: the value is visibly above the limit.
-  EXPECT_EQ(status.error_message(), "goal.positions[6] = 2.8973027 must be within [-2.8973, 2.8973] (joint 'panda_joint7')");
+  grpc::Status status;
 
   request.set_bounds_tolerance(1e-5);
   request.mutable_start()->set_positions(6, -2.8973 - 5e-7);
@@ -122,15 +131,10 @@ TEST_F(RobotsAsShipped, AWorkcellPlanClampsWithinTheToleranceToo) {
     grpc::ClientContext context;
     ASSERT_TRUE(server_->stub().CreateWorkcell(&context, create, &created).ok());
   }
-  v1::PlanRequest request = LoadRequest("panda_table");
-  request.mutable_workcell()->set_name("bounds_cell");
-  request.mutable_goal()->set_positions(6, 2.8973 + 2.7e-6);
-  v1::PlanResponse response;
-  grpc::Status status = server_->Plan(request, &response);
-  ASSERT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
-  EXPECT_EQ(status.error_message(), "goal.positions[6] = 2.8973027 must be within [-2.8973, 2.8973] (joint 'panda_joint7')");
+  v1::PlanRequest request = GoalJustAboveTheLimit("bounds_cell");
   request.set_bounds_tolerance(1e-5);
-  status = server_->Plan(request, &response);
+  v1::PlanResponse response;
+  const grpc::Status status = server_->Plan(request, &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
   ASSERT_EQ(response.warnings_size(), 1);
