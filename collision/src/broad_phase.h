@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <numeric>
 #include <vector>
 
@@ -16,6 +17,24 @@ namespace chasles::detail {
 struct Box3 {
   double lo[3];
   double hi[3];
+
+  /// The box holding nothing (lo = +inf, hi = −inf), for Include to grow.
+  static Box3 None() {
+    Box3 box;
+    for (int a = 0; a < 3; ++a) {
+      box.lo[a] = std::numeric_limits<double>::infinity();
+      box.hi[a] = -std::numeric_limits<double>::infinity();
+    }
+    return box;
+  }
+  /// Grows the box to hold the sphere (centre c, radius r).
+  void Include(const double* c, double r) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], c[a] - r);
+      hi[a] = std::max(hi[a], c[a] + r);
+    }
+  }
+  bool Empty() const { return !(lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2]); }
 };
 
 class SphereBvh {
@@ -27,13 +46,10 @@ class SphereBvh {
 
   /// Spheres (x[i], y[i], z[i]) with radii r[i], i < n.
   SphereBvh(const double* x, const double* y, const double* z, const double* r, std::size_t n) {
-    boxes_.resize(n);
+    boxes_.assign(n, Box3::None());
     for (std::size_t i = 0; i < n; ++i) {
       const double c[3] = {x[i], y[i], z[i]};
-      for (int a = 0; a < 3; ++a) {
-        boxes_[i].lo[a] = c[a] - r[i];
-        boxes_[i].hi[a] = c[a] + r[i];
-      }
+      boxes_[i].Include(c, r[i]);
     }
     order_.resize(n);
     std::iota(order_.begin(), order_.end(), 0u);

@@ -6,7 +6,9 @@
 /// allowed_pairs.cc (the scene's allowed pairs resolved against a robot). See the design notes at
 /// the top of collision_checker.cc.
 
+#include <algorithm>
 #include <cstdint>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <string>
@@ -186,17 +188,9 @@ struct CollisionChecker::Impl {
   /// The box around every sphere link's bounding sphere (centres lb, 3 per link) grown by
   /// grow[li] (nullptr: 0) plus `margin`.
   detail::Box3 LinkBoundsBox(const double* lb, const double* grow, double margin) const {
-    detail::Box3 box;
-    for (int a = 0; a < 3; ++a) {
-      box.lo[a] = std::numeric_limits<double>::infinity();
-      box.hi[a] = -std::numeric_limits<double>::infinity();
-    }
+    detail::Box3 box = detail::Box3::None();
     for (std::size_t li = 0; li < slinks.size(); ++li) {
-      const double r = slinks[li].br + (grow != nullptr ? grow[li] : 0.0) + margin;
-      for (int a = 0; a < 3; ++a) {
-        box.lo[a] = std::min(box.lo[a], lb[3 * li + a] - r);
-        box.hi[a] = std::max(box.hi[a], lb[3 * li + a] + r);
-      }
+      box.Include(&lb[3 * li], slinks[li].br + (grow != nullptr ? grow[li] : 0.0) + margin);
     }
     return box;
   }
@@ -241,49 +235,54 @@ struct CollisionChecker::Impl {
   /// The box around every FCL-path robot shape's bounding sphere (world centres, one per
   /// shape), padded, grown by `margin`.
   detail::Box3 ShapesBox(const Eigen::Vector3d* center, double margin) const {
-    detail::Box3 box;
-    for (int a = 0; a < 3; ++a) {
-      box.lo[a] = std::numeric_limits<double>::infinity();
-      box.hi[a] = -std::numeric_limits<double>::infinity();
-    }
+    detail::Box3 box = detail::Box3::None();
     for (std::size_t i = 0; i < shapes.size(); ++i) {
-      const double r = shapes[i].g.radius + options.padding + margin;
-      for (int a = 0; a < 3; ++a) {
-        box.lo[a] = std::min(box.lo[a], center[i][a] - r);
-        box.hi[a] = std::max(box.hi[a], center[i][a] + r);
-      }
+      box.Include(center[i].data(), shapes[i].g.radius + options.padding + margin);
     }
     return box;
   }
-  /// Clearance over the scene_geoms, widening the search: visit(g) may lower *best; it is called
-  /// for the geoms near box_at(radius), the radius starting at *best (kClearanceSearchRadius
-  /// while *best is +inf) and doubling until *best <= radius or every geom was visited. A geom
-  /// whose AABB misses box_at(radius) is farther than `radius` from every robot shape, so it
-  /// cannot lower a best that is <= radius. Without a broad phase: every geom, once.
+  /// The widening search Clearance makes, for prims and for scene_geoms alike: gather(radius,
+  /// &near) lists, ascending, every item that may lie within `radius` of the robot (false:
+  /// there is no robot to search around); evaluate(fresh, count) may lower *best over the listed
+  /// items no narrower round listed. The radius starts at `radius` and doubles until *best <=
+  /// radius (an item not listed is farther than that, so it cannot lower *best) or every one of
+  /// `total` items was listed.
+  template <typename Gather, typename Evaluate>
+  static void WideningSearch(double radius, std::size_t total, const double* best, const Gather& gather,
+                             const Evaluate& evaluate) {
+    thread_local std::vector<std::uint32_t> near, done, fresh;
+    done.clear();
+    for (;; radius *= 2.0) {
+      if (!gather(radius, &near)) return;
+      fresh.clear();
+      std::set_difference(near.begin(), near.end(), done.begin(), done.end(), std::back_inserter(fresh));
+      evaluate(fresh.data(), fresh.size());
+      if (*best <= radius || near.size() == total) return;
+      done.swap(near);
+    }
+  }
+  /// Clearance over the scene_geoms: visit(g) may lower *best, for the geoms near
+  /// box_at(radius) (WideningSearch from *best, or kClearanceSearchRadius while it is +inf). A
+  /// geom whose bound misses box_at(radius) is farther than `radius` from every robot shape.
+  /// Without a broad phase: every geom, once.
   template <typename BoxAt, typename Visit>
-  void SearchGeomsNear(const BoxAt& box_at, double* best, std::vector<std::uint32_t>* near, const Visit& visit) const {
+  void SearchGeomsNear(const BoxAt& box_at, double* best, const Visit& visit) const {
     if (!geom_broad_phase) {
       for (const SceneGeom& g : scene_geoms) visit(g);
       return;
     }
-    // Each wider round visits only the geoms a narrower one did not (both lists ascending).
-    thread_local std::vector<std::uint32_t> done;
-    done.clear();
-    for (double radius = *best < detail::kInf ? *best : kClearanceSearchRadius;; radius *= 2.0) {
-      const detail::Box3 box = box_at(radius);
-      if (!(box.lo[0] <= box.hi[0])) return;  // no robot shape
-      GeomsNear(box, near);
-      std::size_t d = 0;
-      for (const std::uint32_t gi : *near) {
-        while (d < done.size() && done[d] < gi) ++d;
-        if (d < done.size() && done[d] == gi) continue;
-        visit(scene_geoms[gi]);
-      }
-      if (*best <= radius || near->size() == scene_geoms.size()) return;
-      done.swap(*near);
-    }
+    WideningSearch(
+        *best < detail::kInf ? *best : kClearanceSearchRadius, scene_geoms.size(), best,
+        [&](double radius, std::vector<std::uint32_t>* near) {
+          const detail::Box3 box = box_at(radius);
+          if (box.Empty()) return false;  // no robot shape
+          GeomsNear(box, near);
+          return true;
+        },
+        [&](const std::uint32_t* fresh, std::size_t count) {
+          for (std::size_t j = 0; j < count; ++j) visit(scene_geoms[fresh[j]]);
+        });
   }
-
   // Link–obstacle pairs the scene allows (see the design notes): Prim::allowed and
   // SceneGeom::allowed index into this.
   std::vector<UnitSet> allowed_sets;

@@ -48,9 +48,11 @@
 //   bounds, then 2× wider until the best distance is inside the searched radius. Same answers
 //   as scanning all (certified motions: the same verdicts, a few more states at chunk ends).
 //   Objects FCL handles (meshes and ungridded maps on the fast path, every object on the FCL
-//   path) go into FCL's own broad phase, a DynamicAABBTreeCollisionManager over their world
-//   AABBs, when there are more than 32: a check lists those whose AABB overlaps the robot's box
-//   (sorted, so the same first contact) and Clearance widens that box as it does for primitives.
+//   path) get a broad phase too when there are more than 32: on the FCL path FCL's own, a
+//   DynamicAABBTreeCollisionManager over their world AABBs; on the fast path, where that tree's
+//   query would cost a third of a state check, a SphereBvh of their bounding spheres. A check
+//   lists those near the robot's box (ascending, so the same first contact) and Clearance widens
+//   that box as it does for primitives (WideningSearch, shared by both).
 // * Fast-path order: primitives, occupancy maps (scene order), self, meshes. The FCL path checks
 //   scene objects, then maps, then self, so for a scene of maps only both paths report the same
 //   first contact.
@@ -226,7 +228,7 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
     }
     return false;
   };
-  // Meshes and maps near the robot (FCL's broad phase when there are many), in scene order.
+  // Meshes and maps near the robot (GeomsNear: their broad phase when there are many), in scene order.
   thread_local std::vector<std::uint32_t> geoms_near;
   geoms_near.clear();
   if (!scene_geoms.empty()) GeomsNear(LinkBoundsBox(&lb[0], nullptr, 0.0), &geoms_near);
@@ -355,18 +357,16 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
   } else {
     // Prims within `radius` of the link bounds first; a prim outside that box is farther than
     // `radius` from every link, so once the best distance is at most `radius` it is final.
-    // Each wider round evaluates only the prims a narrower one did not (both lists ascending).
-    thread_local std::vector<std::uint32_t> near, done, fresh;
-    done.clear();
-    for (double radius = kClearanceSearchRadius;; radius *= 2.0) {
-      PrimsNear(&lb[0], nullptr, radius, &near);
-      if (done.empty()) Gathered(&history, near.size());
-      fresh.clear();
-      std::set_difference(near.begin(), near.end(), done.begin(), done.end(), std::back_inserter(fresh));
-      best = PrimClearance(frames, fresh.data(), fresh.size(), &soa[0], &w[0], &placed[0], best);
-      if (best <= radius || near.size() == prims.size()) break;
-      done.swap(near);
-    }
+    WideningSearch(
+        kClearanceSearchRadius, prims.size(), &best,
+        [&](double radius, std::vector<std::uint32_t>* near) {
+          PrimsNear(&lb[0], nullptr, radius, near);
+          if (radius == kClearanceSearchRadius) Gathered(&history, near->size());
+          return true;
+        },
+        [&](const std::uint32_t* fresh, std::size_t count) {
+          best = PrimClearance(frames, fresh, count, &soa[0], &w[0], &placed[0], best);
+        });
   }
   if (!scene_geoms.empty()) {
     for (std::size_t li = 0; li < nl; ++li) PlaceLinkSpheres(frames, li, &w[0], &placed[0]);
@@ -385,9 +385,7 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
         best = std::min(best, d);
       }
     };
-    thread_local std::vector<std::uint32_t> geoms_near;
-    SearchGeomsNear([&](double radius) { return LinkBoundsBox(&lb[0], nullptr, radius); }, &best, &geoms_near,
-                    geom_clearance);
+    SearchGeomsNear([&](double radius) { return LinkBoundsBox(&lb[0], nullptr, radius); }, &best, geom_clearance);
   }
   return best <= 0.0 ? 0.0 : best;
 }
@@ -462,9 +460,7 @@ double CollisionChecker::Impl::FclClearance(const Frame* frames) const {
       best = std::min(best, d - options.padding);
     }
   };
-  thread_local std::vector<std::uint32_t> geoms_near;
-  SearchGeomsNear([&](double radius) { return ShapesBox(center.data(), radius); }, &best, &geoms_near,
-                  geom_clearance);
+  SearchGeomsNear([&](double radius) { return ShapesBox(center.data(), radius); }, &best, geom_clearance);
   return best <= 0.0 ? 0.0 : best;
 }
 
@@ -729,7 +725,7 @@ void CollisionChecker::Impl::GeomsNear(const detail::Box3& box, std::vector<std:
     for (std::size_t i = 0; i < scene_geoms.size(); ++i) out->push_back(static_cast<std::uint32_t>(i));
     return;
   }
-  if (!(box.lo[0] <= box.hi[0] && box.lo[1] <= box.hi[1] && box.lo[2] <= box.hi[2])) return;  // no robot shape
+  if (box.Empty()) return;  // no robot shape
   if (geom_manager == nullptr) {
     geom_bvh.Overlapping(box, out);
     return;

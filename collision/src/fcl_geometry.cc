@@ -59,12 +59,6 @@ std::shared_ptr<fcl::CollisionGeometryd> SharedBvh(const std::shared_ptr<const T
 
 FclGeom MakeGeom(const Shape& s) {
   FclGeom g;
-  if (s.type == ShapeType::kMesh) {
-    g.geom = SharedBvh(s.mesh);  // its local AABB computed once, when it was built
-    g.center = g.geom->aabb_center;
-    g.radius = g.geom->aabb_radius;
-    return g;
-  }
   switch (s.type) {
     case ShapeType::kSphere:
       g.geom = std::make_shared<fcl::Sphered>(s.radius);
@@ -79,9 +73,10 @@ FclGeom MakeGeom(const Shape& s) {
       g.geom = std::make_shared<fcl::Capsuled>(s.radius, s.length);
       break;
     case ShapeType::kMesh:
-      break;  // above
+      g.geom = SharedBvh(s.mesh);  // shared: its local AABB was computed once, when it was built
+      break;
   }
-  g.geom->computeLocalAABB();
+  if (s.type != ShapeType::kMesh) g.geom->computeLocalAABB();
   g.center = g.geom->aabb_center;
   g.radius = g.geom->aabb_radius;
   return g;

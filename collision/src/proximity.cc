@@ -216,11 +216,8 @@ void ObstacleProximity::Query(const Eigen::VectorXd& q, double max_distance, std
       std::size_t count = m.obstacles.size();
       const std::uint32_t* near = nullptr;  // nullptr: every obstacle, in order
       if (m.broad_phase) {
-        detail::Box3 box;
-        for (int a = 0; a < 3; ++a) {
-          box.lo[a] = c[a] - s.g.radius - max_distance;
-          box.hi[a] = c[a] + s.g.radius + max_distance;
-        }
+        detail::Box3 box = detail::Box3::None();
+        box.Include(c.data(), s.g.radius + max_distance);
         m.obstacle_bvh.Overlapping(box, &near_list);
         count = near_list.size();
         near = near_list.data();

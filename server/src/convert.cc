@@ -600,9 +600,11 @@ ParameterValues PlannerParametersFromProto(const v1::PlannerConfig& config, cons
 }
 
 Eigen::VectorXd ConfigurationFromProto(const google::protobuf::RepeatedField<double>& values, const RobotModel& robot,
-                                       const std::string& field) {
+                                       const std::string& field, double bounds_tolerance,
+                                       std::vector<std::string>* warnings) {
   RequireJointCount(values.size(), robot, field);
   Eigen::VectorXd q = PositionsFromProto(values, field);
+  if (warnings != nullptr) ClampOntoLimits(robot, bounds_tolerance, field, &q, warnings);
   robot.ValidateConfiguration(q, field);
   return q;
 }
@@ -647,16 +649,6 @@ double BoundsToleranceFromProto(double value) {
   return value == 0.0 ? kDefaultBoundsTolerance : value;
 }
 
-Eigen::VectorXd LimitedConfigurationFromProto(const google::protobuf::RepeatedField<double>& values,
-                                              const RobotModel& robot, double tolerance, const std::string& field,
-                                              std::vector<std::string>* warnings) {
-  RequireJointCount(values.size(), robot, field);
-  Eigen::VectorXd q = PositionsFromProto(values, field);
-  ClampOntoLimits(robot, tolerance, field, &q, warnings);
-  robot.ValidateConfiguration(q, field);
-  return q;
-}
-
 PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<const CollisionChecker> checker,
                              const PlannerRegistry& registry, RequestSettings* settings) {
   const RobotModel& robot = checker->robot();
@@ -672,13 +664,13 @@ PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<con
   settings->time_budget = budget;
 
   const double bounds_tolerance = BoundsToleranceFromProto(request.bounds_tolerance());
-  query.start = LimitedConfigurationFromProto(request.start().positions(), robot, bounds_tolerance,
-                                              "start.positions", &settings->warnings);
+  query.start = ConfigurationFromProto(request.start().positions(), robot, "start.positions", bounds_tolerance,
+                                       &settings->warnings);
   if (request.target_case() == v1::PlanRequest::kPoseGoal) {
     query.pose_goal = PoseGoalFromProto(request.pose_goal(), robot, "pose_goal");
   } else {
-    query.goal = LimitedConfigurationFromProto(request.goal().positions(), robot, bounds_tolerance,
-                                               "goal.positions", &settings->warnings);
+    query.goal = ConfigurationFromProto(request.goal().positions(), robot, "goal.positions", bounds_tolerance,
+                                        &settings->warnings);
 
     const double tolerance = request.goal().tolerance();
     RequireInRange(tolerance, 0.0, 0.1, "goal.tolerance");

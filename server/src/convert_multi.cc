@@ -125,13 +125,11 @@ CoordinationQuery WorkcellPlanQuery(const v1::PlanRequest& request, std::shared_
     spec.placement.base_pose = PoseFromProto(request.workcell().base_pose(), "workcell.base_pose");
   }
   const double bounds_tolerance = BoundsToleranceFromProto(request.bounds_tolerance());
-  spec.start = LimitedConfigurationFromProto(request.start().positions(), model, bounds_tolerance, "start.positions",
-                                             warnings);
+  spec.start = ConfigurationFromProto(request.start().positions(), model, "start.positions", bounds_tolerance, warnings);
   if (request.target_case() == v1::PlanRequest::kPoseGoal) {
     spec.pose_goal = PoseGoalFromProto(request.pose_goal(), model, "pose_goal");
   } else {
-    spec.goal = LimitedConfigurationFromProto(request.goal().positions(), model, bounds_tolerance, "goal.positions",
-                                              warnings);
+    spec.goal = ConfigurationFromProto(request.goal().positions(), model, "goal.positions", bounds_tolerance, warnings);
   }
   spec.max_velocity = OptionalLimits(options.max_velocity());
   if (spec.max_velocity.size() == model.num_dofs()) spec.max_velocity = spec.max_velocity.cwiseMin(model.velocity_limits());

@@ -753,10 +753,7 @@ class PlanningService final : public RawService {
       const Termination termination = call.Start(BudgetEnd(query.time_budget, call.deadline), call.deadline);
       const CoordinationOutcome outcome = chasles::Coordinate(query, registry_, termination);
       WorkcellPlanToProto(outcome, query, &response);
-      if (request.has_robot()) {
-        for (const std::string& warning : RobotWarnings(*robot.model, "robot")) response.add_warnings(warning);
-      }
-      for (const std::string& warning : warnings) response.add_warnings(warning);
+      AddPlanWarnings(request, *robot.model, warnings, &response);
       call.record.outcome = v1::PlanOutcome_Name(response.outcome());
       if (outcome.code == CoordinationCode::kCancelled) {
         throw StatusError{grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client")};
@@ -788,16 +785,23 @@ class PlanningService final : public RawService {
                           {"optimize", outcome.seconds.optimize},   {"verify", outcome.seconds.verify}};
     outcome.seconds.total = SecondsSince(call.arrival);
     PlanOutcomeToProto(outcome, query, &response);
-    if (request.has_robot()) {
-      for (const std::string& warning : RobotWarnings(*robot.model, "robot")) response.add_warnings(warning);
-    }
-    for (const std::string& warning : settings.warnings) response.add_warnings(warning);
+    AddPlanWarnings(request, *robot.model, settings.warnings, &response);
     grpc::Status status = StatusFromOutcome(outcome.code, outcome.message);
     if (status.ok() && (call.cancelled() || termination.Reason() == StopReason::kCancelled) &&
         outcome.code != PlanOutcomeCode::kSuccess) {
       status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
     }
     if (!status.ok()) throw StatusError{status};
+  }
+
+  /// A plan's warnings: an inline robot's load warnings (an uploaded one reported them at
+  /// upload), then what the request's conversion adjusted.
+  static void AddPlanWarnings(const v1::PlanRequest& request, const RobotModel& robot,
+                              const std::vector<std::string>& adjusted, v1::PlanResponse* response) {
+    if (request.has_robot()) {
+      for (const std::string& warning : RobotWarnings(robot, "robot")) response->add_warnings(warning);
+    }
+    for (const std::string& warning : adjusted) response->add_warnings(warning);
   }
 
   /// The end of a request's budget, cut short so a result can still travel back before the

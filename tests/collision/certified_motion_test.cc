@@ -197,19 +197,25 @@ TEST(CertifiedCurve, FallsBackToDiscreteStatesWhenTheCheckerCannotCertify) {
   EXPECT_FALSE(checker.IsCurveCertified([](double s, Eigen::VectorXd* q) { *q = Q1(0.0025 * s); }, Q1(0.0025)));
 }
 
+/// The robot's collision sphere centres in their link frames, in the checker's sphere order
+/// (link order, then shape order), and each one's link.
+void SphereCentres(const RobotModel& robot, std::vector<Eigen::Vector3d>* centres, std::vector<int>* link_of) {
+  for (int l = 0; l < robot.num_links(); ++l) {
+    for (const Shape& s : robot.links()[l].collision) {
+      centres->push_back(s.pose.translation());
+      link_of->push_back(l);
+    }
+  }
+}
+
 TEST(CertifiedMotion, LeverArmBoundHoldsAlongSegments) {
   auto panda = test::LoadRobot("panda");
   CollisionChecker checker(panda, std::make_shared<Scene>());
   ASSERT_TRUE(checker.uses_fast_path());
   ASSERT_TRUE(checker.certifies_motion());
-  std::vector<Eigen::Vector3d> centres;  // link frame, in the checker's sphere order
+  std::vector<Eigen::Vector3d> centres;
   std::vector<int> link_of;
-  for (int l = 0; l < panda->num_links(); ++l) {
-    for (const Shape& s : panda->links()[l].collision) {
-      centres.push_back(s.pose.translation());
-      link_of.push_back(l);
-    }
-  }
+  SphereCentres(*panda, &centres, &link_of);
   std::mt19937_64 rng(7);
   std::vector<Eigen::Isometry3d> p0, p1;
   double worst = 0.0;  // largest displacement / bound seen
@@ -275,12 +281,7 @@ TEST(CertifiedMotion, LeverBoundsEveryJointsSpeedOfEverySphere) {
     ASSERT_TRUE(checker.certifies_motion()) << robot->name();
     std::vector<Eigen::Vector3d> centres;
     std::vector<int> link_of;
-    for (int l = 0; l < robot->num_links(); ++l) {
-      for (const Shape& s : robot->links()[l].collision) {
-        centres.push_back(s.pose.translation());
-        link_of.push_back(l);
-      }
-    }
+    SphereCentres(*robot, &centres, &link_of);
     std::mt19937_64 rng(11);
     std::vector<Eigen::Isometry3d> lo, hi;
     double closest = 0.0;  // largest speed / bound seen

@@ -31,8 +31,10 @@ struct CollisionOptions {
   /// Clearance visit only the primitives near the robot (or near the motion, in chunks of at
   /// most 0.2 m of sweep). The answers are the same either way (a certified motion may take a
   /// few more states, cut at chunk ends). Likewise, with more than 32 objects that FCL handles
-  /// (meshes, ungridded maps; every object on the FCL path), FCL's DynamicAABBTreeCollisionManager
-  /// over their AABBs lists the ones near the robot. false scans every object (tests, benchmarks).
+  /// (meshes, ungridded maps; every object on the FCL path), only the ones near the robot are
+  /// visited: listed by FCL's DynamicAABBTreeCollisionManager over their AABBs on the FCL path, by
+  /// a hierarchy of their bounding spheres on the sphere path. false scans every object (tests,
+  /// benchmarks).
   bool broad_phase = true;
   /// \throws Error(kInvalidArgument) naming the field.
   void Validate() const;

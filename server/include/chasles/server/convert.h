@@ -70,9 +70,12 @@ PoseGoalSpec PoseGoalFromProto(const v1::PoseGoal& goal, const RobotModel& robot
 ParameterValues PlannerParametersFromProto(const v1::PlannerConfig& config, const PlannerSpec& spec,
                                            const std::string& field);
 
-/// Joint positions: count, finiteness and joint limits checked, errors naming `field`.
+/// Joint positions: count, finiteness and joint limits checked, errors naming `field`. With
+/// `warnings`, values at most `bounds_tolerance` outside a limit are first clamped onto it, each
+/// reported there (ClampOntoLimits).
 Eigen::VectorXd ConfigurationFromProto(const google::protobuf::RepeatedField<double>& values, const RobotModel& robot,
-                                       const std::string& field);
+                                       const std::string& field, double bounds_tolerance = 0.0,
+                                       std::vector<std::string>* warnings = nullptr);
 
 /// Samples → JointTrajectory points (joint names from `robot`).
 void SamplesToProto(const std::vector<TrajectorySample>& samples, const RobotModel& robot,
@@ -95,13 +98,6 @@ inline constexpr double kDefaultBoundsTolerance = 1e-6;
 /// PlanRequest.bounds_tolerance with its default: 0 = kDefaultBoundsTolerance.
 /// \throws Error(kInvalidArgument) `bounds_tolerance = 0.02 must be within [0, 0.01]`.
 double BoundsToleranceFromProto(double value);
-
-/// Joint positions of `robot` from a request (one per joint, finite, within the limits once
-/// values at most `tolerance` outside are clamped onto them, each reported in *warnings).
-/// \throws Error(kInvalidArgument) naming `field`, the index, the value and the rule.
-Eigen::VectorXd LimitedConfigurationFromProto(const google::protobuf::RepeatedField<double>& values,
-                                              const RobotModel& robot, double tolerance, const std::string& field,
-                                              std::vector<std::string>* warnings);
 
 /// Values of q at most `tolerance` outside a joint limit are set onto it, each reported in
 /// *warnings naming `field`, the index, the value, the limit and the joint. Values farther out
