@@ -763,8 +763,7 @@ void detail::CheckSize(const RobotModel& robot, const Eigen::VectorXd& q, const 
   }
 }
 
-namespace {
-bool WithinLimits(const RobotModel& robot, const Eigen::VectorXd& q) {
+bool detail::WithinLimits(const RobotModel& robot, const Eigen::VectorXd& q) {
   const Eigen::VectorXd& lo = robot.lower_limits();
   const Eigen::VectorXd& hi = robot.upper_limits();
   for (Eigen::Index i = 0; i < q.size(); ++i) {
@@ -772,12 +771,11 @@ bool WithinLimits(const RobotModel& robot, const Eigen::VectorXd& q) {
   }
   return true;
 }
-}  // namespace
 
 bool CollisionChecker::IsValid(const Eigen::VectorXd& q, CheckCounters* counters) const {
   CheckSize(*robot_, q, "q");
   if (counters != nullptr) ++counters->state_checks;
-  if (!WithinLimits(*robot_, q)) return false;
+  if (!detail::WithinLimits(*robot_, q)) return false;
   return !impl_->Collide(q, nullptr);
 }
 
