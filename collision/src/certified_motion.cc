@@ -60,9 +60,6 @@ void CollisionChecker::Impl::BuildLevers() {
   // joint's origin). J turns x about its axis a through F's origin at |a × x| <= |a × t| + reach
   // per radian: no more than the distance bound |t| + reach, and less where t runs along a (the
   // Panda's base joint over the 0.333 m column, the hand over its flange).
-  chain_offset.assign(1, 0);
-  chain.clear();
-  taylor.assign(ns, 1);
   for (const SphereLink& L : slinks) {
     for (int k = L.begin; k < L.end; ++k) {
       double* r = lever.data() + static_cast<std::size_t>(k) * num_dofs;
@@ -77,64 +74,15 @@ void CollisionChecker::Impl::BuildLevers() {
             r[j.dof] += 1.0;
             const double travel = std::max(std::abs(j.limits.lower), std::abs(j.limits.upper));
             dist += std::isfinite(travel) ? travel : kInf;
-            taylor[k] = 0;
           } else {
-            const double axis_reach = std::min(dist, j.axis.normalized().cross(t).norm() + reach);
-            r[j.dof] += axis_reach;
-            chain.push_back({j.dof, axis_reach});
+            r[j.dof] += std::min(dist, j.axis.normalized().cross(t).norm() + reach);
           }
         }
         t = j.origin.translation();
         reach = dist;
         link = j.parent_link;
       }
-      chain_offset.push_back(chain.size());
     }
-  }
-}
-
-void CollisionChecker::Impl::AccelerationBounds(const Eigen::VectorXd& w, double* out) const {
-  const std::size_t ns = sx.size();
-  for (std::size_t k = 0; k < ns; ++k) {
-    if (!taylor[k]) {
-      out[k] = kInf;
-      continue;
-    }
-    // The chain runs nearest joint first; walking it from the base, `above` is S_j. The sum
-    // Σ_i w_i (S_i R_ik + Σ_{j at or below i} w_j R_jk) is Σ_j w_j R_jk (2 S_j + w_j), so one pass
-    // adds only non-negative terms (no difference to round below the true sum).
-    const ChainJoint* begin = chain.data() + chain_offset[k];
-    double above = 0.0, a = 0.0;
-    for (const ChainJoint* j = chain.data() + chain_offset[k + 1]; j != begin;) {
-      --j;
-      const double wj = w[j->dof];
-      a += wj * j->axis_reach * (2.0 * above + wj);
-      above += wj;
-    }
-    out[k] = a;
-  }
-}
-
-void CollisionChecker::Impl::LinkTwists(const Frame* frames, const Eigen::VectorXd& dq, double* twist) const {
-  std::fill(twist + 6 * fk.root, twist + 6 * fk.root + 6, 0.0);
-  for (const detail::FkJoint& j : fk.joints) {
-    const double* parent = twist + 6 * j.parent_link;
-    double* t = twist + 6 * j.child_link;
-    std::copy(parent, parent + 6, t);
-    if (j.kind == 0) continue;
-    const double rate = dq[j.dof];
-    const Frame& f = frames[j.child_link];
-    const detail::Lanes a = f.col[0] * j.axis[0] + f.col[1] * j.axis[1] + f.col[2] * j.axis[2];
-    if (j.kind == 2) {  // prismatic: every point of the child moves along a
-      for (int i = 0; i < 3; ++i) t[3 + i] += rate * a[i];
-      continue;
-    }
-    // Revolute about a through o: ẋ = rate·a × (x − o) = rate·(a × x) + rate·(o × a).
-    const detail::Lanes& o = f.col[3];
-    for (int i = 0; i < 3; ++i) t[i] += rate * a[i];
-    t[3] += rate * (o[1] * a[2] - o[2] * a[1]);
-    t[4] += rate * (o[2] * a[0] - o[0] * a[2]);
-    t[5] += rate * (o[0] * a[1] - o[1] * a[0]);
   }
 }
 
@@ -167,11 +115,6 @@ namespace {
 /// advancement for a robot and scene of this size, the next one allocates nothing.
 struct AdvancementScratch {
   std::vector<double> D, Dl;         // sweep bound per sphere, its maximum per sphere link
-  // Straight segments: acceleration bound per sphere and its maximum per link; per state the
-  // links' twists (ω, v₀: world frame, per unit of s), the spheres' speeds and the link bounds'
-  // speed bounds, computed on demand (flags per sphere link).
-  std::vector<double> A, Al, twist, speed, link_speed;
-  std::vector<char> speed_placed, link_speed_placed;
   std::vector<double> PD, PDl;       // self pairs: the same over the unshared joints only
   std::vector<double> w, lb;         // world sphere centres (3 per sphere), link bound centres
   std::vector<char> placed, bound_placed;  // per sphere link: w / lb hold this state's values
@@ -195,32 +138,9 @@ struct AdvancementScratch {
 /// the step had it been evaluated: the steps are exactly those of evaluating every pair.
 constexpr double kFreeSlack = 1e-10;
 
-/// How far along the curve [in s] a shape with clearance d > 0 stays clear when its centre moves
-/// at most D·Δs (the sweep bound): d / D.
-inline double LinearClearFor(double d, double D) {
-  if (!(d > 0.0)) return 0.0;
-  return D > 0.0 ? d / D : kInf;
-}
-
-/// The same on a straight segment where the centre also moves at most v·Δs + A·Δs²/2 (its speed
-/// v at this state and its acceleration bound A): clear while either bound is below d, so for
-/// Δs below the larger of `linear` (= LinearClearFor(d, D)) and the root of v·Δs + A·Δs²/2 = d.
-/// The root is larger only when v·D + A·d/2 < D² (it is not worked out otherwise).
-inline double SecondOrderClearFor(double linear, double d, double D, double v, double A) {
-  if (!(d > 0.0) || !(A < kInf) || v * D + 0.5 * A * d >= D * D) return linear;
-  return std::max(linear, 2.0 * d / (v + std::sqrt(v * v + 2.0 * A * d)));
-}
-
-/// The velocity of the point x of a link whose twist is t = (ω, v₀): v₀ + ω × x.
-inline void PointVelocity(const double* t, const double* x, double* v) {
-  v[0] = t[3] + t[1] * x[2] - t[2] * x[1];
-  v[1] = t[4] + t[2] * x[0] - t[0] * x[2];
-  v[2] = t[5] + t[0] * x[1] - t[1] * x[0];
-}
-
-/// Curve parameter up to which a pair whose clearance at s is at least d stays clear by the
-/// slack, by LinearClearFor.
-inline double FreeUntil(double s, double d, double D) { return s + LinearClearFor(d - kFreeSlack, D); }
+/// Curve parameter up to which a pair whose clearance at s is at least d, approaching at no more
+/// than rate v [m per unit of s], stays clear by the slack: s + (d − slack) / v.
+inline double FreeUntil(double s, double d, double v) { return v > 0.0 ? s + (d - kFreeSlack) / v : kInf; }
 
 }  // namespace
 
@@ -233,16 +153,12 @@ inline double FreeUntil(double s, double d, double D) { return s + LinearClearFo
 // closer than, with v = Dl >= D_k), per primitive (the least of its links'), and likewise per
 // self pair and pair of their spheres; a slack of kFreeSlack is taken off d. The loops skip
 // what cannot shorten the step, so after the first state only the pairs near enough to matter
-// are evaluated again. With the sweep bounds alone a skipped pair could neither have changed
-// the step nor found a contact (its clearance is positive), so the states visited, the steps
-// and the answer are exactly those of evaluating every pair at every state. On a straight
-// segment a sphere–primitive pair's (and a link's) free-until also uses the second-order bound
-// from the state where it was evaluated (see SecondOrderClearFor): every step still ends where
-// each pair's last evaluation proved it clear, though not necessarily where evaluating it at
-// every state would. Occupancy grids keep their margin search at every state (its margins
-// depend on the previous state's).
+// are evaluated again. A skipped pair could neither have changed the step nor found a contact
+// (its clearance is positive), so the states visited, the steps and the answer are exactly
+// those of evaluating every pair at every state. Occupancy grids keep their margin search at
+// every state (its margins depend on the previous state's).
 bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve, const Eigen::VectorXd& speed,
-                                            const Eigen::VectorXd* direction, CheckCounters* counters) const {
+                                            CheckCounters* counters) const {
   // The thread's scratch, or a fresh one when it is taken (a curve that runs a certified check).
   thread_local AdvancementScratch thread_scratch;
   std::unique_ptr<AdvancementScratch> own;
@@ -271,21 +187,6 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
   }
   for (std::size_t k = 0; k < ns; ++k) {
     if (!std::isfinite(D[k])) return false;
-  }
-  // Straight segments: second-order bounds where a sphere's chain has them.
-  const bool second_order = direction != nullptr;
-  if (second_order) {
-    m.A.resize(ns);
-    m.Al.assign(nl, 0.0);
-    AccelerationBounds(speed, m.A.data());
-    for (std::size_t li = 0; li < nl; ++li) {
-      for (int k = slinks[li].begin; k < slinks[li].end; ++k) m.Al[li] = std::max(m.Al[li], m.A[k]);
-    }
-    m.twist.resize(6 * static_cast<std::size_t>(num_links));
-    m.speed.resize(ns);
-    m.link_speed.resize(nl);
-    m.speed_placed.resize(nl);
-    m.link_speed_placed.resize(nl);
   }
   // Self pairs: joints in both links' chains move both spheres rigidly together and leave
   // their distance unchanged (d/dt |x_k − x_l| = (x_k − x_l)·(ω × (x_k − x_l)) / |·| = 0), so
@@ -367,51 +268,7 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
     return &lb[3 * li];
   };
   const auto place = [&](std::size_t li) { PlaceLinkSpheres(frames, li, w, m.placed.data()); };
-  // Straight segments: |dx/ds| at this state of the centre of sphere k (placed) and a bound on
-  // it for every sphere of link li (|v_c| + |ω|·br, c the bound's centre), once per state.
-  bool twists_placed = false;
-  const auto twist_of = [&](std::size_t li) {
-    if (!twists_placed) {
-      twists_placed = true;
-      LinkTwists(frames, *direction, m.twist.data());
-    }
-    return m.twist.data() + 6 * static_cast<std::size_t>(slinks[li].link);
-  };
-  const auto point_speed = [](const double* t, const double* x) {
-    double v[3];
-    PointVelocity(t, x, v);
-    return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  };
-  const auto sphere_speeds = [&](std::size_t li) {
-    if (m.speed_placed[li]) return;
-    m.speed_placed[li] = 1;
-    place(li);
-    const double* t = twist_of(li);
-    for (int k = slinks[li].begin; k < slinks[li].end; ++k) m.speed[k] = point_speed(t, &w[3 * k]);
-  };
-  const auto link_speed = [&](std::size_t li) {
-    if (!m.link_speed_placed[li]) {
-      m.link_speed_placed[li] = 1;
-      const double* t = twist_of(li);
-      m.link_speed[li] = point_speed(t, bound(li)) + std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]) * slinks[li].br;
-    }
-    return m.link_speed[li];
-  };
-  // How far in s link li's spheres (or sphere k) stay clear of what is d away; the second-order
-  // bound is worked out only when the linear one ends before `horizon` (where the state's steps
-  // end: its chunk's end, or 1).
-  double horizon = 1.0;
-  const auto link_clear_for = [&](std::size_t li, double d) {
-    const double linear = LinearClearFor(d, Dl[li]);
-    if (!second_order || linear >= horizon) return linear;
-    return SecondOrderClearFor(linear, d, Dl[li], link_speed(li), m.Al[li]);
-  };
-  const auto sphere_clear_for = [&](int k, double d) {
-    const double linear = LinearClearFor(d, D[k]);
-    if (!second_order || linear >= horizon) return linear;
-    sphere_speeds(static_cast<std::size_t>(slink_of[k]));
-    return SecondOrderClearFor(linear, d, D[k], m.speed[k], m.A[k]);
-  };
+
   double s = 0.0;
   for (int state = 0;; ++state) {
     if (state >= kMaxCertifiedStates) return false;
@@ -419,18 +276,12 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
     curve(s, &m.q);
     if (!m.q.allFinite()) return false;
     ComputeFk(m.q, frames);
-    if (second_order) {
-      twists_placed = false;
-      std::fill(m.speed_placed.begin(), m.speed_placed.end(), 0);
-      std::fill(m.link_speed_placed.begin(), m.link_speed_placed.end(), 0);
-    }
     // A new chunk when this state ends the last one (or nearly: a last step shorter than twice
     // the smallest step allowed is not taken).
     if (prim_broad_phase && (state == 0 || s >= chunk_end - 2.0 * kMinCertifiedStep)) start_chunk(s);
     std::fill(m.placed.begin(), m.placed.end(), 0);
     std::fill(m.bound_placed.begin(), m.bound_placed.end(), 0);
     double step = (prim_broad_phase ? chunk_end : 1.0) - s;
-    horizon = step;
     // Scene primitives: exact clearances; a link whose bounding sphere is clear by more than
     // step·(its fastest sphere's bound) cannot shorten the step.
     for (std::size_t oi = 0; oi < nprims; ++oi) {
@@ -445,12 +296,9 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
           continue;
         }
         const SphereLink& L = slinks[li];
-        // (Clearances are cached and compared less the slack, so the link's spheres are left
-        // only when they stay clear by it.)
         const double dl = detail::SphereDistance(o, bound(li), L.br);
-        const double link_clear = link_clear_for(li, dl - kFreeSlack);
-        if (link_clear >= step) {
-          link_free[li] = s + link_clear;
+        if (dl > 0.0 && dl >= step * Dl[li]) {
+          link_free[li] = FreeUntil(s, dl, Dl[li]);
           prim_until = std::min(prim_until, link_free[li]);
           continue;
         }
@@ -460,9 +308,8 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
           if (sphere_free[k] < s + step) {
             const double d = detail::SphereDistance(o, &w[3 * k], sr[k]);
             if (d <= 0.0) return false;
-            const double clear = sphere_clear_for(k, d - kFreeSlack);
-            step = std::min(step, clear);
-            sphere_free[k] = s + clear;
+            if (d < step * D[k]) step = d / D[k];
+            sphere_free[k] = FreeUntil(s, d, D[k]);
           }
           until = std::min(until, sphere_free[k]);
         }
@@ -572,30 +419,10 @@ bool CollisionChecker::IsMotionCertified(const Eigen::VectorXd& a, const Eigen::
   if (!impl_->certifiable) return IsMotionValid(a, b, 0.005, counters);
   // a's collision check is the advancement's first state, which evaluates every pair at s = 0.
   if (!IsValid(b, counters) || !detail::WithinLimits(*robot_, a)) return false;
-  // The straight segment as a curve (a and b are finite here, inside the limits), with its
-  // direction for the second-order bounds.
+  // The straight segment as a curve: IsCurveCertified's probes, then the advancement (a and b
+  // are finite here, inside the limits).
   const Eigen::VectorXd delta = b - a;
-  return impl_->ProbeAndAdvance([&](double s, Eigen::VectorXd* q) { *q = a + s * delta; }, delta.cwiseAbs(), &delta,
-                                counters);
-}
-
-bool CollisionChecker::Impl::ProbeAndAdvance(const CollisionChecker::Curve& curve, const Eigen::VectorXd& speed,
-                                             const Eigen::VectorXd* direction, CheckCounters* counters) const {
-  // Probes first, in bisection order, until they are at most kProbeSpacing apart in every joint
-  // (by the speed bound), so a curve through an obstacle is rejected here rather than by the
-  // advancement creeping up to the contact. Shorter curves get none: they mostly certify
-  // (verification spans, shortcut pieces), where probes are pure overhead.
-  const double span = speed.maxCoeff();
-  Eigen::VectorXd q(num_dofs);
-  for (int level = 1; level <= kMaxProbeDepth && span / (1 << (level - 1)) > kProbeSpacing; ++level) {
-    const int n = 1 << level;
-    for (int i = 1; i < n; i += 2) {
-      curve(static_cast<double>(i) / n, &q);
-      if (counters != nullptr) ++counters->state_checks;
-      if (!q.allFinite() || Collide(q, nullptr)) return false;
-    }
-  }
-  return CertifiedCurve(curve, speed, direction, counters);
+  return IsCurveCertified([&](double s, Eigen::VectorXd* q) { *q = a + s * delta; }, delta.cwiseAbs(), counters);
 }
 
 bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorXd& speed_bound,
@@ -607,7 +434,23 @@ bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorX
                    " must be finite and >= 0");
     }
   }
-  if (impl_->certifiable) return impl_->ProbeAndAdvance(curve, speed_bound, nullptr, counters);
+  if (impl_->certifiable) {
+    // Probes first, in bisection order, until they are at most kProbeSpacing apart in every
+    // joint (by the speed bound), so a curve through an obstacle is rejected here rather than by
+    // the advancement creeping up to the contact. Shorter curves get none: they mostly certify
+    // (verification spans, shortcut pieces), where probes are pure overhead.
+    const double span = speed_bound.maxCoeff();
+    Eigen::VectorXd q(robot_->num_dofs());
+    for (int level = 1; level <= kMaxProbeDepth && span / (1 << (level - 1)) > kProbeSpacing; ++level) {
+      const int n = 1 << level;
+      for (int i = 1; i < n; i += 2) {
+        curve(static_cast<double>(i) / n, &q);
+        if (counters != nullptr) ++counters->state_checks;
+        if (!q.allFinite() || impl_->Collide(q, nullptr)) return false;
+      }
+    }
+    return impl_->CertifiedCurve(curve, speed_bound, counters);
+  }
   // Discrete fallback: states no more than 0.005 apart in every joint, in order.
   const double span = speed_bound.maxCoeff();
   const double steps = std::ceil(span / 0.005);
@@ -628,37 +471,6 @@ std::vector<double> CollisionChecker::SweepBounds(const Eigen::VectorXd& a, cons
   if (!impl_->certifiable) return {};
   std::vector<double> out(impl_->sx.size());
   impl_->SweepBounds((b - a).cwiseAbs(), out.data());
-  return out;
-}
-
-
-std::vector<double> CollisionChecker::SegmentAccelerationBounds(const Eigen::VectorXd& a,
-                                                                const Eigen::VectorXd& b) const {
-  detail::CheckSize(*robot_, a, "a");
-  detail::CheckSize(*robot_, b, "b");
-  if (!impl_->certifiable) return {};
-  std::vector<double> out(impl_->sx.size());
-  impl_->AccelerationBounds((b - a).cwiseAbs(), out.data());
-  return out;
-}
-
-std::vector<Eigen::Vector3d> CollisionChecker::SphereVelocities(const Eigen::VectorXd& q,
-                                                                const Eigen::VectorXd& dq) const {
-  detail::CheckSize(*robot_, q, "q");
-  detail::CheckSize(*robot_, dq, "dq");
-  if (!impl_->certifiable) return {};
-  std::vector<detail::Frame> frames(impl_->num_links);
-  impl_->ComputeFk(q, frames.data());
-  std::vector<double> twist(6 * static_cast<std::size_t>(impl_->num_links));
-  impl_->LinkTwists(frames.data(), dq, twist.data());
-  std::vector<double> w(3 * impl_->sx.size());
-  std::vector<char> placed(impl_->slinks.size(), 0);
-  std::vector<Eigen::Vector3d> out(impl_->sx.size());
-  for (std::size_t li = 0; li < impl_->slinks.size(); ++li) {
-    impl_->PlaceLinkSpheres(frames.data(), li, w.data(), placed.data());
-    const double* t = twist.data() + 6 * static_cast<std::size_t>(impl_->slinks[li].link);
-    for (int k = impl_->slinks[li].begin; k < impl_->slinks[li].end; ++k) PointVelocity(t, &w[3 * k], out[k].data());
-  }
   return out;
 }
 

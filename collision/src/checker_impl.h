@@ -205,17 +205,6 @@ struct CollisionChecker::Impl {
   // geometry left to FCL (meshes, ungridded maps).
   int num_dofs = 0;
   std::vector<double> lever;
-  // Second-order bounds for straight segments (see AccelerationBounds): sphere k's chain of
-  // moving joints, nearest first, at chain_offset[k] .. chain_offset[k + 1]: the joint's dof and
-  // its lever (the bound on the centre's distance from its axis, as in `lever`); taylor[k] = 0
-  // when the chain has a prismatic joint (no second-order bound).
-  struct ChainJoint {
-    int dof;
-    double axis_reach;
-  };
-  std::vector<std::size_t> chain_offset;
-  std::vector<ChainJoint> chain;
-  std::vector<char> taylor;
   std::vector<std::vector<char>> slink_dofs;  // per sphere link: dofs in its chain (1/0)
   // Self pairs in the advancement: pair p's per-sphere bounds start at self_pair_offset[p]
   // (first link's spheres, then the second's; self_pair_spheres in all), and
@@ -353,27 +342,10 @@ struct CollisionChecker::Impl {
   /// D_k = Σ_i w_i·R_ik: how far sphere k's centre can move per unit of the curve parameter
   /// when |dq_i/ds| <= w_i.
   void SweepBounds(const Eigen::VectorXd& w, double* out) const;
-  /// A_k: a bound on |d²x_k/ds²| for sphere k's centre along a straight segment with dq/ds = δ
-  /// (w = |δ|), +inf for a sphere below a prismatic joint. Along the segment q̈ = 0, so
-  /// ẍ = Σ_i q̇_i d/ds[ω_i × r_i], with ω_i joint i's world axis, o_i its origin, r_i = x − o_i.
-  /// ω_i turns with the joints above it, ω̇_i = Ω_i × ω_i with Ω_i = Σ_{j above i} q̇_j ω_j, and
-  /// ṙ_i = Ω_i × r_i + Σ_{j at or below i} q̇_j ω_j × (x − o_j). By Jacobi's identity
-  /// (Ω × ω) × r + ω × (Ω × r) = Ω × (ω × r), so
-  /// |ẍ| <= Σ_i w_i (S_i R_ik + Σ_{j at or below i} w_j R_jk), S_i = Σ_{j above i} w_j and R_jk
-  /// the levers (bounds on x's distance from axis j).
-  void AccelerationBounds(const Eigen::VectorXd& w, double* out) const;
-  /// Each link's twist (ω, v₀), 6 per link, world frame, for joint rates dq at the state whose
-  /// frames are given: a point x of the link moves at v₀ + ω × x. Links the FK skips are left.
-  void LinkTwists(const Frame* frames, const Eigen::VectorXd& dq, double* twist) const;
   /// Conservative advancement along q(s), s ∈ [0, 1], with |dq_i/ds| <= w_i (see
-  /// IsCurveCertified); joint limits are the caller's. `direction`: dq/ds when the curve is the
-  /// straight segment q(s) = q(0) + s·direction (the advancement then also uses the spheres'
-  /// velocities and AccelerationBounds), nullptr for any other curve.
+  /// IsCurveCertified); joint limits are the caller's.
   bool CertifiedCurve(const CollisionChecker::Curve& curve, const Eigen::VectorXd& speed,
-                      const Eigen::VectorXd* direction, CheckCounters* counters) const;
-  /// IsCurveCertified on the fast path: probes, then CertifiedCurve.
-  bool ProbeAndAdvance(const CollisionChecker::Curve& curve, const Eigen::VectorXd& speed,
-                       const Eigen::VectorXd* direction, CheckCounters* counters) const;
+                      CheckCounters* counters) const;
 };
 
 }  // namespace chasles

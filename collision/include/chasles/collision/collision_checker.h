@@ -103,11 +103,9 @@ class CollisionChecker {
   /// (the sphere grown by m misses every occupied voxel) give the next step
   /// Δs = min(d_k / D_k, s_kl / (D'_k + D'_l)), where D' sums only the joints not shared by
   /// the two links' chains (shared joints move both spheres rigidly: their distance is
-  /// unchanged); a distance <= 0 is a collision. Against the scene a sphere's step may be longer:
-  /// on the segment its centre also moves at most v_k·Δs + A_k·Δs²/2 (v_k its speed at the state,
-  /// A_k = SegmentAccelerationBounds), so Δs reaches the larger root of that bound = d_k.
-  /// b is checked exactly with IsValid and a against the limits (joint limits included; the
-  /// limit box is convex; the advancement's first state is a full check of a), then, on a
+  /// unchanged); a distance <= 0 is a collision. b is checked exactly with IsValid and a against
+  /// the limits (the limit box is convex; the advancement's first state is a full check of a),
+  /// then, on a
   /// segment longer than 0.25 in some joint, interior states in bisection order until they are
   /// at most 0.25 apart, so a segment cutting through an obstacle is rejected quickly; then the
   /// advancement runs from a.
@@ -147,18 +145,6 @@ class CollisionChecker {
   /// order then shape order — a bound on how far each sphere centre moves along the segment.
   /// Empty when !certifies_motion().
   std::vector<double> SweepBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const;
-
-  /// Diagnostics for tests, same sphere order: A_k [m], a bound on |d²x_k/ds²| along the
-  /// straight segment q(s) = a + s·(b − a), s ∈ [0, 1] (+inf for a sphere below a prismatic
-  /// joint). IsMotionCertified's advancement also uses the second-order bound: from a state where
-  /// the centre moves at v = |dx_k/ds|, it moves at most v·Δs + A_k·Δs²/2. Empty when
-  /// !certifies_motion().
-  std::vector<double> SegmentAccelerationBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const;
-
-  /// Diagnostics for tests, same sphere order: each sphere centre's velocity [m per unit of q]
-  /// at q when the joints move at rates dq (the advancement's |dx_k/ds| with dq = b − a). Empty
-  /// when !certifies_motion().
-  std::vector<Eigen::Vector3d> SphereVelocities(const Eigen::VectorXd& q, const Eigen::VectorXd& dq) const;
 
   /// Smallest distance [m] between the robot and the scene at q (0 when in contact; +inf for
   /// an empty scene). Self-distance is not included, nor is the distance of an allowed
