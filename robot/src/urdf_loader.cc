@@ -312,6 +312,7 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
     const auto it = child_joints.find(link.name);
     return it == child_joints.end() ? nullptr : &it->second;
   };
+  std::vector<std::string> mimic_warnings;  // joints with <mimic>, reported in load_warnings()
   add_link(*model->getRoot());
   std::vector<Visit> stack{{model->getRoot().get(), children_of(*model->getRoot())}};
   while (!stack.empty()) {
@@ -385,6 +386,13 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
       joint.damping = ud.damping;
       joint.friction = ud.friction;
     }
+    if (ujoint->mimic && joint.type != JointType::kFixed) {
+      // Not modelled yet: the joint becomes a configuration coordinate of its own.
+      mimic_warnings.push_back("urdf: joint '" + ujoint->name + "' mimics joint '" + ujoint->mimic->joint_name +
+                               "' (multiplier " + FormatNumber(ujoint->mimic->multiplier) + ", offset " +
+                               FormatNumber(ujoint->mimic->offset) +
+                               "); Chasles plans it as an independent joint (its own coordinate)");
+    }
     urdf::LinkConstSharedPtr child = model->getLink(ujoint->child_link_name);
     if (!child) ThrowInvalid(where + " child = '" + ujoint->child_link_name + "' is not a link");
     if (link_index.count(child->name) != 0) {
@@ -400,7 +408,7 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
   // 5. SRDF: pairs of links whose collisions are never checked. A pair naming a link the URDF
   //    lacks is skipped with a warning (an error when strict_srdf).
   std::vector<std::pair<std::string, std::string>> allowed_pairs;
-  std::vector<std::string> warnings;
+  std::vector<std::string> warnings = std::move(mimic_warnings);
   if (!srdf_text.empty()) {
     TiXmlDocument srdf_doc;
     ParseXmlOrThrow(std::string(srdf_text), "srdf", &srdf_doc);

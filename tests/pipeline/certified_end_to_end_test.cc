@@ -21,6 +21,7 @@
 #include "../budget_scale.h"
 #include "../collision/test_util.h"
 #include "../optimizers/test_util.h"
+#include "dense_check.h"
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/planners/registry.h"
 
@@ -41,55 +42,6 @@ std::shared_ptr<Scene> PostRing() {
   bar.translation() = Eigen::Vector3d(0.45, 0.0, 0.3);
   scene->AddObject({"bar", Shape::Cylinder(0.015, 0.5, bar * Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()))});
   return scene;
-}
-
-/// A valid configuration within `near` metres of an obstacle (and not closer than 2 mm).
-Eigen::VectorXd ConfigurationNearObstacles(const CollisionChecker& checker, std::mt19937_64& rng, double near) {
-  for (int tries = 0; tries < 20000; ++tries) {
-    const Eigen::VectorXd q = test::RandomConfig(checker.robot(), rng);
-    if (!checker.IsValid(q)) continue;
-    const double c = checker.Clearance(q);
-    if (c > 0.002 && c < near) return q;
-  }
-  ADD_FAILURE() << "no configuration near the obstacles found";
-  return test::PandaReady();
-}
-
-struct DenseCheck {
-  int states = 0;
-  int colliding = 0;
-  std::string first_contact;
-  double min_clearance = std::numeric_limits<double>::infinity();
-};
-
-/// Every state at most `step` of joint motion apart (each piece's own polynomial, clamped into
-/// the joint limits as the returned samples are, and the exact end), checked on `fcl`; the
-/// clearance at every 10th of them.
-DenseCheck CheckDensely(const TimedTrajectory& trajectory, const CollisionChecker& fcl, double step) {
-  DenseCheck out;
-  const RobotModel& robot = fcl.robot();
-  const auto check = [&](const Eigen::VectorXd& raw, double t) {
-    const Eigen::VectorXd q = raw.cwiseMax(robot.lower_limits()).cwiseMin(robot.upper_limits());
-    ++out.states;
-    const CollisionResult contact = fcl.Check(q);
-    if (contact.in_collision) {
-      if (out.colliding++ == 0) {
-        out.first_contact = "t = " + std::to_string(t) + " s: '" + contact.link_a + "' / '" + contact.other + "'";
-      }
-    }
-    // The clearance (FCL distances, slower) at every 10th state: min_clearance must be at or
-    // below the clearance of any state of the trajectory.
-    if (out.states % 10 == 1) out.min_clearance = std::min(out.min_clearance, fcl.Clearance(q));
-  };
-  for (const TimedTrajectory::Piece& piece : trajectory.pieces()) {
-    const int m = std::max(1, static_cast<int>(std::ceil(piece.MaxJointTravel() / step)));
-    for (int i = 0; i < m; ++i) {
-      const double tau = piece.duration * i / m;
-      check(piece.State(tau).q, piece.t0 + tau);
-    }
-  }
-  check(trajectory.Evaluate(trajectory.duration()).q, trajectory.duration());
-  return out;
 }
 
 /// States the verification before issue 16 checked: every 0.005 rad of each piece, both ends.
@@ -132,9 +84,9 @@ TEST(CertifiedEndToEnd, NoReturnedPandaTrajectoryPenetratesWhenCheckedDenselyOnF
     for (int c = 0; c < per_scene; ++c) {
       PlanQuery query;
       query.checker = checker;
-      query.start = ConfigurationNearObstacles(*checker, rng, 0.03);
+      query.start = test::ConfigurationNearObstacles(*checker, rng, 0.03, test::PandaReady());
       do {
-        query.goal = ConfigurationNearObstacles(*checker, rng, 0.03);
+        query.goal = test::ConfigurationNearObstacles(*checker, rng, 0.03, test::PandaReady());
       } while ((query.goal - query.start).cwiseAbs().maxCoeff() < 1.0);
       query.seed = 1000 + static_cast<std::uint64_t>(c);
       // Mostly the time-optimal blends (tightest near the obstacles), some spline smoothing.
@@ -155,7 +107,7 @@ TEST(CertifiedEndToEnd, NoReturnedPandaTrajectoryPenetratesWhenCheckedDenselyOnF
       verify_seconds += outcome.seconds.verify;
       parameterize_seconds += outcome.seconds.parameterize;
 
-      const DenseCheck dense = CheckDensely(outcome.trajectory, fcl, 0.0005);
+      const test::DenseCheck dense = test::CheckDensely(outcome.trajectory, fcl, 0.0005);
       EXPECT_EQ(dense.colliding, 0) << dense.colliding << " of " << dense.states << " states collide, first at "
                                     << dense.first_contact;
       // min_clearance bounds the continuous minimum from below; the dense FCL minimum is at or

@@ -175,6 +175,22 @@ TEST(UrdfLoaderTest, RejectsUnknownMeshesAndBadPrimitives) {
       "urdf: link 'a' collision[0] box size y = 0 must be > 0 and finite");
 }
 
+TEST(UrdfLoaderTest, AMimicJointIsReportedAsPlannedIndependently) {
+  // <mimic> is not modelled yet: the joint keeps a coordinate of its own, and the load says so.
+  const std::string urdf =
+      Urdf(Links({"base", "left", "right"}) + RevoluteJoint("left_finger", "base", "left") +
+               RevoluteJoint("right_finger", "base", "right",
+                             "<limit lower=\"-1\" upper=\"1\" velocity=\"1\" effort=\"5\"/>"
+                             "<mimic joint=\"left_finger\" multiplier=\"-1\" offset=\"0.25\"/>"),
+           "gripper");
+  const auto robot = RobotModel::FromUrdf(urdf);
+  EXPECT_EQ(robot->num_dofs(), 2);
+  ASSERT_EQ(robot->load_warnings().size(), 1u);
+  EXPECT_EQ(robot->load_warnings()[0],
+            "urdf: joint 'right_finger' mimics joint 'left_finger' (multiplier -1, offset 0.25); Chasles plans it "
+            "as an independent joint (its own coordinate)");
+}
+
 TEST(UrdfLoaderTest, SrdfDisablesPairsAndRejectsUnknownLinks) {
   const std::string urdf = Urdf(Links({"base", "a", "b"}) + RevoluteJoint("j1", "base", "a") +
                                     RevoluteJoint("j2", "a", "b"),
