@@ -2,7 +2,7 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|pipeline|clutter|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
@@ -48,6 +48,7 @@
 #include "chasles/server/planning_server.h"
 #include "chasles/v1/chasles.grpc.pb.h"
 #include "bench_clutter.h"
+#include "bench_mesh_robot.h"
 #include "bench_hardening.h"
 #include "bench_pipeline.h"
 
@@ -1065,7 +1066,7 @@ int Main(int argc, char** argv) {
     else if (arg == "--uploads") options.uploads = std::stoi(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all]\n"
+                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all]\n"
                    "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
@@ -1098,6 +1099,13 @@ int Main(int argc, char** argv) {
     clutter.examples_dir = examples_dir;
     clutter.repeats = std::max(options.bench_repeats, 5);
     BenchClutter(clutter);
+  }
+  if (options.section == "mesh_robot" || options.section == "all") {
+    MeshRobotBenchOptions mesh;
+    mesh.examples_dir = CHASLES_EXAMPLES_DIR;
+    mesh.queries = options.queries;
+    mesh.seed = options.seed;
+    BenchMeshRobot(mesh);
   }
   if (options.section == "families" || options.section == "all") BenchFamilies(options);
   if (options.section == "grpc" || options.section == "all") BenchGrpc(options);

@@ -55,7 +55,7 @@ const char kUsage[] =
     "                                  --out and --method as for plan\n"
     "  ik REQUEST.json                 send a chasles.v1.InverseKinematicsRequest (protobuf JSON); print\n"
     "                                  each solution with its manipulability; exit 0 only when solved\n"
-    "  upload-robot FILE.urdf [--srdf FILE.srdf [--strict-srdf]] [--mesh NAME=FILE]...\n"
+    "  upload-robot FILE.urdf [--srdf FILE.srdf [--strict-srdf]] [--mesh NAME=FILE]... [--exact-meshes]\n"
     "  upload-robot --dh FILE.json | --poe FILE.json\n"
     "                                  store a robot (URDF, or a chasles.v1.DhRobot / PoeRobot in\n"
     "                                  protobuf JSON) on the server; prints its robot_id\n"
@@ -117,6 +117,7 @@ struct Options {
   std::string out;
   std::string srdf;
   bool strict_srdf = false;
+  bool exact_meshes = false;  // upload-robot: keep meshes exact (FCL, discrete) instead of fitted spheres
   std::string dh;   // DhRobot JSON file
   std::string poe;  // PoeRobot JSON file
   std::vector<std::string> meshes;  // NAME=FILE
@@ -509,6 +510,7 @@ int UploadRobot(const Options& options) {
     urdf->set_urdf(ReadFileOrExit(options.positional[1], "URDF"));
     if (!options.srdf.empty()) urdf->set_srdf(ReadFileOrExit(options.srdf, "SRDF"));
     urdf->set_strict_srdf(options.strict_srdf);
+    urdf->set_exact_meshes(options.exact_meshes);
     for (const std::string& mesh : options.meshes) {
       const auto eq = mesh.find('=');
       if (eq == std::string::npos || eq == 0 || eq + 1 == mesh.size()) {
@@ -525,6 +527,15 @@ int UploadRobot(const Options& options) {
   if (!status.ok()) return ReportRpcError("UploadRobot", options, status);
   std::printf("robot_id %s\n", response.robot_id().c_str());
   for (const std::string& warning : response.warnings()) std::printf("warning  %s\n", warning.c_str());
+  const v1::CollisionModel& collision = response.collision_model();
+  if (collision.kind() == "fitted_spheres") {
+    std::printf("collision model: %d spheres fitted to %d shapes in %.2f s, reaching at most %.1f mm outside them "
+                "(link '%s')\n",
+                collision.spheres(), collision.shapes_fitted(), collision.fit_seconds(), 1e3 * collision.reach(),
+                collision.reach_link().c_str());
+  } else {
+    std::printf("collision model: %s\n", collision.kind().c_str());
+  }
   for (int i = 0; i < response.joint_names_size(); ++i) {
     std::printf("  %-24s [%.4f, %.4f]  v_max %.4f\n", response.joint_names(i).c_str(), response.lower_limits(i),
                 response.upper_limits(i), response.velocity_limits(i));
@@ -880,6 +891,8 @@ int main(int argc, char** argv) {
       options.srdf = value();
     } else if (arg == "--strict-srdf") {
       options.strict_srdf = true;
+    } else if (arg == "--exact-meshes") {
+      options.exact_meshes = true;
     } else if (arg == "--dh") {
       options.dh = value();
     } else if (arg == "--poe") {

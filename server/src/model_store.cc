@@ -37,18 +37,31 @@ auto Measured(std::size_t message_bytes, std::uint64_t* bytes, Make make) {
 ModelStore::ModelStore(const v1::RobotModel& default_robot, const v1::Scene& default_scene,
                        std::uint64_t cache_bytes, const InputLimits& limits)
     : limits_(limits), cache_(cache_bytes) {
-  default_robot_ = {ProtoContentId(default_robot), RobotFromProto(default_robot, "default robot")};
+  default_robot_ = {ProtoContentId(default_robot), RobotFromProto(default_robot, "default robot"), nullptr, nullptr};
   default_scene_ = {ProtoContentId(default_scene), SceneFromProto(default_scene, "default scene")};
 }
 
 StoredRobot ModelStore::AddRobot(const v1::RobotModel& robot, const std::string& field) {
   std::string id = ProtoContentId(robot);
   if (id == default_robot_.id) return default_robot_;
-  if (auto model = cache_.Get<RobotModel>("robot:" + id)) return {id, model};
+  if (auto stored = cache_.Get<StoredRobot>("robot:" + id)) return *stored;
   std::uint64_t bytes = 0;
-  auto parsed = Measured(robot.ByteSizeLong(), &bytes, [&] { return RobotFromProto(robot, field, limits_); });
-  auto model = cache_.Put<RobotModel>("robot:" + id, std::move(parsed), bytes);
-  return {std::move(id), std::move(model)};
+  auto parsed = Measured(robot.ByteSizeLong(), &bytes, [&] {
+    auto entry = std::make_shared<StoredRobot>();
+    entry->id = id;
+    entry->model = RobotFromProto(robot, field, limits_);
+    // A URDF with meshes: its shapes covered by spheres, once, here (not per request).
+    if (robot.description_case() == v1::RobotModel::kUrdf && !robot.urdf().exact_meshes()) {
+      RobotSphereFit fit = FitRobotSpheres(*entry->model);
+      if (fit.model != nullptr) {
+        entry->exact = std::move(entry->model);
+        entry->model = fit.model;
+        entry->fit = std::make_shared<const RobotSphereFit>(std::move(fit));
+      }
+    }
+    return std::shared_ptr<const StoredRobot>(std::move(entry));
+  });
+  return *cache_.Put<StoredRobot>("robot:" + id, std::move(parsed), bytes);
 }
 
 StoredScene ModelStore::AddScene(const v1::Scene& scene, const std::string& field) {
@@ -68,7 +81,7 @@ StoredScene ModelStore::PutScene(const std::string& id, std::shared_ptr<const Sc
 
 StoredRobot ModelStore::FindRobot(const std::string& id) const {
   if (id == default_robot_.id) return default_robot_;
-  if (auto model = cache_.Get<RobotModel>("robot:" + id)) return {id, model};
+  if (auto stored = cache_.Get<StoredRobot>("robot:" + id)) return *stored;
   throw Error(ErrorCode::kNotFound, "robot_id '" + id +
                                         "' is not stored on this server (never uploaded here, or evicted); "
                                         "re-send the robot inline (the request's robot field) or call UploadRobot again");

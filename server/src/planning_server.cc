@@ -305,7 +305,17 @@ class PlanningService final : public RawService {
             call.response.add_upper_limits(model.upper_limits()[i]);
             call.response.add_velocity_limits(model.velocity_limits()[i]);
           }
+          v1::CollisionModel& collision = *call.response.mutable_collision_model();
+          collision.set_kind(robot.fit != nullptr ? "fitted_spheres" : "shapes");
+          if (robot.fit != nullptr) {
+            collision.set_spheres(robot.fit->spheres);
+            collision.set_shapes_fitted(robot.fit->shapes_fitted);
+            collision.set_reach(robot.fit->reach);
+            collision.set_reach_link(robot.fit->reach_link);
+            collision.set_fit_seconds(robot.fit->seconds);
+          }
           call.record.fields = {{"robot", IdPrefix(robot.id)}, {"name", model.name()}, {"dofs", std::to_string(model.num_dofs())}};
+          if (robot.fit != nullptr) call.record.fields.push_back({"fitted_spheres", std::to_string(robot.fit->spheres)});
         });
   }
 

@@ -146,6 +146,21 @@ class ServerTest(unittest.TestCase):
         self.assertEqual(info.velocity_limits.shape, (7,))
         self.assertTrue((info.velocity_limits > 0).all())
         self.assertTrue((info.lower_limits < info.upper_limits).all())
+        self.assertEqual(info.collision_model, {"kind": "shapes"})  # spheres already: nothing fitted
+
+    def test_a_mesh_robot_is_fitted_with_spheres_unless_exact_meshes(self) -> None:
+        robots = ROOT / "examples/robots"
+        meshes = {f"package://ur5_meshes/{p.name}": p for p in sorted((robots / "ur5_meshes").glob("*.stl"))}
+        fitted = self.client.upload_robot(robots / "ur5_meshes.urdf", robots / "ur5_meshes.srdf", meshes)
+        model = self.client.robot_info(fitted).collision_model
+        self.assertEqual(model["kind"], "fitted_spheres")
+        self.assertEqual(model["shapes_fitted"], 7)
+        self.assertGreater(model["spheres"], 7)
+        self.assertGreater(model["reach"], 0.0)
+        exact = self.client.upload_robot(robots / "ur5_meshes.urdf", robots / "ur5_meshes.srdf", meshes,
+                                         exact_meshes=True)
+        self.assertNotEqual(exact, fitted)
+        self.assertEqual(self.client.robot_info(exact).collision_model, {"kind": "shapes"})
 
     def test_plan_on_the_default_robot(self) -> None:
         result = self.client.plan(START, GOAL, time_budget=3.0, seed=7, request_id="python-default")

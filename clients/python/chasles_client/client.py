@@ -193,7 +193,8 @@ class Client:
 
     def upload_robot(self, urdf: Union[str, os.PathLike, Message, Mapping[str, Any]], srdf: Union[str, os.PathLike] = "",
                      meshes: Optional[Mapping[str, Union[bytes, str, os.PathLike]]] = None, *,
-                     name: str = "", strict_srdf: bool = False, timeout: Optional[float] = None) -> str:
+                     name: str = "", strict_srdf: bool = False, exact_meshes: bool = False,
+                     timeout: Optional[float] = None) -> str:
         """Stores a robot on the server and returns its id (a content hash) for ``robot_id``.
 
         Args:
@@ -205,6 +206,8 @@ class Client:
             meshes: mesh files the URDF references, keyed by the exact ``filename`` of its
                 ``<mesh>`` tags: bytes, or a path to read.
             name: default robot name used in messages.
+            exact_meshes: keep mesh collision geometry exact (FCL, discrete checks) instead of the
+                spheres the server fits to it at upload (``robot_info(robot_id).collision_model``).
 
         The joints and limits the server answered are kept: ``robot_info(robot_id)``, and plans
         with this robot (also as the server's default robot, when it is the same model) carry
@@ -217,6 +220,7 @@ class Client:
             model.urdf.urdf = _text(urdf)
             model.urdf.srdf = _text(srdf) if srdf else ""
             model.urdf.strict_srdf = strict_srdf
+            model.urdf.exact_meshes = exact_meshes
             for filename, data in (meshes or {}).items():
                 model.urdf.mesh_files[filename] = data if isinstance(data, bytes) else Path(data).read_bytes()
         if name:

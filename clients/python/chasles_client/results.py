@@ -23,6 +23,9 @@ class RobotInfo:
         velocity_limits: shape (n,) [rad/s] or [m/s].
         warnings: what the server skipped while reading the description (e.g. SRDF pairs naming
             links the URDF lacks), one sentence each.
+        collision_model: how its collision geometry is checked: ``{"kind": "shapes"}``, or for a
+            robot with meshes ``{"kind": "fitted_spheres", "spheres": …, "shapes_fitted": …,
+            "reach": … [m], "reach_link": …, "fit_seconds": …}``.
     """
 
     robot_id: str
@@ -31,14 +34,20 @@ class RobotInfo:
     upper_limits: np.ndarray
     velocity_limits: np.ndarray
     warnings: List[str] = field(default_factory=list)
+    collision_model: Dict[str, Any] = field(default_factory=dict)
 
     @classmethod
     def from_response(cls, response: pb.UploadRobotResponse) -> "RobotInfo":
+        c = response.collision_model
+        collision = {"kind": c.kind}
+        if c.kind == "fitted_spheres":
+            collision.update(spheres=c.spheres, shapes_fitted=c.shapes_fitted, reach=c.reach,
+                             reach_link=c.reach_link, fit_seconds=c.fit_seconds)
         return cls(robot_id=response.robot_id, joint_names=list(response.joint_names),
                    lower_limits=np.array(response.lower_limits, dtype=float),
                    upper_limits=np.array(response.upper_limits, dtype=float),
                    velocity_limits=np.array(response.velocity_limits, dtype=float),
-                   warnings=list(response.warnings))
+                   warnings=list(response.warnings), collision_model=collision)
 
 
 @dataclass

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "chasles/collision/collision_checker.h"
+#include "chasles/collision/robot_spheres.h"
 #include "chasles/robot/input_limits.h"
 #include "chasles/server/lru_cache.h"
 #include "chasles/v1/chasles.pb.h"
@@ -17,7 +18,13 @@ namespace chasles {
 
 struct StoredRobot {
   std::string id;
+  /// What planning, checking and every other use of the robot see: the robot as described, or,
+  /// for a URDF with meshes (UrdfRobot.exact_meshes false), the same robot with its collision
+  /// shapes covered by spheres (FitRobotSpheres, once per stored robot).
   std::shared_ptr<const RobotModel> model;
+  /// When model is fitted: the robot as described (its exact shapes) and the fit's figures.
+  std::shared_ptr<const RobotModel> exact;
+  std::shared_ptr<const RobotSphereFit> fit;
 };
 
 struct StoredScene {
