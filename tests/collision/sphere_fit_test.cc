@@ -336,7 +336,9 @@ void CheckCylinder(double radius, double length, std::uint64_t seed) {
   CheckFit(mesh, true, options, fit, seed, kSamples, 4000);
   EXPECT_LE(fit.reach, 0.015);
   EXPECT_LE(fit.centres.size(), 48u);
-  EXPECT_LT(seconds, 2.0);  // 0.2–0.8 s in Release on one core; generous for loaded machines
+  // Timings belong in benchmarks, not in assertions (a sanitizer build takes several times as
+  // long): printed only. 0.2–0.9 s in Release on one core.
+  std::printf("[ time ] %.3f s\n", seconds);
 }
 
 TEST(SphereFitTest, RobotLinkCylinderUpperArm) { CheckCylinder(0.05, 0.3, 31); }
