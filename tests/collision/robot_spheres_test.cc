@@ -57,7 +57,7 @@ TEST(RobotSpheres, EveryMeshVertexIsInsideASphereOfItsLink) {
       ASSERT_EQ(s.type, ShapeType::kSphere) << fitted.name;
       ++spheres;
     }
-    EXPECT_LE(fitted.collision.size(), 48u + 2u) << fitted.name;  // the per-link budget (+ kept spheres)
+    EXPECT_LE(fitted.collision.size(), RobotSphereOptions().max_spheres_per_link + 2u) << fitted.name;  // + kept spheres
     for (const Shape& shape : exact.collision) {
       if (shape.type != ShapeType::kMesh) continue;
       for (const Eigen::Vector3d& v : shape.mesh->vertices) {

@@ -17,7 +17,7 @@ struct RobotSphereOptions {
   /// replaced by the link's budget below, shared by its shapes).
   SphereFitOptions fit;
   /// Spheres per link, shared among the link's shapes that are fitted (each gets at least one), >= 1.
-  int max_spheres_per_link = 48;
+  int max_spheres_per_link = 40;
   /// \throws Error(kInvalidArgument) naming the field.
   void Validate() const;
 };
