@@ -18,7 +18,7 @@
 #include <google/protobuf/util/json_util.h>
 #include <grpcpp/grpcpp.h>
 
-#include "bench_pipeline.h"  // ReadFile
+#include "bench_pipeline.h"  // ReadFile, StartBenchServer
 #include "chasles/collision/collision_checker.h"
 #include "chasles/robot/robot_model.h"
 #include "chasles/server/convert.h"
@@ -149,17 +149,8 @@ void BenchClutter(const ClutterBenchOptions& options) {
   for (int i = 0; i < start.size(); ++i) start[i] = request.start().positions(i);
   for (int i = 0; i < goal.size(); ++i) goal[i] = request.goal().positions(i);
 
-  ServerOptions server_options;
-  server_options.listen = "127.0.0.1:0";
-  server_options.threads = 1;
-  server_options.log_requests = false;
-  server_options.max_message_mb = 256;  // 100,000 boxes are ~10 MB of scene
-  PlanningServer server(server_options);
-  grpc::ChannelArguments arguments;
-  arguments.SetMaxReceiveMessageSize(256 << 20);
-  arguments.SetMaxSendMessageSize(256 << 20);
-  auto stub = v1::Planning::NewStub(grpc::CreateCustomChannel(
-      "127.0.0.1:" + std::to_string(server.port()), grpc::InsecureChannelCredentials(), arguments));
+  const BenchServer server = StartBenchServer(256);  // 100,000 boxes are ~10 MB of scene
+  v1::Planning::Stub* const stub = server.stub.get();
 
   const auto run = [&](const v1::Scene& scene, int boxes) {
     Row row;

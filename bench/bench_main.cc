@@ -93,11 +93,6 @@ std::vector<std::string> Split(const std::string& s) {
   return out;
 }
 
-/// The report's quantile (linear interpolation), but nan for no values: a table cell, not a 0.
-double Quantile(std::vector<double> v, double q) {
-  return v.empty() ? std::nan("") : ::chasles::Quantile(std::move(v), q);
-}
-
 std::string examples_dir;
 
 std::shared_ptr<const RobotModel> LoadRobot(const std::string& name) {
@@ -140,7 +135,7 @@ Rate MeasureChecks(const CollisionChecker& checker, const std::vector<Eigen::Vec
     const double s = std::chrono::duration<double>(Clock::now() - t0).count();
     rates.push_back(configs.size() / s);
   }
-  return {Quantile(rates, 0.5), static_cast<double>(valid) / configs.size()};
+  return {QuantileOrNan(rates, 0.5), static_cast<double>(valid) / configs.size()};
 }
 
 void BenchChecks(const Options& options) {
@@ -265,7 +260,7 @@ void BenchPlanning(const Options& options) {
         raw_length.push_back(PathLength(out.raw_path));
         length.push_back(PathLength(out.path));
       }
-      const double median = Quantile(plan_ms, 0.5);
+      const double median = QuantileOrNan(plan_ms, 0.5);
       if (id == "rrt_connect") baseline_median = median;
       std::string unsolved;
       for (const auto& [code, count] : failures) unsolved += (unsolved.empty() ? " (" : ", ") + code + " " + std::to_string(count);
@@ -274,9 +269,9 @@ void BenchPlanning(const Options& options) {
         unsolved += "; " + std::to_string(collide_when_rechecked) + " collide at a 0.001 rad re-check";
       }
       std::printf("| %s | %s | %d/%zu%s | %.2f | %.2f | %.2f× | %.2f | %.2f | %.2f | %.2f | %.2f |\n", scene_name.c_str(),
-                  id.c_str(), solved, queries.size(), unsolved.c_str(), median, Quantile(plan_ms, 0.95), median / baseline_median,
-                  Quantile(total_ms, 0.5), Quantile(shortcut_ms, 0.5), Quantile(verify_ms, 0.5),
-                  Quantile(raw_length, 0.5), Quantile(length, 0.5));
+                  id.c_str(), solved, queries.size(), unsolved.c_str(), median, QuantileOrNan(plan_ms, 0.95), median / baseline_median,
+                  QuantileOrNan(total_ms, 0.5), QuantileOrNan(shortcut_ms, 0.5), QuantileOrNan(verify_ms, 0.5),
+                  QuantileOrNan(raw_length, 0.5), QuantileOrNan(length, 0.5));
       std::fflush(stdout);
     }
   }
@@ -412,7 +407,7 @@ void BenchFamilies(const Options& options) {
         plan_ms.push_back(1e3 * out.seconds.plan);
         length.push_back(PathLength(out.path));
       }
-      const double t = Quantile(plan_ms, 0.5), l = Quantile(length, 0.5);
+      const double t = QuantileOrNan(plan_ms, 0.5), l = QuantileOrNan(length, 0.5);
       if (id == "rrt_connect") {
         base_time = t;
         base_length = l;
@@ -421,7 +416,7 @@ void BenchFamilies(const Options& options) {
       for (const auto& [code, count] : failures) other += (other.empty() ? "" : ", ") + code + " " + std::to_string(count);
       if (collide > 0) other += (other.empty() ? "" : "; ") + std::to_string(collide) + " collide at the re-check";
       std::printf("| %s | %s | %d/%zu | %.2f | %.2f | %.2f× | %.3f | %.2f× | %s |\n", name.c_str(), config.c_str(), solved,
-                  queries.size(), t, Quantile(plan_ms, 0.95), t / base_time, l, l / base_length, other.c_str());
+                  queries.size(), t, QuantileOrNan(plan_ms, 0.95), t / base_time, l, l / base_length, other.c_str());
       std::fflush(stdout);
     }
   }
@@ -492,18 +487,18 @@ void BenchGrpc(const Options& options) {
     if (!status.ok()) return;
     if (i >= 10) floor_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   }
-  const double remote = Quantile(remote_ms, 0.5), local = Quantile(local_ms, 0.5);
+  const double remote = QuantileOrNan(remote_ms, 0.5), local = QuantileOrNan(local_ms, 0.5);
   std::printf("\n## Plan latency: loopback gRPC vs in-process (panda, table, rrt_connect, %d requests)\n\n",
               options.grpc_requests);
   std::printf("| path | median [ms] | p95 [ms] |\n|---|---|---|\n");
   std::printf("| in-process: convert request + pipeline + convert response | %.3f | %.3f |\n", local,
-              Quantile(local_ms, 0.95));
+              QuantileOrNan(local_ms, 0.95));
   std::printf("| loopback gRPC Plan (same work + transport, %zu-byte response) | %.3f | %.3f |\n", response_bytes,
-              remote, Quantile(remote_ms, 0.95));
-  std::printf("| of which response conversion (in-process) | %.3f | %.3f |\n", Quantile(convert_ms, 0.5),
-              Quantile(convert_ms, 0.95));
+              remote, QuantileOrNan(remote_ms, 0.95));
+  std::printf("| of which response conversion (in-process) | %.3f | %.3f |\n", QuantileOrNan(convert_ms, 0.5),
+              QuantileOrNan(convert_ms, 0.95));
   std::printf("| trivial RPC (ListPlanners) over the same channel: transport floor | %.3f | %.3f |\n",
-              Quantile(floor_ms, 0.5), Quantile(floor_ms, 0.95));
+              QuantileOrNan(floor_ms, 0.5), QuantileOrNan(floor_ms, 0.95));
   std::printf("\ngRPC overhead (difference of medians): %.3f ms; ratio %.2f×\n", remote - local, remote / local);
 }
 
@@ -519,7 +514,7 @@ double MedianMicros(int n, int repeats, Call&& call) {
     for (int i = 0; i < n; ++i) call(i);
     per_call.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count() / n);
   }
-  return Quantile(per_call, 0.5);
+  return QuantileOrNan(per_call, 0.5);
 }
 
 volatile double bench_sink = 0.0;  // keeps results alive
@@ -644,8 +639,8 @@ void BenchKinematics(const Options& options) {
         attempts += result.attempts;
       }
       ik_row.total = options.ik_poses;
-      ik_row.median_us = Quantile(micros, 0.5);
-      ik_row.p95_us = Quantile(micros, 0.95);
+      ik_row.median_us = QuantileOrNan(micros, 0.5);
+      ik_row.p95_us = QuantileOrNan(micros, 0.95);
       ik_row.attempts = attempts / options.ik_poses;
       ik_rows.push_back(ik_row);
     }
@@ -674,7 +669,7 @@ double MedianMillis(int repeats, Call&& call) {
     call();
     ms.push_back(1e3 * std::chrono::duration<double>(Clock::now() - t0).count());
   }
-  return Quantile(ms, 0.5);
+  return QuantileOrNan(ms, 0.5);
 }
 
 struct MethodRow {
@@ -692,16 +687,16 @@ void PrintMethodRows(const std::string& what, const std::string& ratio_name, std
   for (const std::string& m : order) {
     if (rows.count(m) == 0) continue;
     MethodRow& r = rows[m];
-    const double ms = Quantile(r.ms, 0.5);
+    const double ms = QuantileOrNan(r.ms, 0.5);
     double vmax = 0, amax = 0, cmin = std::numeric_limits<double>::infinity();
     for (double v : r.velocity) vmax = std::max(vmax, v);
     for (double a : r.acceleration) amax = std::max(amax, a);
     for (double c : r.clearance) cmin = std::min(cmin, c);
     std::printf("| %s | %s | %d | %.6f | %.6f | %.6f | %.4f | %.4f | %.1f× | %.0f | %.6f | %.6f | %.4f | %s | %d%s |\n",
-                what.c_str(), m.c_str(), r.runs, Quantile(r.ratio, 0.5), Quantile(r.ratio, 0.95),
+                what.c_str(), m.c_str(), r.runs, QuantileOrNan(r.ratio, 0.5), QuantileOrNan(r.ratio, 0.95),
                 r.ratio.empty() ? std::nan("") : *std::max_element(r.ratio.begin(), r.ratio.end()), ms,
-                Quantile(r.ms, 0.95), ms / topp_ms_median, Quantile(r.iterations, 0.5), vmax, amax,
-                Quantile(r.deviation, 0.5), std::isfinite(cmin) ? std::to_string(cmin).c_str() : "no obstacles",
+                QuantileOrNan(r.ms, 0.95), ms / topp_ms_median, QuantileOrNan(r.iterations, 0.5), vmax, amax,
+                QuantileOrNan(r.deviation, 0.5), std::isfinite(cmin) ? std::to_string(cmin).c_str() : "no obstacles",
                 r.fell_back, r.failed_verification > 0 ? (" (" + std::to_string(r.failed_verification) + " failed verification)").c_str() : "");
   }
 }
@@ -776,7 +771,7 @@ void BenchTrajectory(const Options& options) {
               "(or 2/√A); collocation with K = %d knots. compute = one call (topp: median of 21 repeats).\n\n",
               options.segments, options.knots);
   const std::vector<std::string> order = {"topp", "collocation", "spline"};
-  PrintMethodRows("straight", "T/T*", rows, order, Quantile(rows["topp"].ms, 0.5));
+  PrintMethodRows("straight", "T/T*", rows, order, QuantileOrNan(rows["topp"].ms, 0.5));
   std::fflush(stdout);
 
   // 2. Planner paths of 5–10 waypoints in the shelf scene.
@@ -850,9 +845,9 @@ void BenchTrajectory(const Options& options) {
   std::printf("\n%zu RRT-Connect paths in the shelf scene with 5–10 waypoints after 20 shortcut attempts (median %.0f "
               "waypoints); ratios are durations over the time-optimal parameterisation of the same path (max_deviation "
               "0.05 rad), so 'none' shows what blending gains and the optimisers what they gain over it.\n\n",
-              paths.size(), Quantile(waypoints, 0.5));
+              paths.size(), QuantileOrNan(waypoints, 0.5));
   PrintMethodRows("path", "T/T_topp", path_rows, {"topp", "none (stops)", "collocation", "spline"},
-                  Quantile(path_rows["topp"].ms, 0.5));
+                  QuantileOrNan(path_rows["topp"].ms, 0.5));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -911,8 +906,8 @@ void BenchCoordination(const Options& options) {
         if (it != sequential_makespan.end()) ratios.push_back(outcome.makespan / it->second);
       }
       std::printf("%-14s %-16s %5d/%-2d %12.3f %12.3f %12.3f %14.3f %12.3f %10.3f\n", scenario.c_str(), ToString(method),
-                  solved, options.runs, Quantile(seconds, 0.5), Quantile(seconds, 0.95), Quantile(makespans, 0.5),
-                  Quantile(ratios, 0.5), Quantile(sums, 0.5), Quantile(makespans, 0.5) / alone_sum);
+                  solved, options.runs, QuantileOrNan(seconds, 0.5), QuantileOrNan(seconds, 0.95), QuantileOrNan(makespans, 0.5),
+                  QuantileOrNan(ratios, 0.5), QuantileOrNan(sums, 0.5), QuantileOrNan(makespans, 0.5) / alone_sum);
       std::fflush(stdout);
     }
   }
@@ -1018,15 +1013,15 @@ void BenchBenchmarkRpc(const Options& options) {
               "budget %.2g s, %d repeats)\n\n",
               examples.size(), request.configs_size(), options.runs, total, options.budget, options.bench_repeats);
   std::printf("| how | median runs/s | min | max | ratio to in-process |\n|---|---|---|---|---|\n");
-  const double base = Quantile(direct_rates, 0.5);
+  const double base = QuantileOrNan(direct_rates, 0.5);
   const auto row = [&](const char* how, const std::vector<double>& rates) {
-    std::printf("| %s | %.1f | %.1f | %.1f | %.2f× |\n", how, Quantile(rates, 0.5), Quantile(rates, 0.0),
-                Quantile(rates, 1.0), Quantile(rates, 0.5) / base);
+    std::printf("| %s | %.1f | %.1f | %.1f | %.2f× |\n", how, QuantileOrNan(rates, 0.5), QuantileOrNan(rates, 0.0),
+                QuantileOrNan(rates, 1.0), QuantileOrNan(rates, 0.5) / base);
   };
   row("in-process pipeline, one run after another (baseline)", direct_rates);
   row("Benchmark RPC, server with 1 worker thread", one_rates);
   row("Benchmark RPC, server with 2 worker threads", two_rates);
-  std::printf("\n2 threads vs 1: median of the per-repeat ratios %.2f×\n", Quantile(speedups, 0.5));
+  std::printf("\n2 threads vs 1: median of the per-repeat ratios %.2f×\n", QuantileOrNan(speedups, 0.5));
 }
 
 int Main(int argc, char** argv) {

@@ -19,7 +19,7 @@
 
 #include <grpcpp/grpcpp.h>
 
-#include "bench_pipeline.h"  // ReadFile
+#include "bench_pipeline.h"  // ReadFile, QuantileOrNan, StartBenchServer
 #include "chasles/collision/collision_checker.h"
 #include "chasles/collision/mesh.h"
 #include "chasles/robot/robot_model.h"
@@ -31,15 +31,6 @@ namespace chasles {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const double at = q * static_cast<double>(v.size() - 1);
-  const std::size_t lo = static_cast<std::size_t>(std::floor(at));
-  const std::size_t hi = std::min(lo + 1, v.size() - 1);
-  return v[lo] + (at - static_cast<double>(lo)) * (v[hi] - v[lo]);
-}
 
 constexpr const char* kMeshLinks[] = {"base_link",    "shoulder_link", "upper_arm_link", "forearm_link",
                                       "wrist_1_link", "wrist_2_link",  "wrist_3_link"};
@@ -123,16 +114,8 @@ void BenchMeshRobot(const MeshRobotBenchOptions& options) {
     if ((a - b).cwiseAbs().maxCoeff() >= 1.0) queries.emplace_back(std::move(a), std::move(b));
   }
 
-  ServerOptions server_options;
-  server_options.listen = "127.0.0.1:0";
-  server_options.threads = 1;
-  server_options.log_requests = false;
-  PlanningServer server(server_options);
-  grpc::ChannelArguments arguments;
-  arguments.SetMaxReceiveMessageSize(64 << 20);
-  arguments.SetMaxSendMessageSize(64 << 20);
-  auto stub = v1::Planning::NewStub(grpc::CreateCustomChannel("127.0.0.1:" + std::to_string(server.port()),
-                                                              grpc::InsecureChannelCredentials(), arguments));
+  const BenchServer server = StartBenchServer();
+  v1::Planning::Stub* const stub = server.stub.get();
   v1::UploadSceneResponse scene_uploaded;
   {
     grpc::ClientContext context;
@@ -218,12 +201,12 @@ void BenchMeshRobot(const MeshRobotBenchOptions& options) {
               "Plan call median [ms] | p95 [ms] | server total median [ms] | validate median [ms] | plan median [ms] | "
               "call / hand-made spheres |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
-  const double base = Quantile(models[0].call, 0.5);
+  const double base = QuantileOrNan(models[0].call, 0.5);
   for (const Model& m : models) {
     std::printf("| %s | %s | %.0f | %d/%d | %d | %d | %.2f | %.2f | %.2f | %.3f | %.3f | %.2f× |\n", m.name.c_str(),
                 m.collision.c_str(), m.upload_ms, m.solved, options.queries, m.certified, m.touching,
-                Quantile(m.call, 0.5), Quantile(m.call, 0.95), Quantile(m.total, 0.5), Quantile(m.validate, 0.5),
-                Quantile(m.plan, 0.5), Quantile(m.call, 0.5) / base);
+                QuantileOrNan(m.call, 0.5), QuantileOrNan(m.call, 0.95), QuantileOrNan(m.total, 0.5), QuantileOrNan(m.validate, 0.5),
+                QuantileOrNan(m.plan, 0.5), QuantileOrNan(m.call, 0.5) / base);
   }
   std::printf("\n");
 }

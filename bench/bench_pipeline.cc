@@ -32,6 +32,26 @@
 
 namespace chasles {
 
+double QuantileOrNan(std::vector<double> values, double p) {
+  return values.empty() ? std::nan("") : ::chasles::Quantile(std::move(values), p);
+}
+
+BenchServer StartBenchServer(int max_message_mb) {
+  ServerOptions options;
+  options.listen = "127.0.0.1:0";
+  options.threads = 1;
+  options.log_requests = false;
+  options.max_message_mb = max_message_mb;
+  BenchServer out;
+  out.server = std::make_unique<PlanningServer>(options);
+  grpc::ChannelArguments arguments;
+  arguments.SetMaxReceiveMessageSize(max_message_mb << 20);
+  arguments.SetMaxSendMessageSize(max_message_mb << 20);
+  out.stub = v1::Planning::NewStub(grpc::CreateCustomChannel("127.0.0.1:" + std::to_string(out.server->port()),
+                                                             grpc::InsecureChannelCredentials(), arguments));
+  return out;
+}
+
 std::string ReadFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot read " + path);
@@ -51,10 +71,6 @@ constexpr double kRpcMedianTargetMs = 4.0;
 constexpr double kP95OverMedianTarget = 10.0;
 
 /// The p-quantile, but nan (a visible table cell) for no values instead of 0.
-double QuantileOrNan(std::vector<double> values, double p) {
-  return values.empty() ? std::nan("") : ::chasles::Quantile(std::move(values), p);
-}
-
 double MillisSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
@@ -206,15 +222,8 @@ void BenchPipeline(const PipelineBenchOptions& options, const QueryMaker& make_q
 
   // A server in this process with one planning worker, the default robot (the same Panda) and
   // each scene uploaded once.
-  ServerOptions server_options;
-  server_options.listen = "127.0.0.1:0";
-  server_options.threads = 1;
-  server_options.log_requests = false;
-  PlanningServer server(server_options);
-  grpc::ChannelArguments arguments;
-  arguments.SetMaxReceiveMessageSize(64 << 20);
-  auto stub = v1::Planning::NewStub(grpc::CreateCustomChannel(
-      "127.0.0.1:" + std::to_string(server.port()), grpc::InsecureChannelCredentials(), arguments));
+  const BenchServer server = StartBenchServer();
+  v1::Planning::Stub* const stub = server.stub.get();
 
   std::vector<Case> cases;
   int fcl_query_differences = 0;
@@ -276,7 +285,7 @@ void BenchPipeline(const PipelineBenchOptions& options, const QueryMaker& make_q
       const double budget = c.optimizing ? options.anytime_budget : options.budget;
       RunOurs(pipeline, c, budget, options.sample_period, options.seed);
       RunInProcess(pipeline, c, c.fcl, budget, options.sample_period, options.seed, &c.fcl_series);
-      RunRpc(stub.get(), &c);
+      RunRpc(stub, &c);
     }
     // The transport floor: a trivial RPC (ListPlanners, answered on the same pool).
     for (int i = 0; i < 50; ++i) {

@@ -6,11 +6,15 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include <Eigen/Core>
+
+#include "chasles/server/planning_server.h"
+#include "chasles/v1/chasles.grpc.pb.h"
 
 namespace chasles {
 
@@ -18,6 +22,17 @@ class CollisionChecker;
 
 /// The whole file at `path` (the benches' robots and scenes). \throws std::runtime_error naming it.
 std::string ReadFile(const std::string& path);
+
+/// The report's quantile (linear interpolation), but nan for no values: a table cell, not a 0.
+double QuantileOrNan(std::vector<double> values, double p);
+
+/// A planning server in this process on a loopback port (one planning worker, no request log)
+/// and a stub to it, messages up to `max_message_mb` [MiB] both ways (the server's cap too).
+struct BenchServer {
+  std::unique_ptr<PlanningServer> server;
+  std::unique_ptr<v1::Planning::Stub> stub;
+};
+BenchServer StartBenchServer(int max_message_mb = 64);
 
 /// `count` seeded start/goal pairs for `checker`: both collision-free, the straight segment
 /// between them colliding (bench_main.cc's MakeQueries, so the plan section's queries are these).
