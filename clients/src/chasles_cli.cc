@@ -397,15 +397,20 @@ int Plan(const Options& options) {
   std::printf("outcome     %s\n", v1::PlanOutcome_Name(response.outcome()).c_str());
   std::printf("message     %s\n", response.message().c_str());
   for (const std::string& warning : response.warnings()) std::printf("warning     %s\n", warning.c_str());
+  if (response.has_repair()) {
+    std::printf("repair      %s after verification found: %s\n", response.repair().repaired() ? "succeeded" : "failed",
+                response.repair().failure().c_str());
+    for (const std::string& action : response.repair().actions()) std::printf("  tried     %s\n", action.c_str());
+  }
   std::printf("robot/scene %s / %s\n", response.robot_id().c_str(), response.scene_id().c_str());
   std::printf("duration    %.4f s\n", response.duration());
   std::printf("waypoints   %d (planner returned %u)\n", response.path_size(), response.statistics().raw_waypoints());
   std::printf("samples     %d\n", response.trajectory().points_size());
   std::printf("path length %.4f rad\n", response.statistics().path_length());
   std::printf("timings ms  validate %.1f  plan %.1f  shortcut %.1f  parameterize %.1f  optimize %.1f  verify %.1f  "
-              "total %.1f\n",
+              "repair %.1f  total %.1f\n",
               1e3 * t.validate(), 1e3 * t.plan(), 1e3 * t.shortcut(), 1e3 * t.parameterize(), 1e3 * t.optimize(),
-              1e3 * t.verify(), 1e3 * t.total());
+              1e3 * t.verify(), 1e3 * t.repair(), 1e3 * t.total());
   PrintOptimizer(response.optimizer(), response.quality());
   if (v.collision_guarantee() == "certified") {
     std::printf("verified    %u states, certified along the continuous motion, max |qd|/v %.3f, max |qdd|/a %.3f\n",

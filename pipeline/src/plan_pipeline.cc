@@ -93,6 +93,7 @@ void PlanQuery::Validate(const PlannerRegistry& registry) const {
   }
   CheckRange(collision_resolution, 1e-4, 0.1, "collision_resolution");
   CheckRange(sample_period, 1e-4, 1.0, "trajectory.sample_period");
+  CheckRange(repair_budget, 0.0, 600.0, "repair_budget");
   if (shortcut_attempts < -1) {
     ThrowInvalid("trajectory.shortcut_attempts = " + std::to_string(shortcut_attempts) + " must be >= -1");
   }
@@ -199,10 +200,10 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
 
   // 3. Shorten.
   t = Clock::now();
-  if (query.shortcut_attempts >= 0 && !planned.keep_path_shape) {
+  const auto shorten = [&](const JointPath& path, double max_step) {
     ShortcutOptions options;
     options.max_attempts = query.shortcut_attempts;
-    options.max_step = query.collision_resolution;
+    options.max_step = max_step;
     options.seed = query.seed;
     options.stall_attempts = query.shortcut_stall;
     options.stall_improvement = 0.01;
@@ -215,30 +216,131 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
       return reason == StopReason::kCancelled || reason == StopReason::kDeadline;
     };
     CheckCounters counters;
-    out.path = ShortcutPath(planned.path, checker, options, &counters);
+    JointPath shorter = ShortcutPath(path, checker, options, &counters);
     out.state_checks += counters.state_checks;
-  } else {
-    out.path = planned.path;
-  }
+    return shorter;
+  };
+  const bool shortcut = query.shortcut_attempts >= 0 && !planned.keep_path_shape;
+  out.path = shortcut ? shorten(planned.path, query.collision_resolution) : planned.path;
   out.seconds.shortcut = SecondsSince(t);
 
   // 4–5. Time-parameterise (and optimise), then verify densely before anything leaves.
   TrajectorySpec spec = query.trajectory;
   spec.gravity = query.gravity;
-  TrajectoryStageResult timed =
-      RunTrajectoryStage(out.path, checker, spec, std::min(0.005, query.collision_resolution), termination);
-  out.limits = timed.limits;
-  out.verification = timed.verification;
-  out.optimizer = timed.optimizer;
+  const double verify_step = std::min(0.005, query.collision_resolution);
+  TrajectoryStageResult timed = RunTrajectoryStage(out.path, checker, spec, verify_step, termination);
+  out.repair = timed.repair;
   out.seconds.parameterize = timed.parameterize_seconds;
   out.seconds.optimize = timed.optimize_seconds;
   out.seconds.verify = timed.verify_seconds;
+
+  // 5b. Repair a path whose segments collide between the states the planner checked: re-check
+  // each segment finer (certified when the checker certifies motions, else at a quarter of the
+  // verification step), replan each colliding one with RRT-Connect at that step between its
+  // ends, shorten at that step and time again; up to three rounds, the step halved each round.
+  if (timed.code == TrajectoryStageCode::kVerificationFailed && !planned.keep_path_shape) {
+    const auto t_repair = Clock::now();
+    const Termination repair_termination = termination.WithFreshBudget(std::chrono::duration<double>(query.repair_budget));
+    const std::vector<std::string> ids = registry_.Ids();
+    const bool rrt = std::find(ids.begin(), ids.end(), "rrt_connect") != ids.end() &&
+                     registry_.Spec("rrt_connect").Supports(checker.robot().kind());
+    double step = verify_step / 4.0;
+    JointPath path = out.path;
+    for (int round = 0; round < 3 && rrt && timed.code == TrajectoryStageCode::kVerificationFailed; ++round) {
+      if (repair_termination.ShouldStop()) {
+        out.repair.actions.push_back("replanning stopped: " + std::string(repair_termination.Reason() == StopReason::kBudget
+                                                                               ? "its budget of " + FormatNumber(query.repair_budget) + " s was spent"
+                                                                               : "the call ended"));
+        break;
+      }
+      const std::string how = checker.certifies_motion() ? std::string("certified") : "at " + FormatNumber(step) + " rad";
+      std::vector<std::size_t> colliding;
+      CheckCounters counters;
+      for (std::size_t k = 0; k + 1 < path.size(); ++k) {
+        const bool free = checker.certifies_motion() ? checker.IsMotionCertified(path[k], path[k + 1], &counters)
+                                                     : checker.IsMotionValid(path[k], path[k + 1], step, &counters);
+        if (!free) colliding.push_back(k);
+      }
+      out.state_checks += counters.state_checks;
+      if (colliding.empty()) {
+        out.repair.actions.push_back("re-checked the path's " + std::to_string(path.size() - 1) + " segments " + how +
+                                     ": all free, so replanning cannot help");
+        break;
+      }
+      JointPath replanned;
+      std::string failed;
+      std::size_t next = 0;  // first waypoint of `path` not yet copied
+      for (std::size_t k : colliding) {
+        replanned.insert(replanned.end(), path.begin() + static_cast<std::ptrdiff_t>(next),
+                         path.begin() + static_cast<std::ptrdiff_t>(k));
+        std::unique_ptr<Planner> segment_planner = registry_.Create("rrt_connect");
+        PlanningProblem segment;
+        segment.checker = query.checker;
+        segment.start = path[k];
+        segment.goal = path[k + 1];
+        segment.goal_tolerance = 0.0;
+        segment.max_step = step;
+        segment.seed = query.seed + 7919u * static_cast<std::uint64_t>(round + 1) + k;
+        segment_planner->Setup(segment);
+        const PlannerResult result = segment_planner->Solve(repair_termination);
+        out.graph_states += result.graph_states;
+        out.state_checks += result.state_checks;
+        if (result.status != PlanStatus::kExactSolution || result.path.empty()) {
+          failed = "replanning segment path[" + std::to_string(k) + "] → path[" + std::to_string(k + 1) + "] " + how +
+                   " found no path: " + result.message;
+          break;
+        }
+        replanned.insert(replanned.end(), result.path.begin(), result.path.end() - 1);
+        replanned.push_back(path[k + 1]);  // the segment ends exactly where the path goes on
+        next = k + 2;
+      }
+      if (!failed.empty()) {
+        out.repair.actions.push_back(failed);
+        break;
+      }
+      replanned.insert(replanned.end(), path.begin() + static_cast<std::ptrdiff_t>(next), path.end());
+      std::string segments;
+      for (std::size_t j = 0; j < colliding.size() && j < 4; ++j) {
+        segments += (j ? ", path[" : "path[") + std::to_string(colliding[j]) + "] → path[" +
+                    std::to_string(colliding[j] + 1) + "]";
+      }
+      if (colliding.size() > 4) segments += ", …";
+      path = shortcut ? shorten(replanned, step) : replanned;
+      timed = RunTrajectoryStage(path, checker, spec, verify_step, termination);
+      std::string action = "replanned " + std::to_string(colliding.size()) + " segment" +
+                           std::string(colliding.size() == 1 ? " that collides " : "s that collide ") + how + " (" + segments +
+                           ") with RRT-Connect at " + FormatNumber(step) + " rad" + (shortcut ? ", shortened" : "") +
+                           ", " + std::to_string(path.size()) + " waypoints: ";
+      if (timed.code == TrajectoryStageCode::kSuccess) {
+        action += "verified";
+        out.repair.repaired = true;
+        out.path = path;
+      } else {
+        action += "failed verification (" +
+                  (timed.repair.attempted() ? timed.repair.failure : timed.message) + ")";
+      }
+      out.repair.actions.push_back(std::move(action));
+      for (std::string& nested : timed.repair.actions) out.repair.actions.push_back(std::move(nested));
+      if (timed.code == TrajectoryStageCode::kInfeasibleLimits) break;
+      step /= 2.0;
+    }
+    if (!rrt) {
+      out.repair.actions.push_back("no segment replanned: RRT-Connect does not plan for a " +
+                                   std::string(ToString(checker.robot().kind())) + " robot");
+    }
+    out.repair.seconds += SecondsSince(t_repair);
+  }
+  out.seconds.repair = out.repair.seconds;
+  out.limits = timed.limits;
+  out.verification = timed.verification;
+  out.optimizer = timed.optimizer;
   out.state_checks += static_cast<std::uint64_t>(out.verification.states_checked);
   if (timed.code == TrajectoryStageCode::kInfeasibleLimits) {
     return finish(PlanOutcomeCode::kInfeasibleLimits, timed.message);
   }
   if (timed.code != TrajectoryStageCode::kSuccess) {
-    return finish(PlanOutcomeCode::kVerificationFailed, timed.message);
+    return finish(PlanOutcomeCode::kVerificationFailed,
+                  "the trajectory failed dense verification: " + out.repair.Describe());
   }
   out.trajectory = std::move(timed.trajectory);
   out.quality = timed.quality;
@@ -255,6 +357,7 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
           << ToString(out.optimizer.used) << " trajectory of " << out.trajectory.duration() << " s, verified at "
           << out.verification.states_checked << " states";
   if (out.optimizer.fell_back) message << "; " << out.optimizer.message;
+  if (out.repair.repaired) message << "; repaired after verification found " << out.repair.failure;
   return finish(PlanOutcomeCode::kSuccess, message.str());
 }
 

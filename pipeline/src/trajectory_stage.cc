@@ -32,6 +32,14 @@ void CheckVector(const Eigen::VectorXd& v, int n, const std::string& field) {
 
 }  // namespace
 
+std::string VerificationRepair::Describe() const {
+  std::string text = failure;
+  if (actions.empty()) return text;
+  text += "; repairs tried: ";
+  for (std::size_t k = 0; k < actions.size(); ++k) text += (k ? "; " : "") + actions[k];
+  return text;
+}
+
 const char* ToString(PostProcessing method) {
   switch (method) {
     case PostProcessing::kAuto: return "auto";
@@ -172,9 +180,45 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
     out.verify_seconds += SecondsSince(t);
     if (out.optimizer.message.empty()) out.optimizer.message = out.optimizer.time_optimal.message;
   }
+  // 4. Repair: the blends are the only motion the path's checks did not cover; stop at every
+  // waypoint instead.
+  if (!out.verification.ok) {
+    t = Clock::now();
+    out.repair.failure = out.verification.reason;
+    const int blends = out.optimizer.time_optimal.blends;
+    if (exact_kind == PostProcessing::kTimeOptimal && blends > 0) {
+      TimeOptimalOptions options;
+      options.max_deviation = 0.0;
+      options.start_velocity = spec.start_velocity;
+      options.end_velocity = spec.end_velocity;
+      options.max_joint_step = max_joint_step;
+      TimeOptimalReport report;
+      try {
+        TimedTrajectory stopped = ParameterizeTimeOptimal(path, limits, options, &checker, &report);
+        const VerificationReport checked = VerifyTrajectory(stopped, path.front(), path.back(), checker, limits, verify);
+        std::string action = "retimed without the " + std::to_string(blends) + " corner blend" +
+                             (blends == 1 ? "" : "s") + " (stopping at every waypoint): ";
+        if (checked.ok) {
+          action += "verified, " + FormatNumber(stopped.duration()) + " s instead of " +
+                    FormatNumber(chosen.duration()) + " s";
+          chosen = std::move(stopped);
+          out.verification = checked;
+          out.optimizer.time_optimal = report;
+          out.repair.repaired = true;
+        } else {
+          action += "failed too (" + checked.reason + ")";
+        }
+        out.repair.actions.push_back(std::move(action));
+      } catch (const Error& e) {
+        if (e.code() != ErrorCode::kFailedPrecondition) throw;
+        out.repair.actions.push_back(std::string("retiming without corner blends failed: ") + e.what());
+      }
+    }
+    out.repair.seconds = SecondsSince(t);
+  }
   if (!out.verification.ok) {
     out.code = TrajectoryStageCode::kVerificationFailed;
-    out.message = "the trajectory failed dense verification: " + out.verification.reason;
+    out.message = "the trajectory failed dense verification: " + out.repair.Describe();
     return out;
   }
   t = Clock::now();

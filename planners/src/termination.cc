@@ -35,6 +35,12 @@ Termination Termination::WithBudget(std::chrono::duration<double> budget) const 
   return t;
 }
 
+Termination Termination::WithFreshBudget(std::chrono::duration<double> budget) const {
+  Termination t = *this;
+  t.budget_end_ = Clock::time_point::max();
+  return t.WithBudget(budget);
+}
+
 StopReason Termination::Reason() const {
   if (cancelled_->load(std::memory_order_relaxed)) return StopReason::kCancelled;
   if (budget_end_ == Clock::time_point::max() && deadline_ == Clock::time_point::max()) {

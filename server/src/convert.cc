@@ -699,6 +699,10 @@ PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<con
   }
   query.shortcut_attempts = trajectory.shortcut_attempts() == 0 ? 100 : trajectory.shortcut_attempts();
   query.shortcut_stall = trajectory.shortcut_attempts() == 0 ? 10 : 0;  // a number the client named runs in full
+  // A repair after a failed verification gets min(0.5 s, time_budget) of its own (VerificationRepair).
+  if (std::isfinite(request.time_budget()) && request.time_budget() > 0.0) {
+    query.repair_budget = std::min(query.repair_budget, request.time_budget());
+  }
 
   query.trajectory = TrajectorySpecFromProto(trajectory, robot, "trajectory");
   query.Validate(registry);
@@ -944,6 +948,12 @@ static void LimitsToProto(const KinematicLimits& limits, v1::TrajectoryLimits* o
   ToProto(limits.max_effort, out->mutable_max_effort());
 }
 
+static void RepairToProto(const VerificationRepair& repair, v1::VerificationRepair* out) {
+  out->set_failure(repair.failure);
+  for (const std::string& action : repair.actions) out->add_actions(action);
+  out->set_repaired(repair.repaired);
+}
+
 void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery& query, v1::OptimizeResponse* response) {
   response->set_outcome(StageCodeToProto(outcome.code));
   response->set_message(outcome.message);
@@ -954,7 +964,9 @@ void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery&
   timings->set_verify(stage.verify_seconds);
   timings->set_quality(stage.quality_seconds);
   timings->set_sample(outcome.sample_seconds);
+  timings->set_repair(stage.repair.seconds);
   timings->set_total(outcome.total_seconds);
+  if (stage.repair.attempted()) RepairToProto(stage.repair, response->mutable_repair());
   VerificationToProto(stage.verification, std::min(0.005, query.collision_resolution), response->mutable_verification());
   OptimizerToProto(stage.optimizer, response->mutable_optimizer());
   if (outcome.code != TrajectoryStageCode::kSuccess) return;
@@ -995,7 +1007,9 @@ void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::
   timings->set_optimize(outcome.seconds.optimize);
   timings->set_quality(outcome.seconds.quality);
   timings->set_sample(outcome.seconds.sample);
+  timings->set_repair(outcome.seconds.repair);
   timings->set_total(outcome.seconds.total);
+  if (outcome.repair.attempted()) RepairToProto(outcome.repair, response->mutable_repair());
 
   v1::PlannerStatistics* stats = response->mutable_statistics();
   stats->set_graph_states(outcome.graph_states);

@@ -98,6 +98,19 @@ class ConvertTest(unittest.TestCase):
         self.assertEqual(convert.message_to_dict(pb.BenchmarkRun(outcome=pb.SUCCESS))["outcome"], "SUCCESS")
 
 
+    def test_plan_result_carries_the_repair(self) -> None:
+        from chasles_client.results import PlanResult
+
+        plain = PlanResult.from_response(pb.PlanResponse(outcome=pb.SUCCESS, duration=1.0, trajectory=cubic_trajectory()))
+        self.assertIsNone(plain.repair)
+        repaired = PlanResult.from_response(pb.PlanResponse(
+            outcome=pb.SUCCESS, duration=1.0, trajectory=cubic_trajectory(),
+            repair=pb.VerificationRepair(failure="collision at t = 0.5 s between link 'l2' and 'plate'",
+                                         actions=["replanned 1 segment: verified"], repaired=True)))
+        self.assertEqual(repaired.repair, {"failure": "collision at t = 0.5 s between link 'l2' and 'plate'",
+                                           "actions": ["replanned 1 segment: verified"], "repaired": True})
+
+
 class TrajectoryTest(unittest.TestCase):
     def test_arrays_from_message(self) -> None:
         traj = Trajectory.from_message(cubic_trajectory())

@@ -155,6 +155,9 @@ class PlanResult:
         reached_goal: for a pose goal, the IK solution reached (else None).
         warnings: what the server adjusted or skipped (start/goal values clamped onto a limit
             within ``bounds_tolerance``, an inline robot's SRDF pairs skipped), one sentence each.
+        repair: when the first trajectory failed dense verification, the response's
+            VerificationRepair as a dict (``failure``, ``actions`` — each repair tried with its
+            result — and ``repaired``); None when the first trajectory passed.
         response: the raw chasles.v1.PlanResponse.
     """
 
@@ -177,6 +180,7 @@ class PlanResult:
     velocity_limits: Optional[np.ndarray] = None
     acceleration_limits: Optional[np.ndarray] = None
     warnings: List[str] = field(default_factory=list)
+    repair: Optional[Dict[str, Any]] = None
     response: pb.PlanResponse = field(default_factory=pb.PlanResponse, repr=False)
 
     @classmethod
@@ -189,7 +193,8 @@ class PlanResult:
             **common, path=_path_array(response.path, dof), statistics=message_to_dict(response.statistics),
             reached_goal=(np.array(response.reached_goal.positions, dtype=float)
                           if len(response.reached_goal.positions) > 0 else None),
-            goal_manipulability=response.goal_manipulability, warnings=list(response.warnings))
+            goal_manipulability=response.goal_manipulability, warnings=list(response.warnings),
+            repair=message_to_dict(response.repair) if response.HasField("repair") else None)
 
 
 @dataclass

@@ -54,6 +54,9 @@ struct PlanQuery {
   /// shorten the path by less than 0.5% are not checked (ShortcutOptions::min_gain); 0 = every
   /// attempt runs and is checked. The server sets 0 when the request names its shortcut_attempts.
   int shortcut_stall = 10;
+  /// When the trajectory fails dense verification: the replanning repair's own budget [s],
+  /// counted from when it starts (the planning budget may be spent), cut by the deadline.
+  double repair_budget = 0.5;
 
   /// \throws Error(kInvalidArgument/kNotFound) naming the field (proto field names), e.g.
   /// `start.positions[2] = nan must be finite`, `goal.tolerance = 0.5 must be within [0, 0.1]`.
@@ -80,6 +83,7 @@ struct StageSeconds {
   double validate = 0, plan = 0, shortcut = 0, parameterize = 0, optimize = 0, verify = 0, total = 0;
   double quality = 0;  ///< the trajectory's quality figures (MeasureTrajectory: min_clearance bound, deviation)
   double sample = 0;   ///< samples at sample_period, with torques
+  double repair = 0;   ///< repairs of a trajectory that failed verification (retiming, replanning, re-timing)
 };
 
 struct PlanOutcome {
@@ -96,6 +100,9 @@ struct PlanOutcome {
   VerificationReport verification;
   TrajectoryQuality quality;           ///< of the returned trajectory (kSuccess)
   OptimizerSummary optimizer;          ///< what the post-processing did
+  /// When the first trajectory failed dense verification: what failed and each repair tried
+  /// (retiming without blends; replanning the segments that collide at a finer check).
+  VerificationRepair repair;
   StageSeconds seconds;
   std::uint64_t graph_states = 0;
   std::uint64_t state_checks = 0;      ///< all stages

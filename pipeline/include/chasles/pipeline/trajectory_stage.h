@@ -70,6 +70,19 @@ struct OptimizerSummary {
   TimeOptimalReport time_optimal;  ///< of the exact parameterisation
 };
 
+/// What was done when the first trajectory failed dense verification (a contact the planner's
+/// or the blends' checks stepped over, a limit missed by rounding): the failure, then each repair
+/// tried with its result. Empty when the first trajectory passed.
+struct VerificationRepair {
+  std::string failure;               ///< what the first verification found (VerificationReport::reason)
+  std::vector<std::string> actions;  ///< repairs tried, in order, each with its result
+  bool repaired = false;             ///< the returned trajectory is a repair's, verified
+  double seconds = 0.0;              ///< wall time of the repairs [s]
+  bool attempted() const { return !failure.empty(); }
+  /// "<failure>; repairs tried: <action>; <action>" for a message.
+  std::string Describe() const;
+};
+
 struct TrajectoryStageResult {
   TrajectoryStageCode code = TrajectoryStageCode::kVerificationFailed;
   std::string message;
@@ -82,6 +95,10 @@ struct TrajectoryStageResult {
   double optimize_seconds = 0.0;      ///< collocation / spline
   double verify_seconds = 0.0;
   double quality_seconds = 0.0;       ///< MeasureTrajectory: the quality figures (min_clearance bound)
+  /// When the exact parameterisation failed verification with blended corners: the path retimed
+  /// stopping at every waypoint (its straight segments are what the planner and the shortcuts
+  /// checked), verified in turn.
+  VerificationRepair repair;
 };
 
 /// Runs the stage on `path` (start … goal, collision-free segments expected): the exact
@@ -89,7 +106,9 @@ struct TrajectoryStageResult {
 /// optimiser warm-started from it, then dense verification (collisions at max_joint_step,
 /// limits exactly). An optimiser that fails, or whose result fails verification, is replaced by
 /// the exact parameterisation (fell_back, with the reason); the exact one is verified too, so
-/// nothing that violates a limit or collides is ever returned. Optimisers stop when
+/// nothing that violates a limit or collides is ever returned. When it fails with blended
+/// corners, the path is retimed without blends (stopping at each waypoint) and verified again
+/// (`repair` says so); kVerificationFailed only when that fails too. Optimisers stop when
 /// `termination` does (deadline, cancellation) and fall back.
 /// \throws Error(kInvalidArgument) for invalid limits/options (named), and kTimeOptimal with
 ///         max_jerk set.

@@ -29,6 +29,10 @@ class Termination {
   /// A copy that also stops after `budget` from now (kBudget), sharing this one's cancellation
   /// and deadline: a stage's share of a request's budget.
   Termination WithBudget(std::chrono::duration<double> budget) const;
+  /// A copy whose budget ends `budget` from now even when this one's budget has ended, sharing
+  /// its cancellation and deadline: work a request still owes after spending its budget (the
+  /// repair of a trajectory that failed verification).
+  Termination WithFreshBudget(std::chrono::duration<double> budget) const;
   /// Triggers cancellation for every copy, from any thread.
   void Cancel() const { cancelled_->store(true, std::memory_order_relaxed); }
   bool ShouldStop() const { return Reason() != StopReason::kNone; }
