@@ -869,9 +869,10 @@ void BenchCoordination(const Options& options) {
     const auto status = google::protobuf::util::JsonStringToMessage(ReadFile(path), &request);
     if (!status.ok()) throw std::runtime_error(path + ": " + status.ToString());
     const std::shared_ptr<const Scene> scene = SceneFromProto(request.scene());
+    std::vector<std::string> warnings;
     CoordinationQuery base = CoordinationQueryFromProto(
         request, scene, [](const v1::TeamRobot& robot, const std::string& field) { return RobotFromProto(robot.robot(), field); },
-        registry);
+        registry, &warnings);
     base.time_budget = options.team_budget;
     // One robot after another as if the others were out of the way: the sum of each robot's
     // duration alone (the baseline where strict one-after-another is impossible because a goal is

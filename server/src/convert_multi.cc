@@ -34,8 +34,10 @@ void ToProto(const Eigen::VectorXd& v, google::protobuf::RepeatedField<double>* 
 }  // namespace
 
 CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& request, std::shared_ptr<const Scene> scene,
-                                             const TeamRobotResolver& resolve, const PlannerRegistry& registry) {
+                                             const TeamRobotResolver& resolve, const PlannerRegistry& registry,
+                                             std::vector<std::string>* warnings) {
   CoordinationQuery query;
+  const double bounds_tolerance = BoundsToleranceFromProto(request.bounds_tolerance());
   query.scene = std::move(scene);
   if (request.robots_size() == 0 || request.robots_size() > 16) {
     ThrowInvalid("robots has " + std::to_string(request.robots_size()) + " entries; a team has 1 to 16 robots");
@@ -48,11 +50,13 @@ CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& reques
     spec.placement.model = resolve(r, field);
     const RobotModel& model = *spec.placement.model;
     if (r.has_base_pose()) spec.placement.base_pose = PoseFromProto(r.base_pose(), field + ".base_pose");
-    spec.start = ConfigurationFromProto(r.start().positions(), model, field + ".start.positions");
+    spec.start =
+        ConfigurationFromProto(r.start().positions(), model, field + ".start.positions", bounds_tolerance, warnings);
     if (r.target_case() == v1::TeamRobot::kPoseGoal) {
       spec.pose_goal = PoseGoalFromProto(r.pose_goal(), model, field + ".pose_goal");
     } else {
-      spec.goal = ConfigurationFromProto(r.goal().positions(), model, field + ".goal.positions");
+      spec.goal =
+          ConfigurationFromProto(r.goal().positions(), model, field + ".goal.positions", bounds_tolerance, warnings);
     }
     spec.priority = r.priority();
     spec.max_velocity = OptionalLimits(r.max_velocity());

@@ -410,10 +410,19 @@ class PlanningService final : public RawService {
           response.set_request_id(call.record.request_id);
           const StoredScene scene = SceneOfRequest(*store_, request);
           response.set_scene_id(scene.id);
+          std::vector<std::string> warnings;
           CoordinationQuery query = CoordinationQueryFromProto(
               request, scene.scene,
               [this](const v1::TeamRobot& robot, const std::string& field) { return TeamRobotOf(robot, field).model; },
-              registry_);
+              registry_, &warnings);
+          for (int k = 0; k < request.robots_size(); ++k) {
+            if (!request.robots(k).has_robot()) continue;  // an uploaded robot reported them at upload
+            const std::string field = "robots[" + std::to_string(k) + "].robot";
+            for (const std::string& w : RobotWarnings(*query.robots[static_cast<std::size_t>(k)].placement.model, field)) {
+              response.add_warnings(w);
+            }
+          }
+          for (const std::string& w : warnings) response.add_warnings(w);
           ApplyReplyCap(&query.sample_cap, query.robots.size());
           if (request.has_workcell()) {
             const double origin =
@@ -788,6 +797,22 @@ class PlanningService final : public RawService {
 
     // 4. Plan.
     PlanOutcome outcome = pipeline_.Plan(query, termination);
+    // A start or goal that touches only the fitted spheres of a mesh robot (they reach up to
+    // fit->reach outside its meshes) is free as described: plan on the exact meshes instead
+    // (discrete checks, slower), rather than refuse a request the robot can serve.
+    if (robot.exact && robot.fit &&
+        (outcome.code == PlanOutcomeCode::kStartInCollision || outcome.code == PlanOutcomeCode::kGoalInCollision)) {
+      const StoredRobot exact{robot.id + "/exact", robot.exact, nullptr, nullptr};
+      std::shared_ptr<const CollisionChecker> exact_checker = store_->Checker(exact, scene, padding);
+      if (exact_checker->IsValid(query.start) && (query.pose_goal || exact_checker->IsValid(query.goal))) {
+        settings.warnings.push_back(
+            std::string(outcome.code == PlanOutcomeCode::kStartInCollision ? "start" : "goal") +
+            " collides only with the fitted spheres, which reach up to " + FormatNumber(1e3 * robot.fit->reach) +
+            " mm outside the meshes (" + outcome.message + "); planned on the exact meshes instead (discrete checks)");
+        query.checker = std::move(exact_checker);
+        outcome = pipeline_.Plan(query, termination);
+      }
+    }
     outcome.seconds.validate += prepare;
     call.record.outcome = v1::PlanOutcome_Name(OutcomeToProto(outcome.code));
     call.record.stages = {{"validate", outcome.seconds.validate},   {"plan", outcome.seconds.plan},

@@ -232,6 +232,44 @@ TEST_F(CoordinateTest, ReservationsExpire) {
   EXPECT_THAT(gone.error_message(), HasSubstr("expired"));
 }
 
+// Issue 25, item 2 on the Coordinate RPC: a start a hair outside a limit is clamped onto it
+// within bounds_tolerance (default 1e-6), reported in the response's warnings naming the robot's
+// field; farther out it is INVALID_ARGUMENT naming the field, the value and the limit.
+TEST_F(CoordinateTest, StartsJustOutsideALimitAreClampedWithinTheBoundsTolerance) {
+  v1::CoordinateRequest request;
+  request.mutable_scene();
+  *request.add_robots() = Base("a", 1, 1, 5, 5);
+  *request.add_robots() = Base("b", -4e-7, 3, 5, 1);  // x = -4e-7 below the lower limit 0
+  request.set_seed(1);
+  v1::CoordinateResponse response;
+  grpc::Status status = Coordinate(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  ASSERT_EQ(response.warnings_size(), 1);
+  EXPECT_THAT(response.warnings(0), HasSubstr("robots[1].start.positions[0] = -4e-07 is 4e-07 below its lower limit 0"));
+  EXPECT_THAT(response.warnings(0), HasSubstr("within bounds_tolerance 1e-06: clamped onto the limit"));
+  ASSERT_EQ(response.robots_size(), 2);
+  ASSERT_GT(response.robots(1).trajectory().points_size(), 0);
+  EXPECT_EQ(response.robots(1).trajectory().points(0).positions(0), 0.0);  // the clamped start
+
+  request.mutable_robots(1)->mutable_start()->set_positions(0, -0.001);
+  status = Coordinate(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  EXPECT_THAT(status.error_message(), HasSubstr("robots[1].start.positions[0] = -0.001 must be within [0, 12]"));
+
+  request.set_bounds_tolerance(0.002);
+  status = Coordinate(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  ASSERT_EQ(response.warnings_size(), 1);
+  EXPECT_THAT(response.warnings(0), HasSubstr("within bounds_tolerance 0.002"));
+
+  request.set_bounds_tolerance(0.5);
+  status = Coordinate(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(status.error_message(), HasSubstr("bounds_tolerance = 0.5"));
+}
+
 TEST_F(CoordinateTest, BadInputGetsNamedErrors) {
   const auto expect = [](const grpc::Status& status, grpc::StatusCode code, const std::string& text) {
     EXPECT_EQ(status.error_code(), code) << status.error_message();

@@ -167,5 +167,58 @@ TEST_F(MeshRobot, ExactMeshesKeepTheMeshesAndCheckThemAtDiscreteStates) {
   EXPECT_EQ(response.verification().collision_guarantee(), "discrete");
 }
 
+// A start free on the meshes but within the fitted spheres' reach of an obstacle is planned on
+// the exact meshes (said in a warning) rather than refused as START_IN_COLLISION; a start that
+// collides with the meshes themselves still is refused.
+TEST_F(MeshRobot, AStartTouchingOnlyTheFittedSpheresIsPlannedOnTheExactMeshes) {
+  const v1::UploadRobotResponse uploaded = Upload(false);
+  const auto exact_robot = ExactMeshUr5();
+  const auto scene = ObstacleScene();
+  const CollisionChecker exact(exact_robot, scene);
+  const CollisionChecker fitted(FitRobotSpheres(*exact_robot).model, scene);
+  std::mt19937_64 rng(5);
+  Eigen::VectorXd start(6), inside(6);
+  bool found_start = false, found_inside = false;
+  for (int tries = 0; tries < 200000 && !(found_start && found_inside); ++tries) {
+    Eigen::VectorXd q(6);
+    for (int i = 0; i < 6; ++i) q[i] = std::uniform_real_distribution<double>(-M_PI, M_PI)(rng);
+    const bool exact_free = exact.IsValid(q);
+    if (!found_start && exact_free && !fitted.IsValid(q) && !exact.Check(q).self_collision &&
+        !fitted.Check(q).self_collision) {
+      start = q;
+      found_start = true;
+    }
+    if (!found_inside && !exact_free && !exact.Check(q).self_collision) {
+      inside = q;
+      found_inside = true;
+    }
+  }
+  ASSERT_TRUE(found_start && found_inside);
+  v1::PlanRequest request = Request(uploaded.robot_id());
+  for (int i = 0; i < 6; ++i) request.mutable_start()->set_positions(i, start[i]);
+  request.set_time_budget(10.0);
+  v1::PlanResponse response;
+  grpc::Status status = server_->Plan(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  EXPECT_EQ(response.verification().collision_guarantee(), "discrete");
+  ASSERT_EQ(response.warnings_size(), 1);
+  EXPECT_NE(response.warnings(0).find("start collides only with the fitted spheres, which reach up to"),
+            std::string::npos)
+      << response.warnings(0);
+  EXPECT_NE(response.warnings(0).find("planned on the exact meshes instead"), std::string::npos);
+  for (const v1::TrajectoryPoint& point : response.trajectory().points()) {
+    Eigen::VectorXd q(point.positions_size());
+    for (int i = 0; i < q.size(); ++i) q[i] = point.positions(i);
+    EXPECT_FALSE(exact.Check(q).in_collision) << "t = " << point.time_from_start();
+  }
+
+  for (int i = 0; i < 6; ++i) request.mutable_start()->set_positions(i, inside[i]);
+  status = server_->Plan(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.outcome(), v1::START_IN_COLLISION) << response.message();
+  EXPECT_EQ(response.warnings_size(), 0);
+}
+
 }  // namespace
 }  // namespace chasles::testing

@@ -19,9 +19,12 @@ using TeamRobotResolver = std::function<std::shared_ptr<const RobotModel>(const 
 
 /// A CoordinateRequest with the proto's defaults (scene and robots resolved by the caller; the
 /// workcell's committed motions are the caller's too). Also returns the request's time budget.
+/// Start and goal values within `bounds_tolerance` outside a limit are clamped, each reported in
+/// *warnings (robots[k].start.positions[i] …).
 /// \throws Error(kInvalidArgument / kNotFound / kFailedPrecondition) naming the field.
 CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& request, std::shared_ptr<const Scene> scene,
-                                             const TeamRobotResolver& resolve, const PlannerRegistry& registry);
+                                             const TeamRobotResolver& resolve, const PlannerRegistry& registry,
+                                             std::vector<std::string>* warnings);
 
 /// A Plan request with a WorkcellContext as a team of one (PRIORITIZED: its path, a roadmap and
 /// the space-time search around the committed motions). Trajectory options beyond the velocity
