@@ -2,7 +2,7 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|robots|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
@@ -49,6 +49,7 @@
 #include "chasles/v1/chasles.grpc.pb.h"
 #include "bench_clutter.h"
 #include "bench_mesh_robot.h"
+#include "bench_robots.h"
 #include "bench_hardening.h"
 #include "bench_pipeline.h"
 
@@ -1062,7 +1063,7 @@ int Main(int argc, char** argv) {
     else if (arg == "--uploads") options.uploads = std::stoi(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all]\n"
+                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|robots|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all]\n"
                    "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
@@ -1102,6 +1103,14 @@ int Main(int argc, char** argv) {
     mesh.queries = options.queries;
     mesh.seed = options.seed;
     BenchMeshRobot(mesh);
+  }
+  if (options.section == "robots" || options.section == "all") {
+    RobotsBenchOptions robots;
+    robots.examples_dir = CHASLES_EXAMPLES_DIR;
+    robots.queries = options.queries;
+    robots.seed = options.seed;
+    robots.budget = options.budget;
+    BenchRobots(robots);
   }
   if (options.section == "families" || options.section == "all") BenchFamilies(options);
   if (options.section == "grpc" || options.section == "all") BenchGrpc(options);
