@@ -6,6 +6,7 @@
 #include <functional>
 #include <map>
 #include <set>
+#include <utility>
 
 #include <tinyxml.h>
 
@@ -21,6 +22,11 @@ int FindJoint(const RobotModel& robot, const std::string& name) {
   }
   return -1;
 }
+
+/// The joint's value at q (its own coordinate; mimic joints: see ResetFollower).
+double JointValue(const Joint& joint, const Eigen::VectorXd& q) { return q[joint.dof]; }
+/// A joint held fixed follows nothing.
+void ResetFollower(Joint* /*joint*/) {}
 
 }  // namespace
 
@@ -135,6 +141,41 @@ std::vector<PlanningGroup> ReadPlanningGroups(const RobotModel& robot, std::stri
     out.push_back({name, std::vector<int>(dofs.begin(), dofs.end())});
   }
   return out;
+}
+
+std::shared_ptr<const RobotModel> HoldJointsOutside(const RobotModel& robot, const std::vector<int>& dofs,
+                                                    const Eigen::VectorXd& q) {
+  if (q.size() != robot.num_dofs()) {
+    ThrowInvalid("HoldJointsOutside: q has " + std::to_string(q.size()) + " values, robot '" + robot.name() +
+                 "' has " + std::to_string(robot.num_dofs()) + " joints");
+  }
+  std::vector<char> moving(static_cast<std::size_t>(robot.num_dofs()), 0);
+  for (int dof : dofs) {
+    if (dof < 0 || dof >= robot.num_dofs() || moving[static_cast<std::size_t>(dof)]) {
+      ThrowInvalid("HoldJointsOutside: joint index " + std::to_string(dof) + " is out of range or repeated");
+    }
+    moving[static_cast<std::size_t>(dof)] = 1;
+  }
+  std::vector<Joint> joints = robot.joints();
+  for (Joint& joint : joints) {
+    if (joint.dof < 0 || moving[static_cast<std::size_t>(joint.dof)]) continue;
+    const double value = JointValue(joint, q);
+    if (joint.type == JointType::kPrismatic) {
+      joint.origin = joint.origin * Eigen::Translation3d(value * joint.axis);
+    } else {
+      joint.origin = joint.origin * Eigen::AngleAxisd(value, joint.axis);
+    }
+    joint.type = JointType::kFixed;
+    ResetFollower(&joint);
+  }
+  std::vector<std::pair<std::string, std::string>> allowed;
+  const std::vector<Link>& links = robot.links();
+  for (int a = 0; a < robot.num_links(); ++a) {
+    for (int b = a + 1; b < robot.num_links(); ++b) {
+      if (robot.allowed_collisions().IsAllowed(a, b)) allowed.emplace_back(links[a].name, links[b].name);
+    }
+  }
+  return RobotModel::FromTree(robot.name(), links, std::move(joints), allowed, robot.motion());
 }
 
 }  // namespace chasles

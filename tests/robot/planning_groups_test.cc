@@ -1,5 +1,6 @@
 // SRDF planning groups read as MoveIt reads them (issue 25, item 1: "several planning groups").
 
+#include <random>
 #include <string>
 #include <vector>
 
@@ -86,6 +87,40 @@ TEST(PlanningGroups, MalformedGroupsAreNamedErrors) {
       "srdf: group 'a' chain[0] base_link = 'panda_link7' is not an ancestor of tip_link = 'panda_link2'");
   ExpectInvalid([&] { ReadPlanningGroups(*robot, "<robot><group name='a'>", false, nullptr); },
                 "srdf: malformed XML at line 0, column 0: Error reading Element value.");
+}
+
+TEST(PlanningGroups, HoldingTheOtherJointsGivesTheSameKinematics) {
+  // The arm of the mobile manipulator with its prismatic torso held at 0.3 m: every link pose of
+  // the held model at g equals the full robot's at the full configuration with the arm's entries g.
+  const auto robot = LoadExampleRobot("mobile_manipulator");
+  std::vector<std::string> warnings;
+  const PlanningGroup arm =
+      ReadPlanningGroups(*robot, ReadExample("robots/mobile_manipulator.srdf"), false, &warnings).front();
+  std::mt19937_64 rng(3);
+  Eigen::VectorXd held = testing::RandomConfiguration(*robot, rng);
+  held[0] = 0.3;
+  const auto model = HoldJointsOutside(*robot, arm.dofs, held);
+  ASSERT_EQ(model->num_dofs(), 7);
+  ASSERT_EQ(model->num_links(), robot->num_links());
+  for (int i = 0; i < 7; ++i) EXPECT_EQ(model->dof_names()[i], robot->dof_names()[arm.dofs[i]]);
+  for (int trial = 0; trial < 50; ++trial) {
+    const Eigen::VectorXd g = testing::RandomConfiguration(*model, rng);
+    Eigen::VectorXd full = held;
+    for (int i = 0; i < 7; ++i) full[arm.dofs[i]] = g[i];
+    std::vector<Eigen::Isometry3d> a, b;
+    model->ForwardKinematics(g, &a);
+    robot->ForwardKinematics(full, &b);
+    for (int link = 0; link < robot->num_links(); ++link) {
+      EXPECT_LT((a[link].matrix() - b[link].matrix()).cwiseAbs().maxCoeff(), 1e-12) << robot->links()[link].name;
+    }
+  }
+  for (int a = 0; a < robot->num_links(); ++a) {
+    for (int b = 0; b < robot->num_links(); ++b) {
+      EXPECT_EQ(model->allowed_collisions().IsAllowed(a, b), robot->allowed_collisions().IsAllowed(a, b));
+    }
+  }
+  ExpectInvalid([&] { HoldJointsOutside(*robot, {1, 1}, held); },
+                "HoldJointsOutside: joint index 1 is out of range or repeated");
 }
 
 }  // namespace

@@ -36,4 +36,11 @@ struct PlanningGroup {
 std::vector<PlanningGroup> ReadPlanningGroups(const RobotModel& robot, std::string_view srdf, bool strict,
                                               std::vector<std::string>* warnings);
 
+/// The robot planning only the joints `dofs` (configuration indices, ascending): every other
+/// joint held fixed where `q` puts it, so the model's configuration is those joints in the
+/// robot's order. Links, shapes, inertias, allowed pairs, kind and name are the robot's.
+/// \throws Error(kInvalidArgument) when q has the wrong size or a dof is out of range or repeated.
+std::shared_ptr<const RobotModel> HoldJointsOutside(const RobotModel& robot, const std::vector<int>& dofs,
+                                                    const Eigen::VectorXd& q);
+
 }  // namespace chasles
