@@ -42,7 +42,7 @@ const char kUsage[] =
     "  health                          ask the server's gRPC health service (exit 0 when SERVING)\n"
     "  planners                        list planners with their parameters, defaults and ranges\n"
     "  plan REQUEST.json [--out F] [--method M] [--planner ID] [--budget S] [--seed N]\n"
-    "       [--sample-period S] [--padding M]\n"
+    "       [--sample-period S] [--padding M] [--group NAME]\n"
     "                                  send a chasles.v1.PlanRequest (protobuf JSON); print a summary;\n"
     "                                  --out F.json writes the response, --out F.csv the trajectory\n"
     "                                  (columns t, q_<joint>..., qd_<joint>..., qdd_<joint>...);\n"
@@ -96,7 +96,7 @@ const char kUsage[] =
     "                                  runs.csv and results.json into DIR and prints a summary table;\n"
     "                                  Ctrl-C stops it and keeps the finished runs (see docs/benchmarks.md)\n"
     "  import-moveit SCENE.yaml REQUEST.yaml [--robot F.urdf [--srdf F.srdf]] [--out F.json]\n"
-    "                [--planner ID] [--budget S] [--seed N] [--sample-period S] [--padding M]\n"
+    "                [--planner ID] [--budget S] [--seed N] [--sample-period S] [--padding M] [--group NAME]\n"
     "                                  convert a MoveIt PlanningScene and MotionPlanRequest (YAML) into a\n"
     "                                  chasles.v1.PlanRequest and print it as JSON (robot joint order from\n"
     "                                  the URDF; default: the server's default robot, a Panda); the\n"
@@ -532,6 +532,11 @@ int UploadRobot(const Options& options) {
   if (!status.ok()) return ReportRpcError("UploadRobot", options, status);
   std::printf("robot_id %s\n", response.robot_id().c_str());
   for (const std::string& warning : response.warnings()) std::printf("warning  %s\n", warning.c_str());
+  for (const v1::PlanningGroupInfo& group : response.groups()) {
+    std::string joints;
+    for (const std::string& joint : group.joint_names()) joints += (joints.empty() ? "" : ", ") + joint;
+    std::printf("group    %s: %s\n", group.name().c_str(), joints.c_str());
+  }
   const v1::CollisionModel& collision = response.collision_model();
   if (collision.kind() == "fitted_spheres") {
     std::printf("collision model: %d spheres fitted to %d shapes in %.2f s, reaching at most %.1f mm outside them "

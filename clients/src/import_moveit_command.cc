@@ -22,6 +22,7 @@ constexpr int kUsage = 2;
 constexpr const char* kHelpHead =
     "usage: chasles import-moveit SCENE.yaml REQUEST.yaml [--robot F.urdf [--srdf F.srdf]] [--out F.json]\n"
     "                             [--planner ID] [--budget S] [--seed N] [--sample-period S] [--padding M]\n"
+    "                             [--group NAME]\n"
     "  Converts a MoveIt PlanningScene and MotionPlanRequest (YAML, e.g. a MotionBenchMaker pair) into a\n"
     "  chasles.v1.PlanRequest and prints it as protobuf JSON (or writes it to --out F.json). No server needed.\n"
     "  --robot F.urdf  read joint and link names from this URDF and embed it (and --srdf) in the request;\n"

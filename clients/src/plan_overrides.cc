@@ -14,7 +14,9 @@ const char kPlanOverridesUsage[] =
     "  --sample-period S      period of the returned samples [s], in [0.0001, 1]; sets\n"
     "                         trajectory.sample_period\n"
     "  --padding M            safety margin around every robot shape [m], in [0, 0.5]; sets\n"
-    "                         padding (0 = none)\n";
+    "                         padding (0 = none)\n"
+    "  --group NAME           plan only this SRDF planning group's joints (upload-robot lists\n"
+    "                         the groups), the others held at the start; sets group\n";
 
 namespace {
 
@@ -37,7 +39,7 @@ double Number(const std::string& flag, const std::string& text, double low, bool
 
 bool IsPlanOverrideFlag(const std::string& flag) {
   return flag == "--planner" || flag == "--budget" || flag == "--seed" || flag == "--sample-period" ||
-         flag == "--padding";
+         flag == "--padding" || flag == "--group";
 }
 
 void SetPlanOverride(const std::string& flag, const std::string& value, PlanOverrides* overrides) {
@@ -59,6 +61,9 @@ void SetPlanOverride(const std::string& flag, const std::string& value, PlanOver
     overrides->sample_period = Number(flag, value, 1e-4, false, 1.0, "a number of seconds in [0.0001, 1]");
   } else if (flag == "--padding") {
     overrides->padding = Number(flag, value, 0.0, false, 0.5, "a number of metres in [0, 0.5]");
+  } else if (flag == "--group") {
+    if (value.empty()) Invalid(flag, value, "the name of one of the robot's SRDF planning groups");
+    overrides->group = value;
   } else {
     throw std::logic_error("SetPlanOverride: '" + flag + "' is not an override flag");
   }
@@ -70,6 +75,7 @@ void ApplyPlanOverrides(const PlanOverrides& overrides, v1::PlanRequest* request
   if (overrides.seed) request->set_seed(*overrides.seed);
   if (overrides.sample_period) request->mutable_trajectory()->set_sample_period(*overrides.sample_period);
   if (overrides.padding) request->set_padding(*overrides.padding);
+  if (overrides.group) request->set_group(*overrides.group);
 }
 
 }  // namespace chasles::cli

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
-/// Command-line overrides of a chasles.v1.PlanRequest's planner, budget, seed, sample period and
-/// padding, shared by `chasles plan` and `chasles import-moveit` (users need not edit the JSON).
+/// Command-line overrides of a chasles.v1.PlanRequest's planner, budget, seed, sample period,
+/// padding and planning group, shared by `chasles plan` and `chasles import-moveit` (users need not edit the JSON).
 
 #include <cstdint>
 #include <optional>
@@ -18,14 +18,15 @@ struct PlanOverrides {
   std::optional<std::uint64_t> seed;      ///< --seed N -> seed, a whole number >= 0 (0 = seed 1)
   std::optional<double> sample_period;    ///< --sample-period S -> trajectory.sample_period [s], in [1e-4, 1]
   std::optional<double> padding;          ///< --padding M -> padding [m], in [0, 0.5]
+  std::optional<std::string> group;       ///< --group NAME -> group (an SRDF planning group)
 
-  bool empty() const { return !planner_id && !time_budget && !seed && !sample_period && !padding; }
+  bool empty() const { return !planner_id && !time_budget && !seed && !sample_period && !padding && !group; }
 };
 
-/// The usage lines of the five flags.
+/// The usage lines of the six flags.
 extern const char kPlanOverridesUsage[];
 
-/// True for --planner, --budget, --seed, --sample-period and --padding.
+/// True for --planner, --budget, --seed, --sample-period, --padding and --group.
 bool IsPlanOverrideFlag(const std::string& flag);
 
 /// Stores `value` of `flag` (one IsPlanOverrideFlag accepts) in `overrides`.

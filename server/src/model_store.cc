@@ -37,7 +37,8 @@ auto Measured(std::size_t message_bytes, std::uint64_t* bytes, Make make) {
 ModelStore::ModelStore(const v1::RobotModel& default_robot, const v1::Scene& default_scene,
                        std::uint64_t cache_bytes, const InputLimits& limits)
     : limits_(limits), cache_(cache_bytes) {
-  default_robot_ = {ProtoContentId(default_robot), RobotFromProto(default_robot, "default robot"), nullptr, nullptr};
+  default_robot_.id = ProtoContentId(default_robot);
+  default_robot_.model = RobotFromProto(default_robot, "default robot");
   default_scene_ = {ProtoContentId(default_scene), SceneFromProto(default_scene, "default scene")};
 }
 
@@ -50,6 +51,15 @@ StoredRobot ModelStore::AddRobot(const v1::RobotModel& robot, const std::string&
     auto entry = std::make_shared<StoredRobot>();
     entry->id = id;
     entry->model = RobotFromProto(robot, field, limits_);
+    if (robot.description_case() == v1::RobotModel::kUrdf && !robot.urdf().srdf().empty()) {
+      std::vector<std::string> warnings;
+      try {
+        entry->groups = ReadPlanningGroups(*entry->model, robot.urdf().srdf(), robot.urdf().strict_srdf(), &warnings);
+      } catch (const Error& e) {
+        throw Error(e.code(), field + ".urdf." + e.what());
+      }
+      for (std::string& warning : warnings) entry->group_warnings.push_back(field + ".urdf." + warning);
+    }
     // A URDF with meshes: its shapes covered by spheres, once, here (not per request).
     if (robot.description_case() == v1::RobotModel::kUrdf && !robot.urdf().exact_meshes()) {
       RobotSphereFit fit = FitRobotSpheres(*entry->model);

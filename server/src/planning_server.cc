@@ -299,6 +299,12 @@ class PlanningService final : public RawService {
           call.response.set_robot_id(robot.id);
           const RobotModel& model = *robot.model;
           for (const std::string& warning : RobotWarnings(model, "robot")) call.response.add_warnings(warning);
+          for (const std::string& warning : robot.group_warnings) call.response.add_warnings(warning);
+          for (const PlanningGroup& group : robot.groups) {
+            v1::PlanningGroupInfo* info = call.response.add_groups();
+            info->set_name(group.name);
+            for (int dof : group.dofs) info->add_joint_names(model.dof_names()[dof]);
+          }
           for (int i = 0; i < model.num_dofs(); ++i) {
             call.response.add_joint_names(model.dof_names()[i]);
             call.response.add_lower_limits(model.lower_limits()[i]);
@@ -737,16 +743,31 @@ class PlanningService final : public RawService {
   }
 
   void RunPlan(UnaryCall<v1::PlanRequest, v1::PlanResponse>& call) {
-    const v1::PlanRequest& request = call.request;
     v1::PlanResponse& response = call.response;
-    call.record.request_id = RequestId(request.request_id(), "req");
+    call.record.request_id = RequestId(call.request.request_id(), "req");
     response.set_request_id(call.record.request_id);
-    std::string planner = request.planner().planner_id().empty() ? "rrt_connect" : request.planner().planner_id();
+    std::string planner =
+        call.request.planner().planner_id().empty() ? "rrt_connect" : call.request.planner().planner_id();
     call.record.fields = {{"planner", planner}};
 
-    // 1. Robot, scene and checker (parsed or cached).
-    const StoredRobot robot = RobotOfRequest(*store_, request);
+    // 1. Robot, scene and checker (parsed or cached). With a planning group, the robot with
+    //    every other joint held at the start, and the request narrowed to the group's joints.
+    const StoredRobot described = RobotOfRequest(*store_, call.request);
+    StoredRobot robot = described;
     response.set_robot_id(robot.id);
+    v1::PlanRequest grouped;
+    std::vector<std::string> group_warnings;
+    if (!call.request.group().empty()) {
+      if (call.request.has_workcell()) {
+        ThrowInvalid("group = '" + call.request.group() +
+                     "' is not supported with workcell (a workcell plans every joint of its robots); send no group, "
+                     "or plan without workcell");
+      }
+      grouped = call.request;
+      robot = NarrowToGroup(robot, &grouped, &group_warnings);
+      call.record.fields.push_back({"group", call.request.group()});
+    }
+    const v1::PlanRequest& request = call.request.group().empty() ? call.request : grouped;
     const StoredScene scene = SceneOfRequest(*store_, request);
     response.set_scene_id(scene.id);
     call.record.fields.push_back({"robot", IdPrefix(robot.id)});
@@ -772,7 +793,7 @@ class PlanningService final : public RawService {
       const Termination termination = call.Start(BudgetEnd(query.time_budget, call.deadline), call.deadline);
       const CoordinationOutcome outcome = chasles::Coordinate(query, registry_, termination);
       WorkcellPlanToProto(outcome, query, &response);
-      AddPlanWarnings(request, *robot.model, warnings, &response);
+      AddPlanWarnings(request, described, warnings, &response);
       call.record.outcome = v1::PlanOutcome_Name(response.outcome());
       if (outcome.code == CoordinationCode::kCancelled) {
         throw StatusError{grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client")};
@@ -802,7 +823,9 @@ class PlanningService final : public RawService {
     // (discrete checks, slower), rather than refuse a request the robot can serve.
     if (robot.exact && robot.fit &&
         (outcome.code == PlanOutcomeCode::kStartInCollision || outcome.code == PlanOutcomeCode::kGoalInCollision)) {
-      const StoredRobot exact{robot.id + "/exact", robot.exact, nullptr, nullptr};
+      StoredRobot exact;
+      exact.id = robot.id + "/exact";
+      exact.model = robot.exact;
       std::shared_ptr<const CollisionChecker> exact_checker = store_->Checker(exact, scene, padding);
       if (exact_checker->IsValid(query.start) && (query.pose_goal || exact_checker->IsValid(query.goal))) {
         settings.warnings.push_back(
@@ -820,7 +843,8 @@ class PlanningService final : public RawService {
                           {"optimize", outcome.seconds.optimize},   {"verify", outcome.seconds.verify}};
     outcome.seconds.total = SecondsSince(call.arrival);
     PlanOutcomeToProto(outcome, query, &response);
-    AddPlanWarnings(request, *robot.model, settings.warnings, &response);
+    group_warnings.insert(group_warnings.end(), settings.warnings.begin(), settings.warnings.end());
+    AddPlanWarnings(request, described, group_warnings, &response);
     grpc::Status status = StatusFromOutcome(outcome.code, outcome.message);
     if (status.ok() && (call.cancelled() || termination.Reason() == StopReason::kCancelled) &&
         outcome.code != PlanOutcomeCode::kSuccess) {
@@ -829,12 +853,76 @@ class PlanningService final : public RawService {
     if (!status.ok()) throw StatusError{status};
   }
 
+  /// PlanRequest.group: the robot with every joint outside the group held where the start puts
+  /// it (its checker cached per robot, group and held values), and the request's start and goal
+  /// narrowed to the group's joints; start values clamped within bounds_tolerance are reported
+  /// in *warnings. \throws Error(kInvalidArgument) naming the field.
+  static StoredRobot NarrowToGroup(const StoredRobot& robot, v1::PlanRequest* request,
+                                   std::vector<std::string>* warnings) {
+    const RobotModel& model = *robot.model;
+    const auto group = std::find_if(robot.groups.begin(), robot.groups.end(),
+                                    [&](const PlanningGroup& g) { return g.name == request->group(); });
+    if (group == robot.groups.end()) {
+      std::string known;
+      for (const PlanningGroup& g : robot.groups) known += (known.empty() ? "'" : ", '") + g.name + "'";
+      ThrowInvalid("group = '" + request->group() + "' is not a planning group of robot '" + model.name() + "' (" +
+                   (known.empty() ? std::string("its SRDF defines none") : "its groups: " + known) + ")");
+    }
+    const std::vector<int>& dofs = group->dofs;
+    std::vector<char> in_group(static_cast<std::size_t>(model.num_dofs()), 0);
+    std::string joint_names;
+    for (int dof : dofs) {
+      in_group[static_cast<std::size_t>(dof)] = 1;
+      joint_names += (joint_names.empty() ? "'" : ", '") + model.dof_names()[dof] + "'";
+    }
+    const double tolerance = BoundsToleranceFromProto(request->bounds_tolerance());
+    const Eigen::VectorXd start =
+        ConfigurationFromProto(request->start().positions(), model, "start.positions", tolerance, warnings);
+    if (request->target_case() == v1::PlanRequest::kGoal) {
+      const int given = request->goal().positions_size();
+      if (given == model.num_dofs() && static_cast<int>(dofs.size()) != model.num_dofs()) {
+        const Eigen::VectorXd goal =
+            ConfigurationFromProto(request->goal().positions(), model, "goal.positions", tolerance, warnings);
+        for (int i = 0; i < model.num_dofs(); ++i) {
+          if (in_group[static_cast<std::size_t>(i)] || goal[i] == start[i]) continue;
+          ThrowInvalid("goal.positions[" + std::to_string(i) + "] = " + FormatNumber(goal[i]) +
+                       " differs from start.positions[" + std::to_string(i) + "] = " + FormatNumber(start[i]) +
+                       ", but joint '" + model.dof_names()[i] + "' is not in group '" + group->name +
+                       "' and stays where the start puts it: give the group's joints (" + joint_names +
+                       "), or every joint with those outside the group equal to the start's");
+        }
+        request->mutable_goal()->clear_positions();
+        for (int dof : dofs) request->mutable_goal()->add_positions(goal[dof]);
+      } else if (given != static_cast<int>(dofs.size())) {
+        ThrowInvalid("goal.positions has " + std::to_string(given) + " values; group '" + group->name +
+                     "' of robot '" + model.name() + "' has " + std::to_string(dofs.size()) + " joints (" +
+                     joint_names + "): give those, or all " + std::to_string(model.num_dofs()) +
+                     " of the robot's joints");
+      }
+    }
+    request->mutable_start()->clear_positions();
+    for (int dof : dofs) request->mutable_start()->add_positions(start[dof]);
+    // The held values exactly (hex floats) in the id, so two starts never share a checker.
+    std::string id = robot.id + "/group=" + group->name + "/held=";
+    for (int i = 0; i < model.num_dofs(); ++i) {
+      if (in_group[static_cast<std::size_t>(i)]) continue;
+      char text[40];
+      std::snprintf(text, sizeof(text), "%a,", start[i]);
+      id += text;
+    }
+    StoredRobot held;
+    held.id = std::move(id);
+    held.model = HoldJointsOutside(model, dofs, start);
+    return held;
+  }
+
   /// A plan's warnings: an inline robot's load warnings (an uploaded one reported them at
   /// upload), then what the request's conversion adjusted.
-  static void AddPlanWarnings(const v1::PlanRequest& request, const RobotModel& robot,
+  static void AddPlanWarnings(const v1::PlanRequest& request, const StoredRobot& robot,
                               const std::vector<std::string>& adjusted, v1::PlanResponse* response) {
     if (request.has_robot()) {
-      for (const std::string& warning : RobotWarnings(robot, "robot")) response->add_warnings(warning);
+      for (const std::string& warning : RobotWarnings(*robot.model, "robot")) response->add_warnings(warning);
+      for (const std::string& warning : robot.group_warnings) response->add_warnings(warning);
     }
     for (const std::string& warning : adjusted) response->add_warnings(warning);
   }

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "chasles/collision/collision_checker.h"
 #include "server_fixture.h"
 
 namespace chasles::testing {
@@ -188,6 +189,87 @@ TEST_F(RobotsAsShipped, AVerificationFailureIsRepairedAndTheResponseSaysWhat) {
     EXPECT_GE(response.timings().total(), response.timings().repair());
   }
   EXPECT_GE(repaired, 1);
+}
+
+// Issue 25, item 1: several planning groups. The mobile manipulator's SRDF defines "arm" (a
+// chain) and "arm_with_torso" (a joint and a subgroup); a plan for "arm" moves only the arm's
+// seven joints, the torso held where the start puts it, and every state of it is free for the
+// whole robot (re-checked here on a checker of the full robot).
+TEST_F(RobotsAsShipped, APlanningGroupMovesOnlyItsJoints) {
+  v1::UploadRobotRequest upload;
+  upload.mutable_robot()->mutable_urdf()->set_urdf(ReadText(ExamplePath("robots/mobile_manipulator.urdf")));
+  upload.mutable_robot()->mutable_urdf()->set_srdf(ReadText(ExamplePath("robots/mobile_manipulator.srdf")));
+  v1::UploadRobotResponse uploaded;
+  ASSERT_TRUE(Upload(upload, &uploaded).ok());
+  ASSERT_EQ(uploaded.groups_size(), 2);
+  EXPECT_EQ(uploaded.groups(0).name(), "arm");
+  ASSERT_EQ(uploaded.groups(0).joint_names_size(), 7);
+  EXPECT_EQ(uploaded.groups(0).joint_names(0), "shoulder_pan_joint");
+  EXPECT_EQ(uploaded.groups(1).name(), "arm_with_torso");
+  EXPECT_EQ(uploaded.groups(1).joint_names_size(), 8);
+  bool group_warning = false;
+  for (const std::string& w : uploaded.warnings()) {
+    group_warning |= w.find("robot.urdf.srdf: group 'gripper_sensors' link[0] name = 'gripper_camera_link'") == 0;
+  }
+  EXPECT_TRUE(group_warning);
+
+  v1::PlanRequest request;
+  request.set_robot_id(uploaded.robot_id());
+  request.mutable_scene();
+  request.set_group("arm");
+  const double start[8] = {0.2, 0.0, 0.3, 0.0, 1.0, 0.0, 0.6, 0.0};
+  const double goal[7] = {0.9, -0.4, 0.5, 1.2, -0.4, 0.9, 0.3};
+  for (double v : start) request.mutable_start()->add_positions(v);
+  for (double v : goal) request.mutable_goal()->add_positions(v);
+  v1::PlanResponse response;
+  grpc::Status status = server_->Plan(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  ASSERT_EQ(response.trajectory().joint_names_size(), 7);
+  for (int i = 0; i < 7; ++i) EXPECT_EQ(response.trajectory().joint_names(i), uploaded.groups(0).joint_names(i));
+  const auto full = RobotModel::FromUrdf(ReadText(ExamplePath("robots/mobile_manipulator.urdf")),
+                                         ReadText(ExamplePath("robots/mobile_manipulator.srdf")));
+  const CollisionChecker checker(full, std::make_shared<Scene>());
+  ASSERT_GT(response.trajectory().points_size(), 2);
+  for (const v1::TrajectoryPoint& point : response.trajectory().points()) {
+    ASSERT_EQ(point.positions_size(), 7);
+    Eigen::VectorXd q(8);
+    q[0] = start[0];
+    for (int i = 0; i < 7; ++i) q[i + 1] = point.positions(i);
+    EXPECT_FALSE(checker.Check(q).in_collision) << "t = " << point.time_from_start();
+  }
+  const v1::TrajectoryPoint& last = response.trajectory().points(response.trajectory().points_size() - 1);
+  for (int i = 0; i < 7; ++i) EXPECT_NEAR(last.positions(i), goal[i], 1e-9);
+
+  // A whole-robot goal works when the held joint stays; moving it is a named error.
+  request.mutable_goal()->clear_positions();
+  request.mutable_goal()->add_positions(start[0]);
+  for (double v : goal) request.mutable_goal()->add_positions(v);
+  status = server_->Plan(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  request.mutable_goal()->set_positions(0, 0.25);
+  status = server_->Plan(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message(),
+            "goal.positions[0] = 0.25 differs from start.positions[0] = 0.2, but joint 'torso_lift_joint' is not in "
+            "group 'arm' and stays where the start puts it: give the group's joints ('shoulder_pan_joint', "
+            "'shoulder_lift_joint', 'upperarm_roll_joint', 'elbow_flex_joint', 'forearm_roll_joint', "
+            "'wrist_flex_joint', 'wrist_roll_joint'), or every joint with those outside the group equal to the "
+            "start's");
+  request.mutable_goal()->mutable_positions()->RemoveLast();
+  request.mutable_goal()->mutable_positions()->RemoveLast();
+  status = server_->Plan(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("goal.positions has 6 values; group 'arm' of robot 'mobile_manipulator' has 7"),
+            std::string::npos)
+      << status.error_message();
+  request.set_group("legs");
+  status = server_->Plan(request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message(),
+            "group = 'legs' is not a planning group of robot 'mobile_manipulator' (its groups: 'arm', "
+            "'arm_with_torso')");
 }
 
 }  // namespace

@@ -270,7 +270,9 @@ class Client:
             trajectory: a whole TrajectoryOptions (message or dict); the keywords above override it.
             request_id: echoed in the server log and the result.
             timeout: deadline of this call [s] (default: the client's).
-            more: any other PlanRequest field by name, e.g. ``collision_resolution=0.01``.
+            more: any other PlanRequest field by name, e.g. ``collision_resolution=0.01``, or
+                ``group="left_arm"`` to plan one SRDF planning group (``RobotInfo.groups``): ``start``
+                holds every joint, ``goal`` the group's (or every joint), the result the group's.
 
         Returns:
             PlanResult: check ``success`` / ``outcome``; planning failures are not exceptions.

@@ -26,6 +26,7 @@ class RobotInfo:
         collision_model: how its collision geometry is checked: ``{"kind": "shapes"}``, or for a
             robot with meshes ``{"kind": "fitted_spheres", "spheres": …, "shapes_fitted": …,
             "reach": … [m], "reach_link": …, "fit_seconds": …}``.
+        groups: the SRDF's planning groups, name → joint names (plan with ``group=name``).
     """
 
     robot_id: str
@@ -35,6 +36,7 @@ class RobotInfo:
     velocity_limits: np.ndarray
     warnings: List[str] = field(default_factory=list)
     collision_model: Dict[str, Any] = field(default_factory=dict)
+    groups: Dict[str, List[str]] = field(default_factory=dict)
 
     @classmethod
     def from_response(cls, response: pb.UploadRobotResponse) -> "RobotInfo":
@@ -47,7 +49,8 @@ class RobotInfo:
                    lower_limits=np.array(response.lower_limits, dtype=float),
                    upper_limits=np.array(response.upper_limits, dtype=float),
                    velocity_limits=np.array(response.velocity_limits, dtype=float),
-                   warnings=list(response.warnings), collision_model=collision)
+                   warnings=list(response.warnings), collision_model=collision,
+                   groups={g.name: list(g.joint_names) for g in response.groups})
 
 
 @dataclass

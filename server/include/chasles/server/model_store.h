@@ -12,6 +12,7 @@
 #include "chasles/collision/robot_spheres.h"
 #include "chasles/robot/input_limits.h"
 #include "chasles/server/lru_cache.h"
+#include "chasles/robot/planning_groups.h"
 #include "chasles/v1/chasles.pb.h"
 
 namespace chasles {
@@ -25,6 +26,10 @@ struct StoredRobot {
   /// When model is fitted: the robot as described (its exact shapes) and the fit's figures.
   std::shared_ptr<const RobotModel> exact;
   std::shared_ptr<const RobotSphereFit> fit;
+  /// The SRDF's planning groups (ReadPlanningGroups) and what reading them skipped, each
+  /// warning naming the proto field (`robot.urdf.srdf: group 'arm' …`).
+  std::vector<PlanningGroup> groups;
+  std::vector<std::string> group_warnings;
 };
 
 struct StoredScene {
