@@ -22,16 +22,23 @@ using detail::kInf;
 // it by exactly |Δq|. Summing over the chain, the centre's speed is at most Σ_i R_i |q̇_i|, so
 // along any path |x(s1) − x(s0)| <= Σ_i R_i ∫|q̇_i| <= Σ_i R_i w_i (s1 − s0) when |dq_i/ds| <= w_i
 // (a straight segment a→b: w = |b − a|).
+// Mimic joints: the sum runs over the moving joints j (θ_j = m_j q_d + c_j), |θ̇_j| = |m_j| |q̇_d|,
+// so joint j adds |m_j| R_j to the bound of the dof d that drives it; a prismatic mimic joint
+// in between adds its largest |θ| over d's limits.
 void CollisionChecker::Impl::BuildLevers() {
   num_dofs = robot->num_dofs();
+  num_moving = robot->num_moving_joints();
   const std::size_t ns = sx.size();
-  lever.assign(ns * static_cast<std::size_t>(num_dofs), 0.0);
-  slink_dofs.assign(slinks.size(), std::vector<char>(num_dofs, 0));
+  lever.assign(ns * static_cast<std::size_t>(num_moving), 0.0);
+  lever_dof.assign(num_moving, -1);
+  for (int m = 0; m < num_moving; ++m) lever_dof[m] = robot->joints()[robot->moving_joint(m)].dof;
+  slink_moving.assign(slinks.size(), std::vector<char>(num_moving, 0));
   for (std::size_t li = 0; li < slinks.size(); ++li) {
     for (int link = slinks[li].link; robot->links()[link].parent_joint >= 0;) {
-      const Joint& j = robot->joints()[robot->links()[link].parent_joint];
-      if (j.dof >= 0) slink_dofs[li][j.dof] = 1;
-      link = j.parent_link;
+      const int ji = robot->links()[link].parent_joint;
+      const int m = robot->moving_index(ji);
+      if (m >= 0) slink_moving[li][m] = 1;
+      link = robot->joints()[ji].parent_link;
     }
   }
   self_pair_offset.clear();
@@ -45,9 +52,9 @@ void CollisionChecker::Impl::BuildLevers() {
     self_pair_offset.push_back(self_pair_spheres);
     for (int side = 0; side < 2; ++side) {
       const std::size_t li = side == 0 ? pr.first : pr.second;
-      const std::vector<char>& other = slink_dofs[side == 0 ? pr.second : pr.first];
+      const std::vector<char>& other = slink_moving[side == 0 ? pr.second : pr.first];
       std::vector<int> unshared;
-      for (int i = 0; i < num_dofs; ++i) {
+      for (int i = 0; i < num_moving; ++i) {
         if (!other[i]) unshared.push_back(i);
       }
       self_pair_unshared.push_back(std::move(unshared));
@@ -62,20 +69,28 @@ void CollisionChecker::Impl::BuildLevers() {
   // Panda's base joint over the 0.333 m column, the hand over its flange).
   for (const SphereLink& L : slinks) {
     for (int k = L.begin; k < L.end; ++k) {
-      double* r = lever.data() + static_cast<std::size_t>(k) * num_dofs;
+      double* r = lever.data() + static_cast<std::size_t>(k) * num_moving;
       Eigen::Vector3d t(sx[k], sy[k], sz[k]);
       double reach = 0.0;
       int link = L.link;
       while (robot->links()[link].parent_joint >= 0) {
-        const Joint& j = robot->joints()[robot->links()[link].parent_joint];
+        const int ji = robot->links()[link].parent_joint;
+        const Joint& j = robot->joints()[ji];
+        const int m = robot->moving_index(ji);
         double dist = t.norm() + reach;  // bound on the centre's distance from F's origin
-        if (j.dof >= 0 && j.type != JointType::kFixed) {
+        if (m >= 0) {
+          const double scale = j.mimic ? std::abs(j.mimic->multiplier) : 1.0;  // |dθ/dq|
           if (j.type == JointType::kPrismatic) {
-            r[j.dof] += 1.0;
-            const double travel = std::max(std::abs(j.limits.lower), std::abs(j.limits.upper));
+            r[m] += scale;
+            // |θ| over the dof's limits (θ = m·q + c is monotone in q, also as rounded).
+            const double lo = robot->lower_limits()[j.dof], hi = robot->upper_limits()[j.dof];
+            const double travel =
+                j.mimic ? std::max(std::abs(j.mimic->multiplier * lo + j.mimic->offset),
+                                   std::abs(j.mimic->multiplier * hi + j.mimic->offset))
+                        : std::max(std::abs(lo), std::abs(hi));
             dist += std::isfinite(travel) ? travel : kInf;
           } else {
-            r[j.dof] += std::min(dist, j.axis.normalized().cross(t).norm() + reach);
+            r[m] += scale * std::min(dist, j.axis.normalized().cross(t).norm() + reach);
           }
         }
         t = j.origin.translation();
@@ -89,10 +104,10 @@ void CollisionChecker::Impl::BuildLevers() {
 void CollisionChecker::Impl::SweepBounds(const Eigen::VectorXd& w, double* out) const {
   const std::size_t ns = sx.size();
   for (std::size_t k = 0; k < ns; ++k) {
-    const double* r = lever.data() + k * num_dofs;
+    const double* r = lever.data() + k * num_moving;
     double d = 0.0;
-    for (int i = 0; i < num_dofs; ++i) {
-      if (r[i] != 0.0) d += w[i] * r[i];
+    for (int i = 0; i < num_moving; ++i) {
+      if (r[i] != 0.0) d += w[lever_dof[i]] * r[i];
     }
     out[k] = d;
   }
@@ -191,6 +206,8 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
   // Self pairs: joints in both links' chains move both spheres rigidly together and leave
   // their distance unchanged (d/dt |x_k − x_l| = (x_k − x_l)·(ω × (x_k − x_l)) / |·| = 0), so
   // the distance changes at most by the levers of the joints not shared, summed for both.
+  // Joints, not dofs: a dof that drives a joint above each link (a finger and its mimic) moves
+  // them relative to each other, and is counted on both sides.
   m.PD.resize(self_pair_spheres);
   m.PDl.assign(2 * np, 0.0);
   for (std::size_t p = 0; p < np; ++p) {
@@ -199,10 +216,10 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
       const std::size_t li = side == 0 ? self_pairs[p].first : self_pairs[p].second;
       const std::vector<int>& unshared = self_pair_unshared[2 * p + side];
       for (int k = slinks[li].begin; k < slinks[li].end; ++k) {
-        const double* r = lever.data() + static_cast<std::size_t>(k) * num_dofs;
+        const double* r = lever.data() + static_cast<std::size_t>(k) * num_moving;
         double d = 0.0;
         for (int i : unshared) {
-          if (r[i] != 0.0) d += speed[i] * r[i];
+          if (r[i] != 0.0) d += speed[lever_dof[i]] * r[i];
         }
         if (!std::isfinite(d)) return false;
         m.PD[at++] = d;

@@ -200,15 +200,22 @@ struct CollisionChecker::Impl {
   std::vector<std::shared_ptr<fcl::Sphered>> fcl_spheres;  // per sphere, radius + padding
   std::vector<std::shared_ptr<fcl::Sphered>> fcl_link_bounds;  // per sphere link, its bound
   std::vector<detail::OccupancyGrid> grids;  // gridded occupancy maps
-  // Certified motion: lever[k * num_dofs + i] = R_ik, a bound on how far sphere k's centre
-  // moves per unit of q_i [m/rad, or 1 for prismatic]. certifiable = fast path and no scene
+  // Certified motion, per moving joint m (RobotModel::moving_joint: actuated and mimic joints):
+  // lever[k * num_moving + m] = |multiplier_m|·R_km, a bound on how far sphere k's centre moves
+  // through joint m per unit of the dof that drives it, lever_dof[m] [m/rad, or |multiplier|
+  // for prismatic]. A dof that drives several joints of a chain (a mimic joint below its
+  // actuated joint) moves the sphere at most at the sum. certifiable = fast path and no scene
   // geometry left to FCL (meshes, ungridded maps).
   int num_dofs = 0;
+  int num_moving = 0;
   std::vector<double> lever;
-  std::vector<std::vector<char>> slink_dofs;  // per sphere link: dofs in its chain (1/0)
+  std::vector<int> lever_dof;
+  std::vector<std::vector<char>> slink_moving;  // per sphere link: moving joints in its chain (1/0)
   // Self pairs in the advancement: pair p's per-sphere bounds start at self_pair_offset[p]
   // (first link's spheres, then the second's; self_pair_spheres in all), and
-  // self_pair_unshared[2p + side] lists the dofs of that side's chain not in the other side's.
+  // self_pair_unshared[2p + side] lists the moving joints of that side's chain not in the other
+  // side's (a joint, not a dof: a dof driving a joint above each link — two fingers — moves
+  // them apart).
   std::vector<std::size_t> self_pair_offset;
   std::vector<std::vector<int>> self_pair_unshared;
   std::size_t self_pair_spheres = 0;

@@ -64,12 +64,16 @@ __attribute__((always_inline)) inline void TurnColumns(double c, double s, Lanes
 }
 
 /// One joint of the FK program: child = parent · (R0, p0) · motion, where the motion is a
-/// rotation by q about `axis` (revolute), a translation by q along it (prismatic) or nothing.
+/// rotation by θ about `axis` (revolute), a translation by θ along it (prismatic) or nothing;
+/// θ = q[dof], or multiplier · q[dof] + offset for a mimic joint.
 struct FkJoint {
   int parent_link = -1;
   int child_link = -1;
   int dof = -1;
   int kind = 0;              // 0 fixed, 1 revolute, 2 prismatic
+  bool mimic = false;
+  double multiplier = 1.0, offset = 0.0;
+  double Value(const Eigen::VectorXd& q) const { return mimic ? multiplier * q[dof] + offset : q[dof]; }
   bool r0_identity = false;  // R0 = I exactly: parent·R0 is parent, no product needed
   /// Revolute joints about a coordinate axis (±x, ±y, ±z exactly): the axis index, and the
   /// sign folded into sin q. Rot(±e_a, q) leaves column a of parent·R0 as it is and turns the
@@ -126,6 +130,11 @@ inline FkProgram BuildFkProgram(const RobotModel& robot) {
       f.dof = joint.dof;
       f.kind = joint.type == JointType::kFixed ? 0 : joint.type == JointType::kPrismatic ? 2 : 1;
       if (f.dof < 0) f.kind = 0;
+      if (f.kind != 0 && joint.mimic) {
+        f.mimic = true;
+        f.multiplier = joint.mimic->multiplier;
+        f.offset = joint.mimic->offset;
+      }
       const Eigen::Matrix3d r0 = joint.origin.linear();
       const Eigen::Vector3d a = joint.axis.normalized();
       f.r0_identity = r0 == Eigen::Matrix3d::Identity();
@@ -163,7 +172,7 @@ __attribute__((always_inline)) inline void ComputeFkBody(const FkProgram& progra
     sc = heap_sc.data();
   }
   for (std::size_t i = 0; i < fk.size(); ++i) {
-    if (fk[i].kind == 1) SinCos(q[fk[i].dof], &sc[2 * i], &sc[2 * i + 1]);
+    if (fk[i].kind == 1) SinCos(fk[i].Value(q), &sc[2 * i], &sc[2 * i + 1]);
   }
   Frame& base = frames[program.root];
   base.col[0] = Lanes{1.0, 0.0, 0.0, 0.0};
@@ -176,7 +185,7 @@ __attribute__((always_inline)) inline void ComputeFkBody(const FkProgram& progra
     Frame& child = frames[j.child_link];
     double local_p[3] = {j.p0[0], j.p0[1], j.p0[2]};
     if (j.kind == 2) {
-      const double d = q[j.dof];
+      const double d = j.Value(q);
       for (int k = 0; k < 3; ++k) local_p[k] += j.r0a[k] * d;
     }
     Transform(parent, local_p[0], local_p[1], local_p[2], &child.col[3]);

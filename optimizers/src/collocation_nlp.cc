@@ -72,6 +72,7 @@ CollocationNlp::CollocationNlp(const Transcription& transcription, Eigen::Vector
   if (rows_torque_ > 0) {
     torque_.resize(n, points);
     torque_jac_.assign(points, Eigen::MatrixXd(n, 3 * n));
+    for (int i = 0; i < n; ++i) friction_.push_back(DofFriction(*t_.robot, i));
   }
   if (rows_clearance_ > 0) {
     for (const ClearancePair& pair : t_.pairs) instants_.push_back(pair.at);
@@ -228,7 +229,8 @@ void CollocationNlp::Bounds(std::vector<double>* x_l, std::vector<double>* x_u, 
   }
   for (int r = 0; r < rows_torque_; ++r, ++row) {
     const int i = r % n;
-    const double coulomb = t_.dynamics.include_friction ? t_.robot->joints()[t_.robot->dof_joint(i)].friction : 0.0;
+    // The dof's Coulomb friction, its mimic joints' included (DofFriction).
+    const double coulomb = t_.dynamics.include_friction ? friction_[i].friction : 0.0;
     (*g_l)[row] = -(t_.max_effort[i] - coulomb);
     (*g_u)[row] = t_.max_effort[i] - coulomb;
   }
@@ -370,7 +372,7 @@ void CollocationNlp::UpdateTorques(const double* x, bool derivatives) {
     // sign of q̇ near the knot.
     torque_.col(k) = InverseDynamics(robot, q, v, a, frictionless);
     if (t_.dynamics.include_friction) {
-      for (int i = 0; i < n; ++i) torque_(i, k) += robot.joints()[robot.dof_joint(i)].damping * v[i];
+      for (int i = 0; i < n; ++i) torque_(i, k) += friction_[i].damping * v[i];
     }
     if (!derivatives) continue;
     // ∂τ/∂q̈ = M(q) exactly; ∂τ/∂q and ∂τ/∂q̇ by central differences of the frictionless
@@ -388,7 +390,7 @@ void CollocationNlp::UpdateTorques(const double* x, bool derivatives) {
       minus[j] -= kDifferenceStep;
       J.col(n + j) = (InverseDynamics(robot, q, plus, a, frictionless) - InverseDynamics(robot, q, minus, a, frictionless)) /
                      (2 * kDifferenceStep);
-      if (t_.dynamics.include_friction) J(j, n + j) += robot.joints()[robot.dof_joint(j)].damping;
+      if (t_.dynamics.include_friction) J(j, n + j) += friction_[j].damping;
     }
     J.rightCols(n) = MassMatrix(robot, q);
   }

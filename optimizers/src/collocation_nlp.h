@@ -167,6 +167,7 @@ class CollocationNlp : public Ipopt::TNLP {
   std::vector<int> torque_points_;            ///< points (2k knot, 2k + 1 midpoint) with torque rows
   Eigen::MatrixXd torque_;                    ///< n × torque_points_.size()
   std::vector<Eigen::MatrixXd> torque_jac_;   ///< per torque point n × 3n (∂τ/∂q, ∂τ/∂q̇, ∂τ/∂q̈)
+  std::vector<JointFriction> friction_;       ///< per dof, its mimic joints' included (DofFriction)
   std::vector<Instant> instants_;             ///< distinct instants of pairs, sorted
   std::vector<double> distance_;              ///< per pair
   std::vector<Eigen::VectorXd> distance_grad_;  ///< per pair, ∂d/∂q at its instant

@@ -7,6 +7,11 @@
 // Fixed joints are walked like moving joints with zero motion, so their child links' inertia is
 // carried by the parent body exactly (no lumping step is needed).
 //
+// Mimic joints: the recursions run over every moving joint j with its value θ_j = m_j q_d + c_j
+// (θ̇_j = m_j q̇_d, θ̈_j = m_j q̈_d; m_j = 1, c_j = 0 for an actuated joint). The constraint is
+// linear, θ = A q + c with A(j, d) = m_j, so by virtual work the generalised force of dof d is
+// Σ m_j τ_j over the joints it drives, M(q) = Aᵀ M_θ A, and ∂M/∂q_d = Aᵀ (Σ_j m_j ∂M_θ/∂θ_j) A.
+//
 // No heap allocation per call beyond the returned vector/matrix: per-link scratch lives in a
 // thread_local workspace that grows to the largest robot seen by the thread.
 
@@ -112,6 +117,9 @@ inline Matrix3d Skew3(const Vector3d& v) {
   return s;
 }
 
+/// θ̇ (or θ̈) of a moving joint from q̇ (q̈) of the dof that drives it: m·q̇ for a mimic joint.
+inline double Rate(const Joint& joint, double qd) { return joint.mimic ? joint.mimic->multiplier * qd : qd; }
+
 /// Joint torque of the friction model: damping·q̇ + friction·sign(q̇) (sign(0) = 0).
 inline double FrictionTorque(const Joint& joint, double qd) {
   const double sign = qd > 0.0 ? 1.0 : (qd < 0.0 ? -1.0 : 0.0);
@@ -137,9 +145,9 @@ Eigen::VectorXd Rnea(const RobotModel& robot, const Eigen::VectorXd& q, const Ei
   for (const Joint& joint : joints) {
     const LinkState& p = s[joint.parent_link];
     LinkState& c = s[joint.child_link];
-    const double qj = joint.dof >= 0 ? q[joint.dof] : 0.0;
-    const double vj = (joint.dof >= 0 && qd) ? (*qd)[joint.dof] : 0.0;
-    const double aj = (joint.dof >= 0 && qdd) ? (*qdd)[joint.dof] : 0.0;
+    const double qj = joint.Position(q);
+    const double vj = (joint.dof >= 0 && qd) ? Rate(joint, (*qd)[joint.dof]) : 0.0;
+    const double aj = (joint.dof >= 0 && qdd) ? Rate(joint, (*qdd)[joint.dof]) : 0.0;
     JointTransform(joint, qj, &c);
     const Matrix3d Et = c.R.transpose();
     // Acceleration of the child origin as a point of the parent body, in child coordinates.
@@ -173,9 +181,10 @@ Eigen::VectorXd Rnea(const RobotModel& robot, const Eigen::VectorXd& q, const Ei
     LinkState& c = s[joint.child_link];
     if (joint.dof >= 0) {
       double t = IsPrismatic(joint) ? joint.axis.dot(c.f) : joint.axis.dot(c.n);
-      if (armature && qdd) t += joint.armature * (*qdd)[joint.dof];
-      if (friction && qd) t += FrictionTorque(joint, (*qd)[joint.dof]);
-      tau[joint.dof] = t;
+      if (armature && qdd) t += joint.armature * Rate(joint, (*qdd)[joint.dof]);
+      if (friction && qd) t += FrictionTorque(joint, Rate(joint, (*qd)[joint.dof]));
+      // Virtual work: dof d does m_j·τ_j through each joint j it drives.
+      tau[joint.dof] += joint.mimic ? joint.mimic->multiplier * t : t;
     }
     if (joint.parent_link != root) {
       LinkState& p = s[joint.parent_link];
@@ -187,15 +196,17 @@ Eigen::VectorXd Rnea(const RobotModel& robot, const Eigen::VectorXd& q, const Ei
   return tau;
 }
 
-/// Body Jacobians of every link at q (6 × n each, rows (ω, v), link frame, about the link
-/// origin), concatenated: columns [link·n, (link + 1)·n). Uses the workspace's R, r.
+/// Body Jacobians of every link at q with respect to the moving joints' values θ (6 × n each,
+/// n = num_moving_joints(), rows (ω, v), link frame, about the link origin), concatenated:
+/// columns [link·n, (link + 1)·n). Uses the workspace's R, r.
 void BodyJacobians(const RobotModel& robot, const Eigen::VectorXd& q, Matrix6Xd* jac) {
-  const int n = robot.num_dofs();
+  const int n = robot.num_moving_joints();
   const int num_links = robot.num_links();
   std::vector<LinkState>& s = Workspace(num_links);
   jac->setZero(6, static_cast<Eigen::Index>(num_links) * n);
-  for (const Joint& joint : robot.joints()) {
-    const double qj = joint.dof >= 0 ? q[joint.dof] : 0.0;
+  for (std::size_t ji = 0; ji < robot.joints().size(); ++ji) {
+    const Joint& joint = robot.joints()[ji];
+    const double qj = joint.Position(q);
     LinkState& c = s[joint.child_link];
     JointTransform(joint, qj, &c);
     const Matrix3d Et = c.R.transpose();
@@ -208,14 +219,25 @@ void BodyJacobians(const RobotModel& robot, const Eigen::VectorXd& q, Matrix6Xd*
       Jc.col(k).head<3>() = Et * w;
       Jc.col(k).tail<3>() = Et * (v + w.cross(c.r));
     }
-    if (joint.dof >= 0) {
+    const int m = robot.moving_index(static_cast<int>(ji));
+    if (m >= 0) {
       if (IsPrismatic(joint)) {
-        Jc.col(joint.dof).tail<3>() = joint.axis;
+        Jc.col(m).tail<3>() = joint.axis;
       } else {
-        Jc.col(joint.dof).head<3>() = joint.axis;
+        Jc.col(m).head<3>() = joint.axis;
       }
     }
   }
+}
+
+/// The expansion matrix A (num_moving_joints × num_dofs): θ̇ = A q̇, A(m, dof of m) = multiplier.
+Eigen::MatrixXd ExpansionMatrix(const RobotModel& robot) {
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(robot.num_moving_joints(), robot.num_dofs());
+  for (int m = 0; m < robot.num_moving_joints(); ++m) {
+    const Joint& joint = robot.joints()[robot.moving_joint(m)];
+    A(m, joint.dof) = joint.multiplier();
+  }
+  return A;
 }
 
 /// Spatial inertia of a link about its origin, (ω, v) ordering.
@@ -252,10 +274,27 @@ bool HasInertia(const RobotModel& robot) {
     body_mass[joint.child_link] += LinkMass(links[joint.child_link]).m;
     if (joint.type == JointType::kFixed) body_mass[joint.parent_link] += body_mass[joint.child_link];
   }
+  // Per dof: some joint it drives (its own or a mimic joint) carries mass.
+  std::vector<char> massive(robot.num_dofs(), 0);
   for (const Joint& joint : joints) {
-    if (joint.dof >= 0 && !(body_mass[joint.child_link] > 0.0)) return false;
+    if (joint.dof >= 0 && body_mass[joint.child_link] > 0.0) massive[joint.dof] = 1;
+  }
+  for (char m : massive) {
+    if (!m) return false;
   }
   return true;
+}
+
+JointFriction DofFriction(const RobotModel& robot, int dof) {
+  JointFriction out;
+  for (const Joint& joint : robot.joints()) {
+    if (joint.dof != dof) continue;
+    const double m = joint.multiplier();
+    out.damping += m * m * joint.damping;
+    out.friction += std::abs(m) * joint.friction;
+    out.armature += m * m * joint.armature;
+  }
+  return out;
 }
 
 Eigen::VectorXd InverseDynamics(const RobotModel& robot, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
@@ -266,7 +305,7 @@ Eigen::VectorXd InverseDynamics(const RobotModel& robot, const Eigen::VectorXd& 
 
 Eigen::MatrixXd MassMatrix(const RobotModel& robot, const Eigen::VectorXd& q) {
   assert(q.size() == robot.num_dofs());
-  const int n = robot.num_dofs();
+  const int n = robot.num_moving_joints();  // M_θ over the moving joints; = M without mimics
   const std::vector<Joint>& joints = robot.joints();
   const std::vector<Link>& links = robot.links();
   std::vector<LinkState>& s = Workspace(robot.num_links());
@@ -284,7 +323,7 @@ Eigen::MatrixXd MassMatrix(const RobotModel& robot, const Eigen::VectorXd& q) {
       s[l].cI.setZero();
     }
   }
-  for (const Joint& joint : joints) JointTransform(joint, joint.dof >= 0 ? q[joint.dof] : 0.0, &s[joint.child_link]);
+  for (const Joint& joint : joints) JointTransform(joint, joint.Position(q), &s[joint.child_link]);
 
   // Composite inertias, tip to root: I_p += R I_c Rᵀ − m[r]² − [r][h'] − [h'][r], h' = R h.
   for (int j = static_cast<int>(joints.size()) - 1; j >= 0; --j) {
@@ -300,8 +339,10 @@ Eigen::MatrixXd MassMatrix(const RobotModel& robot, const Eigen::VectorXd& q) {
   }
 
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n);
-  for (const Joint& joint : joints) {
-    if (joint.dof < 0) continue;
+  for (std::size_t ji = 0; ji < joints.size(); ++ji) {
+    const Joint& joint = joints[ji];
+    const int mj = robot.moving_index(static_cast<int>(ji));
+    if (mj < 0) continue;
     const LinkState& c = s[joint.child_link];
     // Force (n, f) the composite body needs for a unit acceleration of this joint.
     Vector3d f, m;
@@ -312,7 +353,7 @@ Eigen::MatrixXd MassMatrix(const RobotModel& robot, const Eigen::VectorXd& q) {
       f = joint.axis.cross(c.ch);
       m = c.cI * joint.axis;
     }
-    M(joint.dof, joint.dof) = (IsPrismatic(joint) ? joint.axis.dot(f) : joint.axis.dot(m)) + joint.armature;
+    M(mj, mj) = (IsPrismatic(joint) ? joint.axis.dot(f) : joint.axis.dot(m)) + joint.armature;
     // Carry it towards the root; each moving ancestor joint sees its projection.
     int link = joint.child_link;
     while (link != robot.root_link()) {
@@ -323,14 +364,17 @@ Eigen::MatrixXd MassMatrix(const RobotModel& robot, const Eigen::VectorXd& q) {
       link = parent_link;
       if (link == robot.root_link()) break;
       const Joint& up = joints[links[link].parent_joint];
-      if (up.dof >= 0) {
+      const int mu = robot.moving_index(links[link].parent_joint);
+      if (mu >= 0) {
         const double v = IsPrismatic(up) ? up.axis.dot(f) : up.axis.dot(m);
-        M(joint.dof, up.dof) = v;
-        M(up.dof, joint.dof) = v;
+        M(mj, mu) = v;
+        M(mu, mj) = v;
       }
     }
   }
-  return M;
+  if (!robot.has_mimic_joints()) return M;
+  const Eigen::MatrixXd A = ExpansionMatrix(robot);
+  return A.transpose() * M * A;
 }
 
 Eigen::VectorXd CoriolisTorques(const RobotModel& robot, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
@@ -344,8 +388,11 @@ Eigen::MatrixXd CoriolisMatrix(const RobotModel& robot, const Eigen::VectorXd& q
   // ancestor of dof k on l's chain, else 0 (differentiate J_b,i = Ad_{e^{-[B_n]q_n}···e^{-[B_i+1]q_i+1}} B_i).
   // From ∂M/∂q_k the Christoffel symbols Γ_ijk = ½(∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i) give
   // C_ij = Σ_k Γ_ijk q̇_k.
+  //
+  // With mimic joints this runs over the moving joints (n of them): ∂M_θ/∂θ_k, then
+  // ∂M/∂q_d = Aᵀ (Σ_k A(k, d) ∂M_θ/∂θ_k) A.
   assert(q.size() == robot.num_dofs() && qd.size() == robot.num_dofs());
-  const int n = robot.num_dofs();
+  const int n = robot.num_moving_joints();
   const std::vector<Link>& links = robot.links();
   Matrix6Xd jac;
   BodyJacobians(robot, q, &jac);
@@ -371,11 +418,23 @@ Eigen::MatrixXd CoriolisMatrix(const RobotModel& robot, const Eigen::VectorXd& q
     }
   }
 
-  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(n, n);
-  for (int k = 0; k < n; ++k) {
+  const int nd = robot.num_dofs();
+  if (robot.has_mimic_joints()) {
+    const Eigen::MatrixXd A = ExpansionMatrix(robot);
+    std::vector<Eigen::MatrixXd> dMq(nd, Eigen::MatrixXd::Zero(n, n));
+    for (int k = 0; k < n; ++k) {
+      const Joint& joint = robot.joints()[robot.moving_joint(k)];
+      dMq[joint.dof] += joint.multiplier() * dM[k];
+    }
+    for (int d = 0; d < nd; ++d) dMq[d] = A.transpose() * dMq[d] * A;
+    dM = std::move(dMq);
+  }
+
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(nd, nd);
+  for (int k = 0; k < nd; ++k) {
     if (qd[k] == 0.0) continue;
-    for (int i = 0; i < n; ++i) {
-      for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < nd; ++i) {
+      for (int j = 0; j < nd; ++j) {
         C(i, j) += 0.5 * (dM[k](i, j) + dM[j](i, k) - dM[i](j, k)) * qd[k];
       }
     }

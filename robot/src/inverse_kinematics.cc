@@ -42,7 +42,7 @@ void RequireNonNegative(double x, const char* field) {
   if (!std::isfinite(x)) ThrowInvalid(std::string("ik.") + field + " = " + Num(x) + " must be finite");
 }
 
-/// Per chain dof: limits and whether the joint is continuous (wraps into [-π, π]).
+/// Per dof that moves the link: limits and whether the joint is continuous (wraps into [-π, π]).
 struct ChainDof {
   int dof;
   double lower, upper;
@@ -133,14 +133,30 @@ IkResult SolveIk(const RobotModel& robot, const IkRequest& request) {
 
   const int link = request.link;
   const int n = robot.num_dofs();
-  const std::vector<int>& chain_dofs = robot.link_chain(link);
-  const int k = static_cast<int>(chain_dofs.size());
-  std::vector<ChainDof> chain(k);
-  for (int j = 0; j < k; ++j) {
-    const int d = chain_dofs[j];
-    chain[j] = {d, robot.lower_limits()[d], robot.upper_limits()[d],
-                robot.joints()[robot.dof_joint(d)].type == JointType::kContinuous};
+  // The link's moving joints (PoE factors) and the distinct dofs that drive them, in chain
+  // order: J's column of a dof sums multiplier × the columns of the joints it drives (a mimic
+  // joint downstream of its actuated joint moves the link twice).
+  const std::vector<int>& chain_joints = robot.link_chain(link);
+  std::vector<int> column_of(chain_joints.size());  // chain joint -> column of J
+  std::vector<double> multiplier_of(chain_joints.size());
+  std::vector<ChainDof> chain;
+  {
+    std::vector<int> column_of_dof(n, -1);
+    for (std::size_t j = 0; j < chain_joints.size(); ++j) {
+      const Joint& joint = robot.joints()[robot.moving_joint(chain_joints[j])];
+      const int d = joint.dof;
+      if (column_of_dof[d] < 0) {
+        column_of_dof[d] = static_cast<int>(chain.size());
+        // A continuous joint wraps only while nothing narrowed its [-π, π] (a mimic joint can).
+        const bool wraps = robot.joints()[robot.dof_joint(d)].type == JointType::kContinuous &&
+                           robot.lower_limits()[d] == -kPi && robot.upper_limits()[d] == kPi;
+        chain.push_back({d, robot.lower_limits()[d], robot.upper_limits()[d], wraps});
+      }
+      column_of[j] = column_of_dof[d];
+      multiplier_of[j] = joint.multiplier();
+    }
   }
+  const int k = static_cast<int>(chain.size());
 
   const Eigen::Matrix3d R_target = request.target.linear();
   const Eigen::Vector3d p_target = request.target.translation();
@@ -195,11 +211,13 @@ IkResult SolveIk(const RobotModel& robot, const IkRequest& request) {
       if ((iteration & 15) == 15 && (Clock::now() >= deadline || (request.stop && request.stop()))) break;
       Eigen::Matrix3d R;
       Eigen::Vector3d p;
+      J.setZero();
       kinematics_internal::ChainForward(
-          robot, q.data(), chain_dofs, link, &R, &p,
-          [&J](int j, const Eigen::Vector3d& w, const Eigen::Vector3d& v) {
-            J.col(j).head<3>() = w;
-            J.col(j).tail<3>() = v;
+          robot, q.data(), chain_joints, link, &R, &p,
+          [&](int j, const Eigen::Vector3d& w, const Eigen::Vector3d& v) {
+            const double mult = multiplier_of[j];
+            J.col(column_of[j]).head<3>() += mult * w;
+            J.col(column_of[j]).tail<3>() += mult * v;
           });
       // Body twist error V_b = log(T_sb⁻¹ T_target).
       Eigen::Isometry3d error;

@@ -30,15 +30,22 @@ void CheckArguments(const RobotModel& robot, const Eigen::VectorXd& q, int link,
 }
 
 // Fills J (already 6×n and zeroed) with the space Jacobian; returns the link pose if asked.
+// Column d sums multiplier × column over the chain joints that dof d drives (its own joint and
+// its mimic joints): dθ_j = multiplier_j dq_d.
 void FillSpaceJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int link, Jacobian* J,
                        Eigen::Matrix3d* R, Eigen::Vector3d* p) {
   const std::vector<int>& chain = robot.link_chain(link);
   kinematics_internal::ChainForward(
       robot, q.data(), chain, link, R, p,
       [&](int j, const Eigen::Vector3d& w, const Eigen::Vector3d& v) {
-        const int d = chain[j];
-        J->col(d).head<3>() = w;
-        J->col(d).tail<3>() = v;
+        const Joint& joint = robot.joints()[robot.moving_joint(chain[j])];
+        if (joint.mimic) {
+          J->col(joint.dof).head<3>() += joint.mimic->multiplier * w;
+          J->col(joint.dof).tail<3>() += joint.mimic->multiplier * v;
+        } else {
+          J->col(joint.dof).head<3>() += w;
+          J->col(joint.dof).tail<3>() += v;
+        }
       });
 }
 
@@ -57,8 +64,8 @@ Jacobian BodyJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int lin
   Eigen::Matrix3d R;
   Eigen::Vector3d p;
   FillSpaceJacobian(robot, q, link, &J, &R, &p);
-  // [Ad_{T⁻¹}] (ω, v) = (Rᵀω, Rᵀ(v − p × ω)), column by column in place.
-  for (int d : robot.link_chain(link)) {
+  // [Ad_{T⁻¹}] (ω, v) = (Rᵀω, Rᵀ(v − p × ω)), column by column in place (zero columns stay 0).
+  for (int d = 0; d < robot.num_dofs(); ++d) {
     const Eigen::Vector3d w = J.col(d).head<3>();
     const Eigen::Vector3d v = J.col(d).tail<3>();
     J.col(d).head<3>().noalias() = R.transpose() * w;
@@ -76,7 +83,7 @@ Jacobian PointJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int li
   FillSpaceJacobian(robot, q, link, &J, &R, &p);
   // ṗ = v_s + ω_s × p_world for the point's position p_world in the base frame.
   const Eigen::Vector3d x = R * point + p;
-  for (int d : robot.link_chain(link)) {
+  for (int d = 0; d < robot.num_dofs(); ++d) {
     const Eigen::Vector3d w = J.col(d).head<3>();
     J.col(d).tail<3>() += w.cross(x);
   }

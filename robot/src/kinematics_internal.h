@@ -42,8 +42,10 @@ inline void ScrewExp(const Eigen::Matrix<double, 6, 1>& s, bool prismatic, doubl
 }
 
 /// Pose (R, p) of `link` at q (q has num_dofs() entries) by the PoE along `chain` (the link's
-/// dofs, root to tip). For the j-th chain dof calls column(j, ω_s, v_s) with its space-Jacobian
-/// column Ad_{e^{[S_1]q_1}···e^{[S_{j−1}]q_{j−1}}} S_j.
+/// moving joints, root to tip; RobotModel::link_chain). For the j-th chain joint calls
+/// column(j, ω_s, v_s) with its space-Jacobian column Ad_{e^{[S_1]θ_1}···e^{[S_{j−1}]θ_{j−1}}} S_j
+/// (per unit of its own value θ_j; configuration entry d moves the link at Σ multiplier_j ·
+/// column_j over the chain joints j it drives).
 template <typename ColumnSink>
 inline void ChainForward(const RobotModel& robot, const double* q, const std::vector<int>& chain,
                          int link, Eigen::Matrix3d* R_out, Eigen::Vector3d* p_out,
@@ -52,16 +54,18 @@ inline void ChainForward(const RobotModel& robot, const double* q, const std::ve
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   const int k = static_cast<int>(chain.size());
   for (int j = 0; j < k; ++j) {
-    const int d = chain[j];
-    const Eigen::Matrix<double, 6, 1>& s = robot.space_screw_axis(d);
-    const bool prismatic = robot.joints()[robot.dof_joint(d)].type == JointType::kPrismatic;
+    const int m = chain[j];
+    const Eigen::Matrix<double, 6, 1>& s = robot.space_screw_axis(m);
+    const Joint& joint = robot.joints()[robot.moving_joint(m)];
+    const bool prismatic = joint.type == JointType::kPrismatic;
     const Eigen::Vector3d w = R * s.head<3>();
     const Eigen::Vector3d v = p.cross(w) + R * s.tail<3>();
     column(j, w, v);
     if (j + 1 == k && R_out == nullptr) break;
     Eigen::Matrix3d Re;
     Eigen::Vector3d pe;
-    ScrewExp(s, prismatic, q[d], &Re, &pe);
+    const double theta = joint.mimic ? joint.mimic->multiplier * q[joint.dof] + joint.mimic->offset : q[joint.dof];
+    ScrewExp(s, prismatic, theta, &Re, &pe);
     p.noalias() += R * pe;
     R = R * Re;
   }

@@ -23,11 +23,6 @@ int FindJoint(const RobotModel& robot, const std::string& name) {
   return -1;
 }
 
-/// The joint's value at q (its own coordinate; mimic joints: see ResetFollower).
-double JointValue(const Joint& joint, const Eigen::VectorXd& q) { return q[joint.dof]; }
-/// A joint held fixed follows nothing.
-void ResetFollower(Joint* /*joint*/) {}
-
 }  // namespace
 
 std::vector<PlanningGroup> ReadPlanningGroups(const RobotModel& robot, std::string_view srdf, bool strict,
@@ -159,14 +154,14 @@ std::shared_ptr<const RobotModel> HoldJointsOutside(const RobotModel& robot, con
   std::vector<Joint> joints = robot.joints();
   for (Joint& joint : joints) {
     if (joint.dof < 0 || moving[static_cast<std::size_t>(joint.dof)]) continue;
-    const double value = JointValue(joint, q);
+    const double value = joint.Position(q);  // a mimic joint's too: m·q[dof] + c
     if (joint.type == JointType::kPrismatic) {
       joint.origin = joint.origin * Eigen::Translation3d(value * joint.axis);
     } else {
       joint.origin = joint.origin * Eigen::AngleAxisd(value, joint.axis);
     }
     joint.type = JointType::kFixed;
-    ResetFollower(&joint);
+    joint.mimic.reset();  // held: it follows nothing
   }
   std::vector<std::pair<std::string, std::string>> allowed;
   const std::vector<Link>& links = robot.links();

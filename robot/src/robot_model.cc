@@ -1,5 +1,6 @@
 #include "chasles/robot/robot_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <tuple>
 #include <unordered_map>
@@ -54,6 +55,114 @@ bool AllFinite(const Eigen::Isometry3d& t) { return t.matrix().allFinite(); }
 
 std::string JointLabel(const std::string& robot, size_t index, const std::string& name) {
   return "robot '" + robot + "': joint[" + std::to_string(index) + "] '" + name + "'";
+}
+
+std::string Interval(double lower, double upper) {
+  return "[" + FormatNumber(lower) + ", " + FormatNumber(upper) + "]";
+}
+
+/// Mimic joints (Joint::mimic): validates them, resolves chains (afterwards every mimic follows
+/// an actuated joint, multiplier and offset composed) and narrows the actuated joints' limits
+/// so that their mimic joints stay within theirs, appending a warning for each narrowing that
+/// `warnings` does not hold yet (a model rebuilt from a model's joints repeats none).
+/// Precondition: limits and axes already checked (continuous joints at [-π, π]).
+void ResolveMimicJoints(const std::string& robot, std::vector<Joint>* joints_in, std::vector<std::string>* warnings) {
+  std::vector<Joint>& joints = *joints_in;
+  const int nj = static_cast<int>(joints.size());
+  bool any = false;
+  for (int j = 0; j < nj; ++j) {
+    Joint& joint = joints[j];
+    if (!joint.mimic) continue;
+    if (joint.type == JointType::kFixed) {  // a fixed joint does not move: nothing to follow
+      joint.mimic.reset();
+      continue;
+    }
+    any = true;
+    const std::string label = JointLabel(robot, j, joint.name);
+    const JointMimic& m = *joint.mimic;
+    if (m.joint < 0 || m.joint >= nj || m.joint == j) {
+      ThrowInvalid(label + " mimic.joint = " + std::to_string(m.joint) + " must be the index of another joint, within [0, " +
+                   std::to_string(nj) + ")");
+    }
+    const Joint& followed = joints[m.joint];
+    if (followed.type == JointType::kFixed) {
+      ThrowInvalid(label + " mimics joint[" + std::to_string(m.joint) + "] '" + followed.name +
+                   "', which is fixed; a mimic joint must follow a revolute, continuous or prismatic joint");
+    }
+    if (!std::isfinite(m.multiplier) || m.multiplier == 0.0) {
+      ThrowInvalid(label + " mimic multiplier = " + FormatNumber(m.multiplier) +
+                   " must be finite and non-zero (a joint that never moves is a fixed joint)");
+    }
+    if (!std::isfinite(m.offset)) ThrowInvalid(label + " mimic offset = " + FormatNumber(m.offset) + " must be finite");
+  }
+  if (!any) return;
+
+  // Chains: follow each mimic to the actuated joint at the end, composing θ = m·θ' + c.
+  std::vector<JointMimic> resolved(nj);
+  for (int j = 0; j < nj; ++j) {
+    if (!joints[j].mimic) continue;
+    JointMimic r = *joints[j].mimic;
+    std::vector<int> path{j};
+    while (joints[r.joint].mimic) {
+      if (std::find(path.begin(), path.end(), r.joint) != path.end()) {
+        std::string cycle;
+        for (int k : path) cycle += "'" + joints[k].name + "' -> ";
+        ThrowInvalid(JointLabel(robot, j, joints[j].name) + " follows a cycle of mimic joints (" + cycle + "'" +
+                     joints[r.joint].name + "'); a chain of mimic joints must end at a joint that is not a mimic");
+      }
+      path.push_back(r.joint);
+      const JointMimic& next = *joints[r.joint].mimic;
+      r.offset += r.multiplier * next.offset;
+      r.multiplier *= next.multiplier;
+      r.joint = next.joint;
+    }
+    if (!std::isfinite(r.multiplier) || r.multiplier == 0.0 || !std::isfinite(r.offset)) {
+      ThrowInvalid(JointLabel(robot, j, joints[j].name) + " follows joint '" + joints[r.joint].name +
+                   "' through a chain of mimic joints with multiplier " + FormatNumber(r.multiplier) + " and offset " +
+                   FormatNumber(r.offset) + "; both must be finite and the multiplier non-zero");
+    }
+    resolved[j] = r;
+  }
+  const auto warn = [warnings](std::string text) {
+    if (std::find(warnings->begin(), warnings->end(), text) == warnings->end()) warnings->push_back(std::move(text));
+  };
+  for (int j = 0; j < nj; ++j) {
+    if (!joints[j].mimic) continue;
+    Joint& joint = joints[j];
+    joint.mimic = resolved[j];
+    const JointMimic& r = resolved[j];
+    Joint& actuated = joints[r.joint];
+    const std::string relation = "'" + joint.name + "' = " + FormatNumber(r.multiplier) + " · '" + actuated.name +
+                                 "' + " + FormatNumber(r.offset);
+    JointLimits& lim = actuated.limits;
+    if (joint.type != JointType::kContinuous) {
+      // θ = m·q + c ∈ [lo, hi]  ⇔  q within the preimage.
+      double pre_lo = (joint.limits.lower - r.offset) / r.multiplier;
+      double pre_hi = (joint.limits.upper - r.offset) / r.multiplier;
+      if (pre_lo > pre_hi) std::swap(pre_lo, pre_hi);
+      const double lower = std::max(lim.lower, pre_lo);
+      const double upper = std::min(lim.upper, pre_hi);
+      if (!(lower <= upper)) {
+        ThrowInvalid(JointLabel(robot, j, joint.name) + " is a mimic joint (" + relation + ") and no value of '" +
+                     actuated.name + "' within " + Interval(lim.lower, lim.upper) + " keeps it within its limits " +
+                     Interval(joint.limits.lower, joint.limits.upper));
+      }
+      if (lower != lim.lower || upper != lim.upper) {
+        warn("robot '" + robot + "': joint '" + actuated.name + "' limits " + Interval(lim.lower, lim.upper) +
+             " narrowed to " + Interval(lower, upper) + " so that its mimic joint " + relation + " stays within " +
+             Interval(joint.limits.lower, joint.limits.upper));
+        lim.lower = lower;
+        lim.upper = upper;
+      }
+    }
+    const double velocity = joint.limits.velocity / std::abs(r.multiplier);
+    if (velocity < lim.velocity) {
+      warn("robot '" + robot + "': joint '" + actuated.name + "' velocity limit " + FormatNumber(lim.velocity) +
+           " lowered to " + FormatNumber(velocity) + " so that its mimic joint " + relation +
+           " stays within its velocity limit " + FormatNumber(joint.limits.velocity));
+      lim.velocity = velocity;
+    }
+  }
 }
 
 }  // namespace
@@ -164,6 +273,8 @@ std::shared_ptr<const RobotModel> RobotModel::FromTree(
     }
   }
 
+  ResolveMimicJoints(name, &joints, &load_warnings);
+
   std::shared_ptr<RobotModel> model(new RobotModel());
   model->name_ = std::move(name);
   model->links_ = std::move(links);
@@ -181,16 +292,26 @@ void RobotModel::Finalize(const std::vector<std::pair<std::string, std::string>>
 
   dof_joints_.clear();
   dof_names_.clear();
+  moving_joints_.clear();
+  moving_index_.assign(nj, -1);
   for (int j = 0; j < nj; ++j) {
     if (joints_[j].type == JointType::kFixed) {
       joints_[j].dof = -1;
       continue;
     }
+    moving_index_[j] = static_cast<int>(moving_joints_.size());
+    moving_joints_.push_back(j);
+    if (joints_[j].mimic) continue;
     joints_[j].dof = static_cast<int>(dof_joints_.size());
     dof_joints_.push_back(j);
     dof_names_.push_back(joints_[j].name);
   }
+  // A mimic joint follows an actuated joint (ResolveMimicJoints): it is driven by that dof.
+  for (Joint& joint : joints_) {
+    if (joint.mimic) joint.dof = joints_[joint.mimic->joint].dof;
+  }
   const int nd = num_dofs();
+  const int nm = num_moving_joints();
   lower_.resize(nd);
   upper_.resize(nd);
   velocity_.resize(nd);
@@ -231,42 +352,54 @@ void RobotModel::Finalize(const std::vector<std::pair<std::string, std::string>>
 
   // Home poses (joints are in topological order, so parents come first).
   home_.assign(nl, Eigen::Isometry3d::Identity());
-  parent_dof_of_link_.assign(nl, -1);
-  for (const Joint& joint : joints_) {
+  parent_moving_of_link_.assign(nl, -1);
+  for (int j = 0; j < nj; ++j) {
+    const Joint& joint = joints_[j];
     home_[joint.child_link] = home_[joint.parent_link] * joint.origin;
     home_[joint.child_link].makeAffine();
-    parent_dof_of_link_[joint.child_link] =
-        joint.dof >= 0 ? joint.dof : parent_dof_of_link_[joint.parent_link];
+    parent_moving_of_link_[joint.child_link] =
+        moving_index_[j] >= 0 ? moving_index_[j] : parent_moving_of_link_[joint.parent_link];
   }
 
   // Space screw axes at q = 0 (Modern Robotics: revolute ω = R·axis, v = −ω × p;
   // prismatic ω = 0, v = R·axis).
-  screws_.assign(nd, Eigen::Matrix<double, 6, 1>::Zero());
-  screw_w_cross_v_.assign(nd, Eigen::Vector3d::Zero());
-  dof_prismatic_.assign(nd, 0);
-  parent_dof_of_dof_.assign(nd, -1);
-  for (int d = 0; d < nd; ++d) {
-    const Joint& joint = joints_[dof_joints_[d]];
+  screws_.assign(nm, Eigen::Matrix<double, 6, 1>::Zero());
+  screw_w_cross_v_.assign(nm, Eigen::Vector3d::Zero());
+  moving_prismatic_.assign(nm, 0);
+  parent_moving_of_moving_.assign(nm, -1);
+  moving_dof_.assign(nm, -1);
+  moving_multiplier_.assign(nm, 1.0);
+  moving_offset_.assign(nm, 0.0);
+  moving_mimic_.assign(nm, 0);
+  for (int m = 0; m < nm; ++m) {
+    const Joint& joint = joints_[moving_joints_[m]];
     const Eigen::Isometry3d& frame = home_[joint.child_link];
     const Eigen::Vector3d dir = frame.linear() * joint.axis;
-    Eigen::Matrix<double, 6, 1>& s = screws_[d];
+    Eigen::Matrix<double, 6, 1>& s = screws_[m];
     if (joint.type == JointType::kPrismatic) {
       s.head<3>().setZero();
       s.tail<3>() = dir;
-      dof_prismatic_[d] = 1;
+      moving_prismatic_[m] = 1;
     } else {
       s.head<3>() = dir;
       s.tail<3>() = -dir.cross(frame.translation());
-      screw_w_cross_v_[d] = dir.cross(Eigen::Vector3d(s.tail<3>()));
+      screw_w_cross_v_[m] = dir.cross(Eigen::Vector3d(s.tail<3>()));
     }
-    parent_dof_of_dof_[d] = parent_dof_of_link_[joint.parent_link];
+    parent_moving_of_moving_[m] = parent_moving_of_link_[joint.parent_link];
+    moving_dof_[m] = joint.dof;
+    if (joint.mimic) {
+      moving_mimic_[m] = 1;
+      moving_multiplier_[m] = joint.mimic->multiplier;
+      moving_offset_[m] = joint.mimic->offset;
+    }
   }
 
-  // Chains: dofs that move each link, root to tip.
+  // Chains: moving joints that move each link, root to tip.
   chains_.assign(nl, {});
-  for (const Joint& joint : joints_) {
+  for (int j = 0; j < nj; ++j) {
+    const Joint& joint = joints_[j];
     std::vector<int> chain = chains_[joint.parent_link];
-    if (joint.dof >= 0) chain.push_back(joint.dof);
+    if (moving_index_[j] >= 0) chain.push_back(moving_index_[j]);
     chains_[joint.child_link] = std::move(chain);
   }
 }
@@ -296,23 +429,25 @@ constexpr int kStackDofs = 64;
 void RobotModel::ForwardKinematics(const Eigen::VectorXd& q,
                                    std::vector<Eigen::Isometry3d>* poses) const {
   const int nl = static_cast<int>(links_.size());
-  const int nd = num_dofs();
+  const int nm = num_moving_joints();
   if (static_cast<int>(poses->size()) != nl) poses->resize(nl, Eigen::Isometry3d::Identity());
 
   Rigid stack_buffer[kStackDofs];
   Rigid* prefix = stack_buffer;
-  if (nd > kStackDofs) {
+  if (nm > kStackDofs) {
     thread_local std::vector<Rigid> heap_buffer;
-    if (static_cast<int>(heap_buffer.size()) < nd) heap_buffer.resize(nd);
+    if (static_cast<int>(heap_buffer.size()) < nm) heap_buffer.resize(nm);
     prefix = heap_buffer.data();
   }
 
-  // prefix[d] = prefix[nearest moving ancestor of d] · e^[S_d] q_d  (closed-form Rodrigues).
-  for (int d = 0; d < nd; ++d) {
+  // prefix[d] = prefix[nearest moving ancestor of d] · e^[S_d] θ_d  (closed-form Rodrigues),
+  // d over the moving joints.
+  for (int d = 0; d < nm; ++d) {
     const Eigen::Matrix<double, 6, 1>& s = screws_[d];
-    const double theta = q[d];
+    const double qi = q[moving_dof_[d]];
+    const double theta = moving_mimic_[d] ? moving_multiplier_[d] * qi + moving_offset_[d] : qi;
     Rigid e;
-    if (dof_prismatic_[d]) {
+    if (moving_prismatic_[d]) {
       e.R.setIdentity();
       e.t = s.tail<3>() * theta;
     } else {
@@ -333,7 +468,7 @@ void RobotModel::ForwardKinematics(const Eigen::VectorXd& q,
       // p = (Iθ + (1 − cos θ)[ω] + (θ − sin θ)[ω]²) v with ω·v = 0 (zero-pitch screw).
       e.t = sn * s.tail<3>() + vc * screw_w_cross_v_[d];
     }
-    const int parent = parent_dof_of_dof_[d];
+    const int parent = parent_moving_of_moving_[d];
     if (parent < 0) {
       prefix[d] = e;
     } else {
@@ -348,7 +483,7 @@ void RobotModel::ForwardKinematics(const Eigen::VectorXd& q,
   for (int l = 0; l < nl; ++l) {
     Eigen::Isometry3d& out = (*poses)[l];
     const Eigen::Isometry3d& m = home_[l];
-    const int d = parent_dof_of_link_[l];
+    const int d = parent_moving_of_link_[l];
     if (d < 0) {
       out = m;
       continue;
@@ -368,10 +503,10 @@ void RobotModel::ForwardKinematicsByChaining(const Eigen::VectorXd& q,
     switch (joint.type) {
       case JointType::kRevolute:
       case JointType::kContinuous:
-        motion.linear() = Eigen::AngleAxisd(q[joint.dof], joint.axis).toRotationMatrix();
+        motion.linear() = Eigen::AngleAxisd(joint.Position(q), joint.axis).toRotationMatrix();
         break;
       case JointType::kPrismatic:
-        motion.translation() = joint.axis * q[joint.dof];
+        motion.translation() = joint.axis * joint.Position(q);
         break;
       case JointType::kFixed:
         break;

@@ -140,6 +140,37 @@ void CheckInertialNumbers(const TiXmlElement& robot) {
   }
 }
 
+/// urdfdom cannot read "nan", "inf" or "1e400" in <mimic multiplier= offset=> and says so
+/// without naming the joint; they are read here first, as strtod reads them, and refused with
+/// the joint, the attribute and the value. A multiplier of 0 is refused too: such a joint never
+/// moves (it is a fixed joint at the offset).
+void CheckMimicNumbers(const TiXmlElement& robot) {
+  for (const TiXmlElement* joint = robot.FirstChildElement("joint"); joint != nullptr;
+       joint = joint->NextSiblingElement("joint")) {
+    const TiXmlElement* mimic = joint->FirstChildElement("mimic");
+    if (mimic == nullptr) continue;
+    const char* name = joint->Attribute("name");
+    const std::string where = std::string("urdf: joint '") + (name ? name : "") + "' mimic";
+    for (const char* attribute : {"multiplier", "offset"}) {
+      const char* text = mimic->Attribute(attribute);
+      if (text == nullptr) continue;  // defaults: multiplier 1, offset 0
+      char* end = nullptr;
+      const double value = std::strtod(text, &end);
+      if (end == text) continue;  // not a number at all: urdfdom names it
+      while (*end == ' ' || *end == '\t' || *end == '\n' || *end == '\r') ++end;
+      if (*end != '\0') continue;
+      const bool multiplier = std::string(attribute) == "multiplier";
+      if (multiplier && (!std::isfinite(value) || value == 0.0)) {
+        ThrowInvalid(where + " multiplier = " + FormatNumber(value) +
+                     " must be finite and non-zero (a joint that never moves is a fixed joint)");
+      }
+      if (!multiplier && !std::isfinite(value)) {
+        ThrowInvalid(where + " offset = " + FormatNumber(value) + " must be finite");
+      }
+    }
+  }
+}
+
 /// urdfdom joins a joint's parent and child links with owning pointers before it checks that
 /// the links form a tree, so a joint whose child is its own parent, or joints that form a
 /// cycle, leak the whole parsed model on every request (found by fuzzing). The joint graph is
@@ -224,6 +255,7 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
 
   if (urdf_doc.RootElement() != nullptr) {
     CheckInertialNumbers(*urdf_doc.RootElement());
+    CheckMimicNumbers(*urdf_doc.RootElement());
     CheckJointGraph(*urdf_doc.RootElement());
   }
 
@@ -312,7 +344,9 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
     const auto it = child_joints.find(link.name);
     return it == child_joints.end() ? nullptr : &it->second;
   };
-  std::vector<std::string> mimic_warnings;  // joints with <mimic>, reported in load_warnings()
+  // Moving joints with <mimic>: (index into joints, the urdfdom description), resolved once
+  // every joint has its index.
+  std::vector<std::pair<std::size_t, std::shared_ptr<const urdf::JointMimic>>> mimics;
   add_link(*model->getRoot());
   std::vector<Visit> stack{{model->getRoot().get(), children_of(*model->getRoot())}};
   while (!stack.empty()) {
@@ -386,13 +420,8 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
       joint.damping = ud.damping;
       joint.friction = ud.friction;
     }
-    if (ujoint->mimic && joint.type != JointType::kFixed) {
-      // Not modelled yet: the joint becomes a configuration coordinate of its own.
-      mimic_warnings.push_back("urdf: joint '" + ujoint->name + "' mimics joint '" + ujoint->mimic->joint_name +
-                               "' (multiplier " + FormatNumber(ujoint->mimic->multiplier) + ", offset " +
-                               FormatNumber(ujoint->mimic->offset) +
-                               "); Chasles plans it as an independent joint (its own coordinate)");
-    }
+    // <mimic> on a fixed joint means nothing (it does not move) and is ignored.
+    if (ujoint->mimic && joint.type != JointType::kFixed) mimics.emplace_back(joints.size(), ujoint->mimic);
     urdf::LinkConstSharedPtr child = model->getLink(ujoint->child_link_name);
     if (!child) ThrowInvalid(where + " child = '" + ujoint->child_link_name + "' is not a link");
     if (link_index.count(child->name) != 0) {
@@ -405,10 +434,39 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
     stack.push_back({child.get(), children_of(*child)});
   }
 
-  // 5. SRDF: pairs of links whose collisions are never checked. A pair naming a link the URDF
+  // 5. Mimic joints: the followed joint by name; FromTree resolves chains and narrows limits.
+  if (!mimics.empty()) {
+    std::unordered_map<std::string, int> joint_index;
+    for (std::size_t j = 0; j < joints.size(); ++j) joint_index.emplace(joints[j].name, static_cast<int>(j));
+    for (const auto& [j, umimic] : mimics) {
+      const std::string where = "urdf: joint '" + joints[j].name + "'";
+      const auto it = joint_index.find(umimic->joint_name);
+      if (it == joint_index.end()) {
+        ThrowInvalid(where + " mimics joint '" + umimic->joint_name + "', which is not a joint of robot '" + robot_name +
+                     "'; a mimic joint must follow a revolute, continuous or prismatic joint of the robot");
+      }
+      if (it->second == static_cast<int>(j)) {
+        ThrowInvalid(where + " mimics itself; a mimic joint must follow another joint");
+      }
+      if (joints[it->second].type == JointType::kFixed) {
+        ThrowInvalid(where + " mimics joint '" + umimic->joint_name +
+                     "', which is fixed; a mimic joint must follow a revolute, continuous or prismatic joint");
+      }
+      if (!std::isfinite(umimic->multiplier) || umimic->multiplier == 0.0) {
+        ThrowInvalid(where + " mimic multiplier = " + FormatNumber(umimic->multiplier) +
+                     " must be finite and non-zero (a joint that never moves is a fixed joint)");
+      }
+      if (!std::isfinite(umimic->offset)) {
+        ThrowInvalid(where + " mimic offset = " + FormatNumber(umimic->offset) + " must be finite");
+      }
+      joints[j].mimic = JointMimic{it->second, umimic->multiplier, umimic->offset};
+    }
+  }
+
+  // 6. SRDF: pairs of links whose collisions are never checked. A pair naming a link the URDF
   //    lacks is skipped with a warning (an error when strict_srdf).
   std::vector<std::pair<std::string, std::string>> allowed_pairs;
-  std::vector<std::string> warnings = std::move(mimic_warnings);
+  std::vector<std::string> warnings;
   if (!srdf_text.empty()) {
     TiXmlDocument srdf_doc;
     ParseXmlOrThrow(std::string(srdf_text), "srdf", &srdf_doc);

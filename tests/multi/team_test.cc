@@ -159,6 +159,47 @@ TEST(ComposeRobotsTest, EveryLinkPoseIsTheBasePoseTimesTheRobotsOwn) {
   }
 }
 
+TEST(ComposeRobotsTest, MimicJointsKeepFollowingTheirJointMovableOrFrozen) {
+  // Two dual-arm robots (grippers whose second finger is a <mimic>) after a Panda: the movable
+  // one keeps one coordinate per gripper, the frozen one is fixed at its mimic fingers' values.
+  const std::string dir = std::string(CHASLES_SOURCE_DIR) + "/examples/robots/";
+  const auto dual = RobotModel::FromUrdf(ReadFile(dir + "dual_arm.urdf"), ReadFile(dir + "dual_arm.srdf"));
+  ASSERT_EQ(dual->num_dofs(), 13);
+  std::mt19937 rng(17);
+  Eigen::VectorXd parked_at = RandomConfiguration(*dual, &rng);
+  parked_at[6] = 0.035;  // a wide-open gripper: finger b at -0.035
+  const std::vector<PlacedRobot> team = {Place("panda", Panda(), Pose(1.5, 0.3, 0.0, 0.4)),
+                                         Place("dual", dual, Pose(0.0, -0.5, 0.1, 0.7, Eigen::Vector3d(1, 2, 3))),
+                                         Place("parked", dual, Pose(-1.0, 2.0, 0.0, 1.2), parked_at)};
+  const auto composite = ComposeRobots(team);
+  ASSERT_EQ(composite->num_dofs(), 7 + 13);
+  EXPECT_EQ(composite->num_moving_joints(), 7 + 15);
+  for (const Joint& joint : composite->joints()) {
+    if (!joint.mimic) continue;
+    EXPECT_TRUE(StartsWith(joint.name, "dual/")) << joint.name;  // the frozen robot's are fixed
+    EXPECT_EQ(composite->joints()[joint.mimic->joint].name, joint.name.substr(0, joint.name.size() - 8) + "_joint")
+        << joint.name;  // dual/left_finger_b_joint follows dual/left_finger_joint
+  }
+  std::vector<Eigen::Isometry3d> poses, chained, own;
+  for (int trial = 0; trial < 100; ++trial) {
+    const std::vector<Eigen::VectorXd> qs = {RandomConfiguration(*Panda(), &rng), RandomConfiguration(*dual, &rng),
+                                             parked_at};
+    composite->ForwardKinematics(Concat({qs[0], qs[1]}), &poses);
+    composite->ForwardKinematicsByChaining(Concat({qs[0], qs[1]}), &chained);
+    for (std::size_t k = 0; k < team.size(); ++k) {
+      const RobotModel& model = *team[k].model;
+      model.ForwardKinematics(qs[k], &own);
+      for (int l = 0; l < model.num_links(); ++l) {
+        const int c = composite->FindLink(team[k].name + "/" + model.links()[l].name);
+        ASSERT_GE(c, 0);
+        const Eigen::Matrix4d expected = (team[k].base_pose * own[l]).matrix();
+        EXPECT_LT((poses[c].matrix() - expected).cwiseAbs().maxCoeff(), 1e-12) << composite->links()[c].name;
+        EXPECT_LT((chained[c].matrix() - expected).cwiseAbs().maxCoeff(), 1e-12) << composite->links()[c].name;
+      }
+    }
+  }
+}
+
 TEST(ComposeRobotsTest, DofsAreTheMovableRobotsInOrderWithTheirLimits) {
   const std::vector<PlacedRobot> team = MixedTeam();
   const auto composite = ComposeRobots(team);

@@ -219,6 +219,57 @@ TEST(Collocation, TorqueLimitsOnThePandaHold) {
   EXPECT_GE(tight.trajectory.duration(), free.trajectory.duration() * (1.0 - 1e-6));
 }
 
+TEST(Collocation, TorqueLimitsHoldOnTheDualArmWhoseGrippersHaveMimicFingers) {
+  // examples/robots/dual_arm: each gripper coordinate drives two fingers (the second a <mimic>),
+  // so its force carries both fingers' inertia and friction (DofFriction: damping 5 + 5, Coulomb
+  // 1 + 1). The limits bind, the grippers' too; VerifyTrajectory re-checks the efforts exactly by
+  // inverse dynamics. (The result's torques are checked the same way inside the optimiser, which
+  // slows the trajectory when they exceed a limit, so this shows the limits hold, not how close
+  // the NLP's friction model is.)
+  const std::string dir = std::string(CHASLES_SOURCE_DIR) + "/examples/robots/";
+  auto robot = RobotModel::FromUrdf(ReadFile(dir + "dual_arm.urdf"), ReadFile(dir + "dual_arm.srdf"));
+  ASSERT_EQ(robot->num_dofs(), 13);
+  ASSERT_TRUE(HasInertia(*robot));
+  const auto checker = std::make_shared<CollisionChecker>(robot, std::make_shared<Scene>());
+  Eigen::VectorXd home(13), away(13);
+  home << 0.0, 0.4, 0.2, -1.2, 0.0, 0.6, 0.0, 0.4, -0.2, -1.2, 0.0, 0.6, 0.0;
+  away << 0.6, -0.3, 0.6, -0.4, 1.0, -0.5, 0.035, 0.8, -0.6, -1.8, -0.8, 0.9, 0.03;
+  ASSERT_TRUE(checker->IsMotionValid(home, away, 0.005));
+  KinematicLimits limits;
+  limits.max_velocity = robot->velocity_limits();
+  limits.max_acceleration = Eigen::VectorXd::Constant(13, 8.0);
+  limits.max_acceleration[6] = limits.max_acceleration[12] = 0.5;
+  const TimedTrajectory warm = ParameterizeTimeOptimal({home, away}, limits);
+  CollocationOptions options = TestOptions();
+  options.knots = 20;
+  const CollocationResult free = OptimizeByCollocation(warm, limits, options, checker.get());
+  ASSERT_TRUE(free.report.ok) << free.report.message;
+  Eigen::VectorXd peak = Eigen::VectorXd::Zero(13), hold = Eigen::VectorXd::Zero(13);
+  for (const TrajectorySample& s : free.trajectory.Sample(0.002)) {
+    peak = peak.cwiseMax(InverseDynamics(*robot, s.q, s.qd, s.qdd).cwiseAbs());
+    hold = hold.cwiseMax(GravityTorques(*robot, s.q).cwiseAbs());
+  }
+  // Coulomb friction is always there while a coordinate moves: keep above it (and gravity).
+  Eigen::VectorXd coulomb(13);
+  for (int d = 0; d < 13; ++d) coulomb[d] = DofFriction(*robot, d).friction;
+  EXPECT_DOUBLE_EQ(coulomb[6], 2.0);
+  limits.max_effort = (0.7 * peak).cwiseMax(1.2 * (hold + coulomb) + Eigen::VectorXd::Constant(13, 0.1));
+  // The grippers' force just above their Coulomb friction: their viscous damping (10 N·s/m, half
+  // of it the mimic finger's) is what limits their speed, so the gripper motions set the pace.
+  for (int d : {6, 12}) {
+    limits.max_effort[d] = coulomb[d] + 0.45;
+    EXPECT_GT(peak[d], limits.max_effort[d] * 1.05) << "the gripper limit must bind";
+  }
+  ASSERT_GT(MeasureTrajectory(free.trajectory, limits, {}, checker.get()).max_effort_ratio, 1.05)
+      << "the limits must bind";
+  const CollocationResult tight = OptimizeByCollocation(warm, limits, options, checker.get());
+  ExpectReportFigures(tight.report);
+  const VerificationReport verified = VerifyTrajectory(tight.trajectory, home, away, *checker, limits);
+  EXPECT_TRUE(verified.ok) << verified.reason;
+  EXPECT_LE(verified.max_effort_ratio, 1.0 + 1e-9);
+  EXPECT_LE(MeasureTrajectory(tight.trajectory, limits, {}, checker.get(), 0.002).max_effort_ratio, 1.0 + 1e-3);
+}
+
 TEST(Collocation, JerkWeightLowersTheJerkIntegral) {
   const auto checker = Panda(false);
   const KinematicLimits limits = PandaLimits(checker->robot());

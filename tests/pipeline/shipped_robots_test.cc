@@ -135,5 +135,62 @@ TEST(ShippedRobots, NoMobileManipulatorTrajectoryCollidesWhenCheckedDenselyOnFcl
   EXPECT_GT(torso_travel, 0.0);  // the prismatic joint takes part in the plans
 }
 
+TEST(ShippedRobots, DualArmWithMimicGrippersPlansAndNoTrajectoryCollidesOrExceedsItsEffort) {
+  // examples/robots/dual_arm: 13 coordinates for 15 moving joints (each gripper's second finger
+  // is a <mimic>). Plans between configurations near a table, with the robot's effort limits;
+  // every trajectory re-checked densely on FCL, every sample's effort within the limits.
+  PlannerRegistry registry;
+  RegisterDefaultPlanners(&registry);
+  const PlanningPipeline pipeline(registry);
+  const auto robot = RobotModel::FromUrdf(Read("dual_arm.urdf"), Read("dual_arm.srdf"));
+  ASSERT_EQ(robot->num_dofs(), 13);
+  auto scene = std::make_shared<Scene>();
+  Eigen::Isometry3d at = Eigen::Isometry3d::Identity();
+  at.translation() << 0.75, 0.0, 0.4;
+  scene->AddObject({"table", Shape::Box({0.6, 1.2, 0.1}, at)});
+  at.translation() << 0.55, 0.0, 0.75;
+  scene->AddObject({"post", Shape::Cylinder(0.04, 0.6, at)});
+  const auto checker = std::make_shared<const CollisionChecker>(robot, scene);
+  ASSERT_TRUE(checker->certifies_motion());
+  CollisionOptions fcl_options;
+  fcl_options.force_fcl = true;
+  const CollisionChecker fcl(robot, scene, fcl_options);
+  const int queries = std::max(4, test::TestCases(10));
+  std::mt19937_64 rng(test::TestSeed());
+  int solved = 0;
+  double gripper_travel = 0.0;
+  for (int c = 0; c < queries; ++c) {
+    PlanQuery query;
+    query.checker = checker;
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(13);
+    query.start = test::ConfigurationNearObstacles(*checker, rng, 0.05, zero);
+    do {
+      query.goal = test::ConfigurationNearObstacles(*checker, rng, 0.05, zero);
+    } while ((query.goal - query.start).cwiseAbs().maxCoeff() < 1.0);
+    query.seed = 3000 + static_cast<std::uint64_t>(c);
+    query.trajectory.max_deviation = 0.1;
+    query.trajectory.max_effort = robot->effort_limits();
+    SCOPED_TRACE("query " + std::to_string(c));
+    const PlanOutcome outcome = pipeline.Plan(query, Termination::After(std::chrono::duration<double>(test::Budget(2.0))));
+    ASSERT_NE(outcome.code, PlanOutcomeCode::kVerificationFailed) << outcome.message;
+    if (outcome.code != PlanOutcomeCode::kSuccess) continue;
+    ++solved;
+    EXPECT_EQ(outcome.verification.collision_guarantee, "certified");
+    const test::DenseCheck dense = test::CheckDensely(outcome.trajectory, fcl, 0.0005);
+    EXPECT_EQ(dense.colliding, 0) << dense.colliding << " of " << dense.states << " states collide, first at "
+                                  << dense.first_contact;
+    for (const TrajectorySample& sample : outcome.samples) {
+      ASSERT_EQ(sample.effort.size(), 13);
+      for (int d = 0; d < 13; ++d) {
+        EXPECT_LE(std::abs(sample.effort[d]), robot->effort_limits()[d] * (1.0 + 1e-6)) << robot->dof_names()[d];
+      }
+    }
+    gripper_travel += std::abs(outcome.goal[6] - query.start[6]) + std::abs(outcome.goal[12] - query.start[12]);
+  }
+  std::printf("[ stats    ] %d of %d dual-arm queries solved\n", solved, queries);
+  EXPECT_GE(solved, queries * 9 / 10);
+  EXPECT_GT(gripper_travel, 0.0);
+}
+
 }  // namespace
 }  // namespace chasles

@@ -3,6 +3,7 @@
 // (checked without the collision module: plain sphere/sphere overlap for the panda, containing
 // capsules for the others).
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -27,6 +28,10 @@ Eigen::VectorXd Vec(std::initializer_list<double> values) {
 Eigen::VectorXd PandaReady() { return Vec({0, -0.785, 0, -2.356, 0, 1.571, 0.785}); }
 Eigen::VectorXd Ur5Ready() { return Vec({0, -M_PI / 2, M_PI / 2, -M_PI / 2, -M_PI / 2, 0}); }
 Eigen::VectorXd Planar2rReady() { return Vec({M_PI / 4, M_PI / 2}); }
+/// Torso straight, both arms lowered with the elbows bent up and the grippers half open.
+Eigen::VectorXd DualArmReady() {
+  return Vec({0, 0.4, 0.2, -1.2, 0, 0.6, 0.02, 0.4, -0.2, -1.2, 0, 0.6, 0.02});
+}
 
 /// Exact sphere/sphere self-collision check (every shape must be a sphere).
 /// Returns the smallest clearance [m] over pairs not allowed by the ACM (negative = overlap).
@@ -129,8 +134,10 @@ class ExampleRobotAcmTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(ExampleRobotAcmTest, SelfCollisionFreeAtZeroAndReady) {
   const auto robot = LoadExampleRobot(GetParam());
-  const Eigen::VectorXd ready =
-      GetParam() == "panda" ? PandaReady() : GetParam() == "ur5" ? Ur5Ready() : Planar2rReady();
+  const Eigen::VectorXd ready = GetParam() == "panda"      ? PandaReady()
+                                : GetParam() == "ur5"      ? Ur5Ready()
+                                : GetParam() == "dual_arm" ? DualArmReady()
+                                                           : Planar2rReady();
   for (const Eigen::VectorXd& q : {Eigen::VectorXd(Eigen::VectorXd::Zero(robot->num_dofs())), ready}) {
     // (The panda's zero configuration is outside its joint-4 limits; it is still checked.)
     if (GetParam() != "panda" || q != Eigen::VectorXd::Zero(7)) {
@@ -179,7 +186,70 @@ TEST_P(ExampleRobotAcmTest, PairsThatAlwaysOverlapAreAllowed) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Robots, ExampleRobotAcmTest, ::testing::Values("planar_2r", "ur5", "panda"));
+INSTANTIATE_TEST_SUITE_P(Robots, ExampleRobotAcmTest, ::testing::Values("planar_2r", "ur5", "panda", "dual_arm"));
+
+TEST(ExampleRobotsTest, DualArmHasOneCoordinatePerGripperAndWarnsOfItsStaleSrdfEntry) {
+  const std::string urdf = testing::ReadExample("robots/dual_arm.urdf");
+  const std::string srdf = testing::ReadExample("robots/dual_arm.srdf");
+  const auto robot = RobotModel::FromUrdf(urdf, srdf);
+  // 1 torso + 2 × (5 arm joints + 1 gripper); the second fingers are mimic joints.
+  ASSERT_EQ(robot->num_dofs(), 13);
+  EXPECT_EQ(robot->num_moving_joints(), 15);
+  EXPECT_EQ(robot->dof_names(),
+            (std::vector<std::string>{"torso_joint", "left_shoulder_pitch", "left_shoulder_roll", "left_elbow",
+                                      "left_wrist_roll", "left_wrist_pitch", "left_finger_joint", "right_shoulder_pitch",
+                                      "right_shoulder_roll", "right_elbow", "right_wrist_roll", "right_wrist_pitch",
+                                      "right_finger_joint"}));
+  for (const char* side : {"left", "right"}) {
+    const std::string finger = std::string(side) + "_finger_joint";
+    const int d = static_cast<int>(std::find(robot->dof_names().begin(), robot->dof_names().end(), finger) -
+                                   robot->dof_names().begin());
+    EXPECT_EQ(robot->lower_limits()[d], 0.0) << side;
+    EXPECT_EQ(robot->upper_limits()[d], 0.04) << side;
+    int mimics = 0;
+    for (const Joint& joint : robot->joints()) {
+      if (!joint.mimic) continue;
+      if (joint.dof != d) continue;
+      ++mimics;
+      EXPECT_EQ(joint.name, std::string(side) + "_finger_b_joint");
+      EXPECT_EQ(joint.type, JointType::kPrismatic);
+      EXPECT_EQ(robot->joints()[joint.mimic->joint].name, finger);
+      EXPECT_EQ(joint.mimic->multiplier, -1.0);
+    }
+    EXPECT_EQ(mimics, 1) << side;
+  }
+  // The stale SRDF pair is the one warning (the mimic limits fit: nothing is narrowed).
+  ASSERT_EQ(robot->load_warnings().size(), 1u);
+  EXPECT_NE(robot->load_warnings()[0].find("'left_wrist_camera_link'"), std::string::npos) << robot->load_warnings()[0];
+  EXPECT_NE(robot->load_warnings()[0].find("the pair is skipped"), std::string::npos) << robot->load_warnings()[0];
+  try {
+    RobotModel::FromUrdf(urdf, srdf, {}, {}, /*strict_srdf=*/true);
+    ADD_FAILURE() << "strict_srdf accepted the stale entry";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("left_wrist_camera_link"), std::string::npos) << e.what();
+  }
+  // Spheres only (the fast, certified collision path), and mass on every moving link.
+  for (const Link& link : robot->links()) {
+    for (const Shape& shape : link.collision) EXPECT_EQ(shape.type, ShapeType::kSphere) << link.name;
+  }
+  for (const Joint& joint : robot->joints()) {
+    if (joint.type == JointType::kFixed) continue;
+    const Link& child = robot->links()[joint.child_link];
+    ASSERT_TRUE(child.inertial.has_value()) << child.name;
+    EXPECT_GT(child.inertial->mass, 0.0) << child.name;
+  }
+  // The fingers close towards each other and are checked against each other.
+  EXPECT_FALSE(robot->allowed_collisions().IsAllowed(robot->FindLink("left_finger_a"), robot->FindLink("left_finger_b")));
+  std::vector<Eigen::Isometry3d> poses;
+  Eigen::VectorXd q = DualArmReady();
+  for (double opening : {0.0, 0.04}) {
+    q[6] = opening;
+    robot->ForwardKinematics(q, &poses);
+    const double gap = (poses[robot->FindLink("left_finger_a")].translation() -
+                        poses[robot->FindLink("left_finger_b")].translation()).norm();
+    EXPECT_NEAR(gap, 0.03 + 2 * opening, 1e-12);
+  }
+}
 
 TEST(ExampleRobotsTest, Ur5AndPlanar2rJointOrderAndLimits) {
   const auto ur5 = LoadExampleRobot("ur5");

@@ -1,5 +1,6 @@
 // SRDF planning groups read as MoveIt reads them (issue 25, item 1: "several planning groups").
 
+#include <algorithm>
 #include <random>
 #include <string>
 #include <vector>
@@ -121,6 +122,39 @@ TEST(PlanningGroups, HoldingTheOtherJointsGivesTheSameKinematics) {
   }
   ExpectInvalid([&] { HoldJointsOutside(*robot, {1, 1}, held); },
                 "HoldJointsOutside: joint index 1 is out of range or repeated");
+}
+
+TEST(PlanningGroups, HeldGroupsOfTheDualArmKeepTheirMimicFingersRight) {
+  // left_gripper names both fingers; the second mimics the first, so the group is one joint and
+  // its mimic moves with it. left_arm holds the grippers: the mimic finger held at its mimic value.
+  const auto robot = LoadExampleRobot("dual_arm");
+  std::vector<std::string> warnings;
+  const std::vector<PlanningGroup> groups =
+      ReadPlanningGroups(*robot, ReadExample("robots/dual_arm.srdf"), false, &warnings);
+  std::mt19937_64 rng(9);
+  for (const char* name : {"left_gripper", "left_arm", "both"}) {
+    SCOPED_TRACE(name);
+    const auto group = std::find_if(groups.begin(), groups.end(), [&](const PlanningGroup& g) { return g.name == name; });
+    ASSERT_NE(group, groups.end());
+    if (std::string(name) == "left_gripper") {
+      ASSERT_EQ(group->dofs.size(), 1u);
+      EXPECT_EQ(robot->dof_names()[group->dofs[0]], "left_finger_joint");
+    }
+    const Eigen::VectorXd held = testing::RandomConfiguration(*robot, rng);
+    const auto model = HoldJointsOutside(*robot, group->dofs, held);
+    ASSERT_EQ(model->num_dofs(), static_cast<int>(group->dofs.size()));
+    for (int trial = 0; trial < 30; ++trial) {
+      const Eigen::VectorXd g = testing::RandomConfiguration(*model, rng);
+      Eigen::VectorXd full = held;
+      for (std::size_t i = 0; i < group->dofs.size(); ++i) full[group->dofs[i]] = g[static_cast<Eigen::Index>(i)];
+      std::vector<Eigen::Isometry3d> a, b;
+      model->ForwardKinematics(g, &a);
+      robot->ForwardKinematics(full, &b);
+      for (int link = 0; link < robot->num_links(); ++link) {
+        EXPECT_LT((a[link].matrix() - b[link].matrix()).cwiseAbs().maxCoeff(), 1e-12) << robot->links()[link].name;
+      }
+    }
+  }
 }
 
 }  // namespace

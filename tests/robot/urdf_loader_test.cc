@@ -175,20 +175,166 @@ TEST(UrdfLoaderTest, RejectsUnknownMeshesAndBadPrimitives) {
       "urdf: link 'a' collision[0] box size y = 0 must be > 0 and finite");
 }
 
-TEST(UrdfLoaderTest, AMimicJointIsReportedAsPlannedIndependently) {
-  // <mimic> is not modelled yet: the joint keeps a coordinate of its own, and the load says so.
+std::string Mimic(const std::string& joint, const std::string& multiplier = "1", const std::string& offset = "0") {
+  return "<mimic joint=\"" + joint + "\" multiplier=\"" + multiplier + "\" offset=\"" + offset + "\"/>";
+}
+const char* kLimit = "<limit lower=\"-1\" upper=\"1\" velocity=\"1\" effort=\"5\"/>";
+
+TEST(UrdfLoaderTest, AMimicJointHasNoCoordinateOfItsOwn) {
+  // right_finger = -left_finger + 0.25 has no coordinate; left_finger's limits [-1, 1] are
+  // narrowed to [-0.75, 1] so that right_finger stays within its own [-1, 1].
   const std::string urdf =
       Urdf(Links({"base", "left", "right"}) + RevoluteJoint("left_finger", "base", "left") +
-               RevoluteJoint("right_finger", "base", "right",
-                             "<limit lower=\"-1\" upper=\"1\" velocity=\"1\" effort=\"5\"/>"
-                             "<mimic joint=\"left_finger\" multiplier=\"-1\" offset=\"0.25\"/>"),
+               RevoluteJoint("right_finger", "base", "right", kLimit + Mimic("left_finger", "-1", "0.25")),
            "gripper");
   const auto robot = RobotModel::FromUrdf(urdf);
-  EXPECT_EQ(robot->num_dofs(), 2);
+  EXPECT_EQ(robot->num_dofs(), 1);
+  EXPECT_EQ(robot->num_moving_joints(), 2);
+  EXPECT_EQ(robot->dof_names(), std::vector<std::string>{"left_finger"});
+  const Joint& right = robot->joints()[1];
+  ASSERT_TRUE(right.mimic.has_value());
+  EXPECT_EQ(right.mimic->joint, 0);
+  EXPECT_EQ(right.mimic->multiplier, -1.0);
+  EXPECT_EQ(right.mimic->offset, 0.25);
+  EXPECT_EQ(right.dof, 0);
+  EXPECT_EQ(right.Position(Eigen::VectorXd::Constant(1, 0.5)), -0.25);
+  EXPECT_EQ(robot->lower_limits()[0], -0.75);
+  EXPECT_EQ(robot->upper_limits()[0], 1.0);
+  EXPECT_EQ(robot->joints()[1].limits.lower, -1.0);  // the mimic joint keeps its own
+  EXPECT_EQ(robot->link_chain(2), std::vector<int>{1});  // moving joint 1 (right_finger) moves 'right'
+  EXPECT_EQ(robot->load_warnings(),
+            std::vector<std::string>{"robot 'gripper': joint 'left_finger' limits [-1, 1] narrowed to [-0.75, 1] so "
+                                     "that its mimic joint 'right_finger' = -1 · 'left_finger' + 0.25 stays within [-1, 1]"});
+  // A configuration of the narrowed range is the one validated.
+  ExpectInvalid([&] { robot->ValidateConfiguration(Eigen::VectorXd::Constant(1, -0.8), "q"); },
+                "q[0] = -0.8 must be within [-0.75, 1] (joint 'left_finger')");
+}
+
+TEST(UrdfLoaderTest, MimicChainsResolveToTheActuatedJointWhateverTheDocumentOrder) {
+  // c = 0.5·b + 0.1, b = 2·a − 0.2 (b listed before a, c before b): c = a − 0.1 + 0.1 = a.
+  const std::string limit = "<limit lower=\"-3\" upper=\"3\" velocity=\"5\" effort=\"5\"/>";
+  const std::string urdf = Urdf(Links({"base", "la", "lb", "lc"}) +
+                                RevoluteJoint("c", "base", "lc", limit + Mimic("b", "0.5", "0.1")) +
+                                RevoluteJoint("b", "base", "lb", limit + Mimic("a", "2", "-0.2")) +
+                                RevoluteJoint("a", "base", "la"));
+  const auto robot = RobotModel::FromUrdf(urdf);
+  ASSERT_EQ(robot->dof_names(), std::vector<std::string>{"a"});
+  const Joint& c = robot->joints()[0];
+  ASSERT_EQ(c.name, "c");
+  ASSERT_TRUE(c.mimic.has_value());
+  EXPECT_EQ(robot->joints()[c.mimic->joint].name, "a");
+  EXPECT_EQ(c.mimic->multiplier, 1.0);
+  EXPECT_NEAR(c.mimic->offset, 0.0, 1e-16);
+  EXPECT_EQ(c.dof, 0);
+  // b = 2a − 0.2 within [-3, 3]: a within [-1.4, 1.6] ⊇ [-1, 1]; no narrowing, no warning.
+  EXPECT_TRUE(robot->load_warnings().empty());
+  // Continuous and fixed: a continuous mimic has no position limits to narrow with; <mimic> on a
+  // fixed joint is ignored (it does not move).
+  const auto cont = RobotModel::FromUrdf(
+      Urdf(Links({"base", "la", "lb", "lf"}) + RevoluteJoint("a", "base", "la") +
+           RevoluteJoint("b", "base", "lb", "<limit velocity=\"3\" effort=\"1\"/>" + Mimic("a", "3"), "continuous") +
+           "<joint name=\"f\" type=\"fixed\"><parent link=\"base\"/><child link=\"lf\"/>" + Mimic("a") + "</joint>\n"));
+  EXPECT_EQ(cont->num_dofs(), 1);
+  EXPECT_EQ(cont->lower_limits()[0], -1.0);
+  EXPECT_FALSE(cont->joints()[2].mimic.has_value());
+  EXPECT_EQ(cont->joints()[2].dof, -1);
+  EXPECT_TRUE(cont->load_warnings().empty());
+}
+
+TEST(UrdfLoaderTest, AMimicWithAFasterMultiplierLowersTheVelocityLimit) {
+  // b = 3·a at most 1 rad/s: a at most 1/3 rad/s.
+  const std::string urdf =
+      Urdf(Links({"base", "la", "lb"}) + RevoluteJoint("a", "base", "la") +
+           RevoluteJoint("b", "base", "lb", "<limit lower=\"-3\" upper=\"3\" velocity=\"1\" effort=\"5\"/>" + Mimic("a", "3")));
+  const auto robot = RobotModel::FromUrdf(urdf);
+  EXPECT_DOUBLE_EQ(robot->velocity_limits()[0], 1.0 / 3.0);
   ASSERT_EQ(robot->load_warnings().size(), 1u);
-  EXPECT_EQ(robot->load_warnings()[0],
-            "urdf: joint 'right_finger' mimics joint 'left_finger' (multiplier -1, offset 0.25); Chasles plans it "
-            "as an independent joint (its own coordinate)");
+  EXPECT_EQ(robot->load_warnings()[0].rfind("robot 'r': joint 'a' velocity limit 1 lowered to 0.333", 0), 0u)
+      << robot->load_warnings()[0];
+}
+
+TEST(UrdfLoaderTest, RejectsMimicJointsThatCannotBeModelled) {
+  const auto gripper = [](const std::string& mimic, const std::string& limit = kLimit) {
+    return Urdf(Links({"base", "left", "right", "palm"}) + RevoluteJoint("left", "base", "left") +
+                "<joint name=\"palm_joint\" type=\"fixed\"><parent link=\"base\"/><child link=\"palm\"/></joint>\n" +
+                RevoluteJoint("right", "base", "right", limit + mimic));
+  };
+  ExpectInvalid([&] { RobotModel::FromUrdf(gripper(Mimic("thumb"))); },
+                "urdf: joint 'right' mimics joint 'thumb', which is not a joint of robot 'r'; a mimic joint must "
+                "follow a revolute, continuous or prismatic joint of the robot");
+  ExpectInvalid([&] { RobotModel::FromUrdf(gripper(Mimic("palm_joint"))); },
+                "urdf: joint 'right' mimics joint 'palm_joint', which is fixed; a mimic joint must follow a revolute, "
+                "continuous or prismatic joint");
+  ExpectInvalid([&] { RobotModel::FromUrdf(gripper(Mimic("right"))); },
+                "urdf: joint 'right' mimics itself; a mimic joint must follow another joint");
+  ExpectInvalid([&] { RobotModel::FromUrdf(gripper(Mimic("left", "0"))); },
+                "urdf: joint 'right' mimic multiplier = 0 must be finite and non-zero (a joint that never moves is a "
+                "fixed joint)");
+  ExpectInvalid([&] { RobotModel::FromUrdf(gripper(Mimic("left", "nan"))); },
+                "urdf: joint 'right' mimic multiplier = nan must be finite and non-zero (a joint that never moves is a "
+                "fixed joint)");
+  ExpectInvalid([&] { RobotModel::FromUrdf(gripper(Mimic("left", "1e400"))); },
+                "urdf: joint 'right' mimic multiplier = inf must be finite and non-zero (a joint that never moves is a "
+                "fixed joint)");
+  ExpectInvalid([&] { RobotModel::FromUrdf(gripper(Mimic("left", "1", "-inf"))); },
+                "urdf: joint 'right' mimic offset = -inf must be finite");
+  // right = left + 5 within [-1, 1] needs left within [-6, -4]: outside left's [-1, 1].
+  ExpectInvalid([&] { RobotModel::FromUrdf(gripper(Mimic("left", "1", "5"))); },
+                "robot 'r': joint[2] 'right' is a mimic joint ('right' = 1 · 'left' + 5) and no value of 'left' "
+                "within [-1, 1] keeps it within its limits [-1, 1]");
+  // Two joints that mimic each other: nothing drives them.
+  ExpectInvalid(
+      [] {
+        RobotModel::FromUrdf(Urdf(Links({"base", "la", "lb"}) + RevoluteJoint("a", "base", "la", kLimit + Mimic("b")) +
+                                  RevoluteJoint("b", "base", "lb", kLimit + Mimic("a"))));
+      },
+      "robot 'r': joint[0] 'a' follows a cycle of mimic joints ('a' -> 'b' -> 'a'); a chain of mimic joints must end "
+      "at a joint that is not a mimic");
+}
+
+TEST(UrdfLoaderTest, FromTreeValidatesMimicJoints) {
+  Link base, a, b;
+  base.name = "base";
+  a.name = "a";
+  b.name = "b";
+  Joint ja, jb;
+  ja.name = "ja";
+  ja.type = JointType::kRevolute;
+  ja.parent_link = 0;
+  ja.child_link = 1;
+  ja.limits = {-1.0, 1.0, 1.0, 0.0};
+  jb = ja;
+  jb.name = "jb";
+  jb.child_link = 2;
+  jb.mimic = JointMimic{7, 1.0, 0.0};
+  ExpectInvalid([&] { RobotModel::FromTree("t", {base, a, b}, {ja, jb}); },
+                "robot 't': joint[1] 'jb' mimic.joint = 7 must be the index of another joint, within [0, 2)");
+  jb.mimic = JointMimic{0, 0.0, 0.0};
+  ExpectInvalid([&] { RobotModel::FromTree("t", {base, a, b}, {ja, jb}); },
+                "robot 't': joint[1] 'jb' mimic multiplier = 0 must be finite and non-zero (a joint that never moves "
+                "is a fixed joint)");
+  jb.mimic = JointMimic{0, 1e300, 0.0};
+  Joint jc = jb;
+  jc.name = "jc";
+  jc.child_link = 3;
+  jc.mimic = JointMimic{1, 1e300, 0.0};  // 1e300 · 1e300 overflows
+  Link c;
+  c.name = "c";
+  ExpectInvalid([&] { RobotModel::FromTree("t", {base, a, b, c}, {ja, jb, jc}); },
+                "robot 't': joint[2] 'jc' follows joint 'ja' through a chain of mimic joints with multiplier inf and "
+                "offset 0; both must be finite and the multiplier non-zero");
+  // A model rebuilt from a model's joints is the same model, with no warning repeated.
+  jb.mimic = JointMimic{0, -2.0, 0.5};
+  const auto first = RobotModel::FromTree("t", {base, a, b}, {ja, jb});
+  ASSERT_EQ(first->load_warnings().size(), 2u);  // position and velocity limits narrowed
+  const auto again = RobotModel::FromTree("t", first->links(), first->joints(), {}, {}, first->load_warnings());
+  EXPECT_EQ(again->load_warnings(), first->load_warnings());
+  EXPECT_EQ(again->lower_limits(), first->lower_limits());
+  EXPECT_EQ(again->upper_limits(), first->upper_limits());
+  EXPECT_EQ(again->velocity_limits(), first->velocity_limits());
+  EXPECT_EQ(first->lower_limits()[0], -0.25);  // −2a + 0.5 ∈ [-1, 1] ⇔ a ∈ [-0.25, 0.75]
+  EXPECT_EQ(first->upper_limits()[0], 0.75);
+  EXPECT_EQ(first->velocity_limits()[0], 0.5);
 }
 
 TEST(UrdfLoaderTest, SrdfDisablesPairsAndRejectsUnknownLinks) {
@@ -237,7 +383,7 @@ TEST(UrdfLoaderTest, SrdfDisablesPairsAndRejectsUnknownLinks) {
 }
 
 TEST(UrdfLoaderTest, ExampleRobotsLoad) {
-  for (const char* name : {"planar_2r", "ur5", "panda"}) {
+  for (const char* name : {"planar_2r", "ur5", "panda", "dual_arm"}) {
     const auto robot = testing::LoadExampleRobot(name);
     EXPECT_EQ(robot->name(), name);
   }

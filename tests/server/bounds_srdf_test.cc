@@ -4,10 +4,12 @@
 // farther out they are refused, the message printing the value and the limit exactly.
 
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "chasles/collision/collision_checker.h"
+#include "chasles/robot/robot_model.h"
 #include "server_fixture.h"
 
 namespace chasles::testing {
@@ -85,6 +87,71 @@ TEST_F(RobotsAsShipped, AnSrdfNamingUnknownLinksLoadsWithAWarningPerSkippedPair)
       << strict.error_message();
   EXPECT_NE(strict.error_message().find("link2 = 'bellows_link2' is not a link of robot 'panda'"), std::string::npos)
       << strict.error_message();
+}
+
+TEST_F(RobotsAsShipped, ARobotWithMimicGrippersUploadsPlansAndSolvesIkWithOneCoordinatePerGripper) {
+  // examples/robots/dual_arm: each gripper's second finger is a URDF <mimic> of the first.
+  v1::UploadRobotRequest upload;
+  v1::UrdfRobot* urdf = upload.mutable_robot()->mutable_urdf();
+  urdf->set_urdf(ReadText(ExamplePath("robots/dual_arm.urdf")));
+  urdf->set_srdf(ReadText(ExamplePath("robots/dual_arm.srdf")));
+  v1::UploadRobotResponse uploaded;
+  const grpc::Status status = Upload(upload, &uploaded);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(uploaded.joint_names_size(), 13);
+  EXPECT_EQ(uploaded.joint_names(6), "left_finger_joint");
+  EXPECT_EQ(uploaded.joint_names(12), "right_finger_joint");
+  ASSERT_EQ(uploaded.warnings_size(), 1);  // the SRDF's stale pair, nothing about the mimic joints
+  EXPECT_NE(uploaded.warnings(0).find("'left_wrist_camera_link'"), std::string::npos) << uploaded.warnings(0);
+  EXPECT_EQ(uploaded.collision_model().kind(), "shapes");
+
+  // Plan: grippers from closed to open while the arms move.
+  v1::PlanRequest plan;
+  plan.set_robot_id(uploaded.robot_id());
+  const std::vector<double> goal = {0.3, 0.4, 0.2, -1.2, 0.3, 0.6, 0.04, 0.4, -0.2, -1.2, -0.3, 0.6, 0.03};
+  for (int i = 0; i < 13; ++i) plan.mutable_start()->add_positions(0.0);
+  for (double g : goal) plan.mutable_goal()->add_positions(g);
+  plan.mutable_planner()->set_planner_id("rrt_connect");
+  plan.set_time_budget(3.0);
+  plan.set_seed(7);
+  v1::PlanResponse planned;
+  const grpc::Status planned_status = server_->Plan(plan, &planned);
+  ASSERT_TRUE(planned_status.ok()) << planned_status.error_message();
+  ASSERT_EQ(planned.outcome(), v1::SUCCESS) << planned.message();
+  ASSERT_EQ(planned.trajectory().joint_names_size(), 13);
+  ASSERT_GT(planned.trajectory().points_size(), 1);
+  const v1::TrajectoryPoint& last = planned.trajectory().points(planned.trajectory().points_size() - 1);
+  ASSERT_EQ(last.positions_size(), 13);
+  EXPECT_NEAR(last.positions(6), 0.04, 1e-9);
+  EXPECT_EQ(last.efforts_size(), 13);  // the robot has inertia on every moving link, fingers included
+
+  // InverseKinematics of the left gripper's tool frame, at a pose the arm reaches (FK of `goal`).
+  const auto robot = RobotModel::FromUrdf(urdf->urdf(), urdf->srdf());
+  std::vector<Eigen::Isometry3d> poses;
+  robot->ForwardKinematics(Eigen::Map<const Eigen::VectorXd>(goal.data(), 13), &poses);
+  const Eigen::Isometry3d target = poses[robot->FindLink("left_tcp")];
+  v1::InverseKinematicsRequest ik;
+  ik.set_robot_id(uploaded.robot_id());
+  ik.set_link("left_tcp");
+  ik.mutable_pose()->mutable_position()->set_x(target.translation().x());
+  ik.mutable_pose()->mutable_position()->set_y(target.translation().y());
+  ik.mutable_pose()->mutable_position()->set_z(target.translation().z());
+  const Eigen::Quaterniond rotation(target.linear());
+  ik.mutable_pose()->mutable_orientation()->set_x(rotation.x());
+  ik.mutable_pose()->mutable_orientation()->set_y(rotation.y());
+  ik.mutable_pose()->mutable_orientation()->set_z(rotation.z());
+  ik.mutable_pose()->mutable_orientation()->set_w(rotation.w());
+  ik.set_time_budget(1.0);
+  v1::InverseKinematicsResponse solved;
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+  ASSERT_TRUE(server_->stub().InverseKinematics(&context, ik, &solved).ok());
+  ASSERT_TRUE(solved.solved()) << solved.message();
+  ASSERT_EQ(solved.solutions(0).positions_size(), 13);
+  Eigen::VectorXd q(13);
+  for (int i = 0; i < 13; ++i) q[i] = solved.solutions(0).positions(i);
+  robot->ForwardKinematics(q, &poses);
+  EXPECT_LT((poses[robot->FindLink("left_tcp")].translation() - target.translation()).norm(), 1e-4 + 1e-12);
 }
 
 TEST_F(RobotsAsShipped, ValuesJustOutsideALimitAreClampedWithinTheToleranceAndRefusedBeyondIt) {

@@ -129,16 +129,20 @@ std::shared_ptr<const RobotModel> ComposeRobots(const std::vector<PlacedRobot>& 
     joints.push_back(base);
 
     // The robot's joints keep their (topological) order, so the composite's configuration is
-    // the movable robots' configurations concatenated.
+    // the movable robots' configurations concatenated. A mimic joint keeps following its joint
+    // (index shifted); frozen, it is fixed at its value like the rest.
+    const int first_joint = static_cast<int>(joints.size());
     for (const Joint& joint : model.joints()) {
       Joint copy = joint;
       copy.name = prefix + joint.name;
       copy.parent_link = first_link + joint.parent_link;
       copy.child_link = first_link + joint.child_link;
       if (frozen && joint.type != JointType::kFixed) {
-        copy.origin = FrozenOrigin(joint, robot.frozen_at[joint.dof]);
+        copy.origin = FrozenOrigin(joint, joint.Position(robot.frozen_at));
         copy.type = JointType::kFixed;
+        copy.mimic.reset();
       }
+      if (copy.mimic) copy.mimic->joint += first_joint;
       copy.dof = -1;
       joints.push_back(std::move(copy));
     }

@@ -97,13 +97,15 @@ class CollisionChecker {
   /// When certifies_motion() (fast sphere path, scene of primitives and gridded occupancy maps
   /// only): conservative advancement. Every robot sphere k has, per joint i of its chain, a lever
   /// arm R_ik [m per rad] bounding how far its centre moves per unit of q_i (prismatic: 1), so
-  /// from s to s + Δs its centre moves at most D_k·Δs, D_k = Σ_i |b_i − a_i|·R_ik [m]. At each
+  /// from s to s + Δs its centre moves at most D_k·Δs, D_k = Σ_i |b_i − a_i|·R_ik [m] (a mimic
+  /// joint driven by q_i adds |multiplier| times its own lever to R_ik). At each
   /// evaluated state the exact sphere–primitive clearances d_k, sphere–sphere self distances
   /// s_kl (both net of padding) and, for occupancy maps, a lower bound m on the clearance
   /// (the sphere grown by m misses every occupied voxel) give the next step
   /// Δs = min(d_k / D_k, s_kl / (D'_k + D'_l)), where D' sums only the joints not shared by
   /// the two links' chains (shared joints move both spheres rigidly: their distance is
-  /// unchanged); a distance <= 0 is a collision. b is checked exactly with IsValid and a against
+  /// unchanged; a coordinate that drives a different joint above each link, such as a finger and
+  /// its mimic, is not shared); a distance <= 0 is a collision. b is checked exactly with IsValid and a against
   /// the limits (the limit box is convex; the advancement's first state is a full check of a),
   /// then, on a
   /// segment longer than 0.25 in some joint, interior states in bisection order until they are

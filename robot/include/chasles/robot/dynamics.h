@@ -11,10 +11,15 @@
 ///   τ_f,i = damping_i · q̇_i + friction_i · sign(q̇_i), with sign(0) = 0.
 ///   Armature: M(q) gets armature_i on its diagonal, so InverseDynamics adds armature_i · q̈_i.
 ///   c(q, q̇) and g(q) never contain friction or armature.
+/// - Mimic joints (Joint::mimic) move with the dof that drives them: θ_j = m_j q_d + c_j,
+///   θ̇_j = m_j q̇_d, θ̈_j = m_j q̈_d; the generalised force of dof d is Σ m_j τ_j over the joints it
+///   drives (virtual work), so M(q) = Aᵀ M_θ A with A(j, d) = m_j, and a mimic joint's damping,
+///   friction and armature reach dof d as DofFriction says.
 /// - Preconditions (sizes asserted in Debug builds only): every vector has num_dofs()
 ///   entries and is finite. No function throws; the returned vector/matrix is the only heap
 ///   allocation of InverseDynamics, MassMatrix, CoriolisTorques and GravityTorques (per-link
-///   scratch is thread_local). All functions are thread-safe.
+///   scratch is thread_local; a robot with mimic joints adds M_θ and A to MassMatrix). All
+///   functions are thread-safe.
 /// - Cost, 7-DOF Panda on one core: InverseDynamics ≈ 0.6 µs, MassMatrix ≈ 1 µs (composite rigid
 ///   body algorithm), ForwardDynamics ≈ 2 µs (LDLT), CoriolisMatrix ≈ 15 µs (exact Christoffel
 ///   symbols from ∂M/∂q via body-Jacobian derivatives; meant for analysis, not inner loops).
@@ -30,9 +35,21 @@ struct DynamicsOptions {
   bool include_friction = true;  ///< joint viscous damping and Coulomb friction from the model
 };
 
-/// True when every moving joint drives a body with mass > 0: its child link plus every link
-/// attached to that child through fixed joints only (so M(q) is positive definite in practice).
+/// True when every dof drives (through its own joint or a mimic joint) a body with mass > 0: the
+/// joint's child link plus every link attached to that child through fixed joints only (so M(q)
+/// is positive definite in practice).
 bool HasInertia(const RobotModel& robot);
+
+/// Friction and armature acting on one configuration entry.
+struct JointFriction {
+  double damping = 0.0;   ///< viscous [N·m·s/rad] or [N·s/m]: τ = damping · q̇
+  double friction = 0.0;  ///< Coulomb [N·m] or [N]: τ = friction · sign(q̇)
+  double armature = 0.0;  ///< added to M(q)'s diagonal [kg·m²] or [kg]
+};
+/// What InverseDynamics applies to dof `dof`: over the joints j it drives (its own, m_j = 1, and
+/// its mimic joints), damping Σ m_j² damping_j, friction Σ |m_j| friction_j, armature
+/// Σ m_j² armature_j. Precondition: 0 <= dof < num_dofs().
+JointFriction DofFriction(const RobotModel& robot, int dof);
 
 /// τ for (q, q̇, q̈) by recursive Newton–Euler. All vectors have num_dofs() entries.
 Eigen::VectorXd InverseDynamics(const RobotModel& robot, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,

@@ -2,6 +2,9 @@
 /// \file
 /// Jacobians and manipulability (Lynch & Park, ch. 5). Columns follow the configuration-vector
 /// order of the model; columns of joints that do not move the link are zero. Rows are (ω, v).
+/// A configuration entry that also drives mimic joints on the link's chain moves the link
+/// through each of them: its column is Σ multiplier_j · (column of joint j) over those joints
+/// (its own joint with multiplier 1), dθ_j = multiplier_j dq.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -17,9 +17,8 @@ namespace chasles {
 /// A named set of the robot's joints that move together, e.g. "left_arm".
 struct PlanningGroup {
   std::string name;
-  /// Configuration indices of the group's joints, ascending (the robot's joint order). Joints
-  /// without a coordinate of their own (fixed joints; a mimic joint follows the joint it mimics)
-  /// are not listed.
+  /// Configuration indices of the group's joints, ascending (the robot's joint order). Fixed
+  /// joints have none; a mimic joint counts as the joint it follows.
   std::vector<int> dofs;
 };
 
@@ -37,8 +36,8 @@ std::vector<PlanningGroup> ReadPlanningGroups(const RobotModel& robot, std::stri
                                               std::vector<std::string>* warnings);
 
 /// The robot planning only the joints `dofs` (configuration indices, ascending): every other
-/// joint held fixed where `q` puts it, so the model's configuration is those joints in the
-/// robot's order. Links, shapes, inertias, allowed pairs, kind and name are the robot's.
+/// joint held fixed where `q` puts it (with the mimic joints that follow it), so the model's
+/// configuration is those joints in the robot's order. Links, shapes, inertias, allowed pairs, kind and name are the robot's.
 /// \throws Error(kInvalidArgument) when q has the wrong size or a dof is out of range or repeated.
 std::shared_ptr<const RobotModel> HoldJointsOutside(const RobotModel& robot, const std::vector<int>& dofs,
                                                     const Eigen::VectorXd& q);

@@ -17,33 +17,9 @@
 
 #include "chasles/robot/geometry.h"
 #include "chasles/robot/input_limits.h"
+#include "chasles/robot/joint.h"
 
 namespace chasles {
-
-enum class JointType { kRevolute, kContinuous, kPrismatic, kFixed };
-
-/// Limits of one joint. Continuous joints get lower = -π, upper = π (the planner does not
-/// wrap around; documented in the API).
-struct JointLimits {
-  double lower = 0.0;     ///< [rad] or [m]
-  double upper = 0.0;     ///< [rad] or [m]
-  double velocity = 0.0;  ///< > 0 [rad/s] or [m/s]
-  double effort = 0.0;    ///< >= 0 [N·m] or [N]; 0 = unknown
-};
-
-struct Joint {
-  std::string name;
-  JointType type = JointType::kFixed;
-  int parent_link = -1;
-  int child_link = -1;
-  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  ///< child frame in parent frame at q = 0
-  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();             ///< unit, in the joint (child) frame
-  JointLimits limits;
-  double damping = 0.0;   ///< viscous friction [N·m·s/rad] or [N·s/m], >= 0
-  double friction = 0.0;  ///< Coulomb friction [N·m] or [N], >= 0
-  double armature = 0.0;  ///< reflected rotor inertia added to M(q)'s diagonal [kg·m²] or [kg], >= 0
-  int dof = -1;  ///< index into the configuration vector, -1 for fixed joints
-};
 
 /// What kind of robot a model is: which motions its configuration coordinates describe, and so
 /// which planners apply (an arm's joints move freely; a car's (x, y, θ) do not).
@@ -106,10 +82,13 @@ class RobotModel {
   /// Before any XML parser runs, both texts are checked against `limits` (max_document_bytes,
   /// max_xml_depth) and the URDF's <link>/<joint> elements are counted (max_links for each,
   /// max_dofs for joints that are not fixed).
+  /// A moving joint with `<mimic joint= multiplier= offset=>` gets no configuration coordinate:
+  /// its value is multiplier · (the followed joint's) + offset (chains resolved; see FromTree).
   /// \throws Error(kInvalidArgument) naming the element for malformed URDF/SRDF (unparsable XML,
   ///         a NUL byte, SRDF naming an unknown link when strict_srdf, a mesh that is not in `meshes`, limits with
   ///         lower > upper, velocity <= 0, non-finite numbers, negative mass, an inertia with a
-  ///         negative principal moment, planar/floating joints).
+  ///         negative principal moment, planar/floating joints, a mimic naming an unknown or fixed
+  ///         joint, a mimic multiplier that is 0 or not finite).
   /// \throws Error(kResourceExhausted) when a text is beyond `limits`, e.g.
   ///         `urdf nests XML elements 100000 deep, more than the cap of 64 (InputLimits::max_xml_depth); …`.
   /// SRDF entries that name a link the URDF lacks (published SRDFs routinely keep pairs of
@@ -121,11 +100,12 @@ class RobotModel {
       const InputLimits& limits = {}, bool strict_srdf = false);
 
   const std::string& name() const { return name_; }
+  /// Configuration coordinates: one per actuated joint (moving, not a mimic joint).
   int num_dofs() const { return static_cast<int>(dof_joints_.size()); }
   int num_links() const { return static_cast<int>(links_.size()); }
   const std::vector<Link>& links() const { return links_; }
   const std::vector<Joint>& joints() const { return joints_; }
-  /// Names of the active (non-fixed) joints in configuration-vector order: the order of joints().
+  /// Names of the actuated joints (moving, not mimic) in configuration-vector order: the order of joints().
   /// For FromUrdf that is a depth-first traversal of the tree from the root link, the child
   /// joints of a link visited in URDF document order (so for a serial arm: root to tip).
   const std::vector<std::string>& dof_names() const { return dof_names_; }
@@ -143,14 +123,28 @@ class RobotModel {
   /// Index of a link by name, or -1.
   int FindLink(std::string_view name) const;
 
-  /// Space screw axis S_dof = (ω, v) of configuration entry `dof`, at q = 0.
-  const Eigen::Matrix<double, 6, 1>& space_screw_axis(int dof) const { return screws_[dof]; }
+  /// The PoE factors are the moving joints: every joint that is not fixed, mimic joints
+  /// included, in joints() order. Moving joint m has value θ_m = multiplier · q[dof] + offset
+  /// (joints()[moving_joint(m)].Position(q)). Without mimic joints, moving joint m is
+  /// configuration entry m.
+  int num_moving_joints() const { return static_cast<int>(moving_joints_.size()); }
+  /// Index into joints() of moving joint `m`.
+  int moving_joint(int m) const { return moving_joints_[m]; }
+  /// Index among the moving joints of joints()[joint], -1 for a fixed joint.
+  int moving_index(int joint) const { return moving_index_[joint]; }
+  /// True when some joint is a mimic joint (num_moving_joints() > num_dofs()).
+  bool has_mimic_joints() const { return num_moving_joints() != num_dofs(); }
+
+  /// Space screw axis S_m = (ω, v) of moving joint `m`, at q = 0.
+  const Eigen::Matrix<double, 6, 1>& space_screw_axis(int m) const { return screws_[m]; }
   /// Pose of `link` in the base (root link) frame at q = 0 (the PoE "M").
   const Eigen::Isometry3d& home_pose(int link) const { return home_[link]; }
-  /// Configuration entries that move `link`, root to tip (the PoE product order).
+  /// Moving joints that move `link`, root to tip (the PoE product order). Configuration entry
+  /// d moves the link through each of them that it drives (joints()[moving_joint(m)].dof == d).
   const std::vector<int>& link_chain(int link) const { return chains_[link]; }
 
-  /// Forward kinematics of every link by PoE: T_link = e^[S_a]q_a ··· e^[S_k]q_k M_link.
+  /// Forward kinematics of every link by PoE: T_link = e^[S_a]θ_a ··· e^[S_k]θ_k M_link over
+  /// the link's chain, θ the moving joints' values at q.
   /// `poses` is resized to num_links(). Precondition: q.size() == num_dofs().
   void ForwardKinematics(const Eigen::VectorXd& q, std::vector<Eigen::Isometry3d>* poses) const;
 
@@ -167,7 +161,14 @@ class RobotModel {
 
   /// Builds a model directly from links and joints (used by URDF/DH/PoE front ends and tests).
   /// Joints must be in topological order (a joint's parent link is the root or the child of an
-  /// earlier joint). \throws Error(kInvalidArgument) when the tree is malformed.
+  /// earlier joint). A moving joint with `mimic` follows joints[mimic->joint] (any joint of the
+  /// list, before or after it): chains are resolved (θ_c = m₂(m₁θ_a + c₁) + c₂), and the
+  /// actuated joint's position limits are intersected with the preimage of every (non-continuous)
+  /// mimic joint's, its velocity limit with the mimic's velocity limit / |multiplier|; each
+  /// narrowing is reported in load_warnings().
+  /// \throws Error(kInvalidArgument) when the tree is malformed, a mimic follows itself, an
+  /// unknown or a fixed joint, or forms a cycle, its (composed) multiplier is 0 or not finite,
+  /// its offset not finite, or no value of the actuated joint keeps it within its limits.
   /// `load_warnings`: what the front end skipped while reading the description (load_warnings()).
   static std::shared_ptr<const RobotModel> FromTree(std::string name, std::vector<Link> links,
                                                     std::vector<Joint> joints,
@@ -191,13 +192,19 @@ class RobotModel {
   Eigen::VectorXd lower_, upper_, velocity_, effort_;
   AllowedCollisionMatrix acm_;
   MotionModel motion_;
+  // Per moving joint m (PoE factor), in joints() order.
+  std::vector<int> moving_joints_;  ///< joint index of each moving joint
+  std::vector<int> moving_index_;   ///< per joint: its moving index, -1 if fixed
   std::vector<Eigen::Matrix<double, 6, 1>> screws_;
   std::vector<Eigen::Isometry3d> home_;
-  std::vector<std::vector<int>> chains_;
-  std::vector<int> parent_dof_of_link_;  ///< nearest moving ancestor dof, -1 if none
-  std::vector<int> parent_dof_of_dof_;   ///< nearest moving ancestor dof of each dof, -1 if none
-  std::vector<Eigen::Vector3d> screw_w_cross_v_;  ///< ω × v of each dof (FK hot path)
-  std::vector<char> dof_prismatic_;               ///< 1 for prismatic dofs
+  std::vector<std::vector<int>> chains_;  ///< per link: moving joints, root to tip
+  std::vector<int> parent_moving_of_link_;    ///< nearest moving ancestor joint, -1 if none
+  std::vector<int> parent_moving_of_moving_;  ///< nearest moving ancestor of each moving joint, -1 if none
+  std::vector<Eigen::Vector3d> screw_w_cross_v_;  ///< ω × v of each moving joint (FK hot path)
+  std::vector<char> moving_prismatic_;            ///< 1 for prismatic moving joints
+  std::vector<int> moving_dof_;                   ///< θ_m = mult · q[dof] + offset
+  std::vector<double> moving_multiplier_, moving_offset_;
+  std::vector<char> moving_mimic_;                ///< 1 for mimic joints (else θ_m = q[dof] exactly)
   int root_ = 0;
   std::vector<std::string> load_warnings_;
 };
