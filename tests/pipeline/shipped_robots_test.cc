@@ -135,23 +135,18 @@ TEST(ShippedRobots, NoMobileManipulatorTrajectoryCollidesWhenCheckedDenselyOnFcl
   EXPECT_GT(torso_travel, 0.0);  // the prismatic joint takes part in the plans
 }
 
-TEST(ShippedRobots, DualArmWithMimicGrippersPlansAndNoTrajectoryCollidesOrExceedsItsEffort) {
-  // examples/robots/dual_arm: 13 coordinates for 15 moving joints (each gripper's second finger
-  // is a <mimic>). Plans between configurations near a table, with the robot's effort limits;
-  // every trajectory re-checked densely on FCL, every sample's effort within the limits.
+/// Plans between configurations near the obstacles of `scene` for `robot` (certified on its
+/// spheres), with the robot's effort limits; every trajectory re-checked densely on FCL, every
+/// sample's effort within the limits. Returns how far the gripper coordinates `grippers` moved
+/// in all (they must be planned too, not only carried).
+double PlanNearObstaclesAndRecheck(const std::shared_ptr<const RobotModel>& robot, std::shared_ptr<const Scene> scene,
+                                   std::uint64_t seed_base, const std::vector<int>& grippers) {
   PlannerRegistry registry;
   RegisterDefaultPlanners(&registry);
   const PlanningPipeline pipeline(registry);
-  const auto robot = RobotModel::FromUrdf(Read("dual_arm.urdf"), Read("dual_arm.srdf"));
-  ASSERT_EQ(robot->num_dofs(), 13);
-  auto scene = std::make_shared<Scene>();
-  Eigen::Isometry3d at = Eigen::Isometry3d::Identity();
-  at.translation() << 0.75, 0.0, 0.4;
-  scene->AddObject({"table", Shape::Box({0.6, 1.2, 0.1}, at)});
-  at.translation() << 0.55, 0.0, 0.75;
-  scene->AddObject({"post", Shape::Cylinder(0.04, 0.6, at)});
+  const int n = robot->num_dofs();
   const auto checker = std::make_shared<const CollisionChecker>(robot, scene);
-  ASSERT_TRUE(checker->certifies_motion());
+  EXPECT_TRUE(checker->certifies_motion());
   CollisionOptions fcl_options;
   fcl_options.force_fcl = true;
   const CollisionChecker fcl(robot, scene, fcl_options);
@@ -162,17 +157,17 @@ TEST(ShippedRobots, DualArmWithMimicGrippersPlansAndNoTrajectoryCollidesOrExceed
   for (int c = 0; c < queries; ++c) {
     PlanQuery query;
     query.checker = checker;
-    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(13);
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
     query.start = test::ConfigurationNearObstacles(*checker, rng, 0.05, zero);
     do {
       query.goal = test::ConfigurationNearObstacles(*checker, rng, 0.05, zero);
     } while ((query.goal - query.start).cwiseAbs().maxCoeff() < 1.0);
-    query.seed = 3000 + static_cast<std::uint64_t>(c);
+    query.seed = seed_base + static_cast<std::uint64_t>(c);
     query.trajectory.max_deviation = 0.1;
     query.trajectory.max_effort = robot->effort_limits();
     SCOPED_TRACE("query " + std::to_string(c));
     const PlanOutcome outcome = pipeline.Plan(query, Termination::After(std::chrono::duration<double>(test::Budget(2.0))));
-    ASSERT_NE(outcome.code, PlanOutcomeCode::kVerificationFailed) << outcome.message;
+    EXPECT_NE(outcome.code, PlanOutcomeCode::kVerificationFailed) << outcome.message;
     if (outcome.code != PlanOutcomeCode::kSuccess) continue;
     ++solved;
     EXPECT_EQ(outcome.verification.collision_guarantee, "certified");
@@ -180,16 +175,56 @@ TEST(ShippedRobots, DualArmWithMimicGrippersPlansAndNoTrajectoryCollidesOrExceed
     EXPECT_EQ(dense.colliding, 0) << dense.colliding << " of " << dense.states << " states collide, first at "
                                   << dense.first_contact;
     for (const TrajectorySample& sample : outcome.samples) {
-      ASSERT_EQ(sample.effort.size(), 13);
-      for (int d = 0; d < 13; ++d) {
+      EXPECT_EQ(sample.effort.size(), n);
+      for (int d = 0; d < n && d < sample.effort.size(); ++d) {
         EXPECT_LE(std::abs(sample.effort[d]), robot->effort_limits()[d] * (1.0 + 1e-6)) << robot->dof_names()[d];
       }
     }
-    gripper_travel += std::abs(outcome.goal[6] - query.start[6]) + std::abs(outcome.goal[12] - query.start[12]);
+    for (int g : grippers) gripper_travel += std::abs(outcome.goal[g] - query.start[g]);
   }
-  std::printf("[ stats    ] %d of %d dual-arm queries solved\n", solved, queries);
+  std::printf("[ stats    ] %d of %d %s queries solved\n", solved, queries, robot->name().c_str());
   EXPECT_GE(solved, queries * 9 / 10);
-  EXPECT_GT(gripper_travel, 0.0);
+  return gripper_travel;
+}
+
+TEST(ShippedRobots, DualArmWithMimicGrippersPlansAndNoTrajectoryCollidesOrExceedsItsEffort) {
+  // examples/robots/dual_arm: 13 coordinates for 15 moving joints (each gripper's second finger
+  // is a <mimic>), near a table and a post.
+  const auto robot = RobotModel::FromUrdf(Read("dual_arm.urdf"), Read("dual_arm.srdf"));
+  ASSERT_EQ(robot->num_dofs(), 13);
+  auto scene = std::make_shared<Scene>();
+  Eigen::Isometry3d at = Eigen::Isometry3d::Identity();
+  at.translation() << 0.75, 0.0, 0.4;
+  scene->AddObject({"table", Shape::Box({0.6, 1.2, 0.1}, at)});
+  at.translation() << 0.55, 0.0, 0.75;
+  scene->AddObject({"post", Shape::Cylinder(0.04, 0.6, at)});
+  EXPECT_GT(PlanNearObstaclesAndRecheck(robot, scene, 3000, {6, 12}), 0.0);
+}
+
+TEST(ShippedRobots, Ur5WithAGripperPlansAndNoTrajectoryCollidesOrExceedsItsEffort) {
+  // examples/robots/ur5_gripper: a 6-joint arm with a parallel gripper whose second finger is a
+  // <mimic>: 7 coordinates, the SRDF's groups "manipulator" and "gripper".
+  const auto robot = RobotModel::FromUrdf(Read("ur5_gripper.urdf"), Read("ur5_gripper.srdf"));
+  ASSERT_EQ(robot->num_dofs(), 7);
+  EXPECT_EQ(robot->dof_names()[6], "finger_joint");
+  EXPECT_TRUE(robot->load_warnings().empty());
+  const CollisionChecker alone(robot, std::make_shared<Scene>());
+  EXPECT_TRUE(alone.IsValid(Eigen::VectorXd::Zero(7)));
+  Eigen::VectorXd open = Eigen::VectorXd::Zero(7);
+  open[6] = 0.04;
+  EXPECT_TRUE(alone.IsValid(open));
+  // The shelf of the mesh-robot bench: a table, a board over it, two posts.
+  auto scene = std::make_shared<Scene>();
+  const auto box = [&](const char* name, double sx, double sy, double sz, double x, double y, double z) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() << x, y, z;
+    scene->AddObject({name, Shape::Box({sx, sy, sz}, pose)});
+  };
+  box("table", 0.6, 1.2, 0.04, 0.55, 0.0, -0.05);
+  box("board", 0.35, 1.0, 0.02, 0.55, 0.0, 0.4);
+  box("post_left", 0.04, 0.04, 0.8, 0.35, 0.45, 0.35);
+  box("post_right", 0.04, 0.04, 0.8, 0.35, -0.45, 0.35);
+  EXPECT_GT(PlanNearObstaclesAndRecheck(robot, scene, 5000, {6}), 0.0);
 }
 
 }  // namespace

@@ -383,7 +383,7 @@ TEST(UrdfLoaderTest, SrdfDisablesPairsAndRejectsUnknownLinks) {
 }
 
 TEST(UrdfLoaderTest, ExampleRobotsLoad) {
-  for (const char* name : {"planar_2r", "ur5", "panda", "dual_arm"}) {
+  for (const char* name : {"planar_2r", "ur5", "panda", "dual_arm", "ur5_gripper"}) {
     const auto robot = testing::LoadExampleRobot(name);
     EXPECT_EQ(robot->name(), name);
   }
