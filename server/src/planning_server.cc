@@ -376,11 +376,17 @@ class PlanningService final : public RawService {
                                               grpc::ByteBuffer* out) override {
     return Serve<v1::InverseKinematicsRequest, v1::InverseKinematicsResponse>(
         "InverseKinematics", context, in, out, Where::kPool, [this](auto& call) {
-          const v1::InverseKinematicsRequest& request = call.request;
           v1::InverseKinematicsResponse& response = call.response;
-          // Robot (inline, id or default) and, for collision_free, the scene's cached checker.
-          const StoredRobot robot = RobotOfRequest(*store_, request);
+          // Robot (inline, id or default) and, for collision_free, the scene's cached checker;
+          // with a planning group, the robot held outside it at initial_guess.
+          StoredRobot robot = RobotOfRequest(*store_, call.request);
           response.set_robot_id(robot.id);
+          v1::InverseKinematicsRequest grouped;
+          if (!call.request.group().empty()) {
+            grouped = call.request;
+            robot = NarrowToGroup(robot, &grouped);
+          }
+          const v1::InverseKinematicsRequest& request = call.request.group().empty() ? call.request : grouped;
           IkRequest ik = IkRequestFromProto(request, *robot.model);
           std::string scene_id = "-";
           std::shared_ptr<const CollisionChecker> checker;
@@ -853,28 +859,56 @@ class PlanningService final : public RawService {
     if (!status.ok()) throw StatusError{status};
   }
 
-  /// PlanRequest.group: the robot with every joint outside the group held where the start puts
-  /// it (its checker cached per robot, group and held values), and the request's start and goal
-  /// narrowed to the group's joints; start values clamped within bounds_tolerance are reported
-  /// in *warnings. \throws Error(kInvalidArgument) naming the field.
-  static StoredRobot NarrowToGroup(const StoredRobot& robot, v1::PlanRequest* request,
-                                   std::vector<std::string>* warnings) {
-    const RobotModel& model = *robot.model;
+  /// The planning group `name` of `robot`. \throws Error(kInvalidArgument) listing its groups.
+  static const PlanningGroup& FindGroup(const StoredRobot& robot, const std::string& name) {
     const auto group = std::find_if(robot.groups.begin(), robot.groups.end(),
-                                    [&](const PlanningGroup& g) { return g.name == request->group(); });
+                                    [&](const PlanningGroup& g) { return g.name == name; });
     if (group == robot.groups.end()) {
       std::string known;
       for (const PlanningGroup& g : robot.groups) known += (known.empty() ? "'" : ", '") + g.name + "'";
-      ThrowInvalid("group = '" + request->group() + "' is not a planning group of robot '" + model.name() + "' (" +
+      ThrowInvalid("group = '" + name + "' is not a planning group of robot '" + robot.model->name() + "' (" +
                    (known.empty() ? std::string("its SRDF defines none") : "its groups: " + known) + ")");
     }
-    const std::vector<int>& dofs = group->dofs;
-    std::vector<char> in_group(static_cast<std::size_t>(model.num_dofs()), 0);
-    std::string joint_names;
-    for (int dof : dofs) {
-      in_group[static_cast<std::size_t>(dof)] = 1;
-      joint_names += (joint_names.empty() ? "'" : ", '") + model.dof_names()[dof] + "'";
+    return *group;
+  }
+
+  /// `robot` with every joint outside `group` held where `state` (every joint) puts it; its id
+  /// names the group and the held values exactly (hex floats), so two states never share a
+  /// cached checker.
+  static StoredRobot HoldOutside(const StoredRobot& robot, const PlanningGroup& group, const Eigen::VectorXd& state) {
+    std::vector<char> in_group(static_cast<std::size_t>(robot.model->num_dofs()), 0);
+    for (int dof : group.dofs) in_group[static_cast<std::size_t>(dof)] = 1;
+    std::string id = robot.id + "/group=" + group.name + "/held=";
+    for (int i = 0; i < robot.model->num_dofs(); ++i) {
+      if (in_group[static_cast<std::size_t>(i)]) continue;
+      char text[40];
+      std::snprintf(text, sizeof(text), "%a,", state[i]);
+      id += text;
     }
+    StoredRobot held;
+    held.id = std::move(id);
+    held.model = HoldJointsOutside(*robot.model, group.dofs, state);
+    return held;
+  }
+
+  /// The group's joints as 'a', 'b', … for messages.
+  static std::string GroupJointNames(const RobotModel& model, const PlanningGroup& group) {
+    std::string names;
+    for (int dof : group.dofs) names += (names.empty() ? "'" : ", '") + model.dof_names()[dof] + "'";
+    return names;
+  }
+
+  /// PlanRequest.group: the robot with every joint outside the group held where the start puts
+  /// it, and the request's start and goal narrowed to the group's joints; start values clamped
+  /// within bounds_tolerance are reported in *warnings. \throws Error(kInvalidArgument) naming
+  /// the field.
+  static StoredRobot NarrowToGroup(const StoredRobot& robot, v1::PlanRequest* request,
+                                   std::vector<std::string>* warnings) {
+    const RobotModel& model = *robot.model;
+    const PlanningGroup& group = FindGroup(robot, request->group());
+    const std::vector<int>& dofs = group.dofs;
+    std::vector<char> in_group(static_cast<std::size_t>(model.num_dofs()), 0);
+    for (int dof : dofs) in_group[static_cast<std::size_t>(dof)] = 1;
     const double tolerance = BoundsToleranceFromProto(request->bounds_tolerance());
     const Eigen::VectorXd start =
         ConfigurationFromProto(request->start().positions(), model, "start.positions", tolerance, warnings);
@@ -887,33 +921,40 @@ class PlanningService final : public RawService {
           if (in_group[static_cast<std::size_t>(i)] || goal[i] == start[i]) continue;
           ThrowInvalid("goal.positions[" + std::to_string(i) + "] = " + FormatNumber(goal[i]) +
                        " differs from start.positions[" + std::to_string(i) + "] = " + FormatNumber(start[i]) +
-                       ", but joint '" + model.dof_names()[i] + "' is not in group '" + group->name +
-                       "' and stays where the start puts it: give the group's joints (" + joint_names +
-                       "), or every joint with those outside the group equal to the start's");
+                       ", but joint '" + model.dof_names()[i] + "' is not in group '" + group.name +
+                       "' and stays where the start puts it: give the group's joints (" +
+                       GroupJointNames(model, group) + "), or every joint with those outside the group equal to "
+                       "the start's");
         }
         request->mutable_goal()->clear_positions();
         for (int dof : dofs) request->mutable_goal()->add_positions(goal[dof]);
       } else if (given != static_cast<int>(dofs.size())) {
-        ThrowInvalid("goal.positions has " + std::to_string(given) + " values; group '" + group->name +
+        ThrowInvalid("goal.positions has " + std::to_string(given) + " values; group '" + group.name +
                      "' of robot '" + model.name() + "' has " + std::to_string(dofs.size()) + " joints (" +
-                     joint_names + "): give those, or all " + std::to_string(model.num_dofs()) +
+                     GroupJointNames(model, group) + "): give those, or all " + std::to_string(model.num_dofs()) +
                      " of the robot's joints");
       }
     }
     request->mutable_start()->clear_positions();
     for (int dof : dofs) request->mutable_start()->add_positions(start[dof]);
-    // The held values exactly (hex floats) in the id, so two starts never share a checker.
-    std::string id = robot.id + "/group=" + group->name + "/held=";
-    for (int i = 0; i < model.num_dofs(); ++i) {
-      if (in_group[static_cast<std::size_t>(i)]) continue;
-      char text[40];
-      std::snprintf(text, sizeof(text), "%a,", start[i]);
-      id += text;
+    return HoldOutside(robot, group, start);
+  }
+
+  /// InverseKinematicsRequest.group: the robot with every joint outside the group held where
+  /// initial_guess (every joint, required) puts it, and initial_guess narrowed to the group's
+  /// joints. \throws Error(kInvalidArgument) naming the field.
+  static StoredRobot NarrowToGroup(const StoredRobot& robot, v1::InverseKinematicsRequest* request) {
+    const RobotModel& model = *robot.model;
+    const PlanningGroup& group = FindGroup(robot, request->group());
+    if (request->initial_guess_size() != model.num_dofs()) {
+      ThrowInvalid("initial_guess has " + std::to_string(request->initial_guess_size()) + " values; with group '" +
+                   group.name + "' it must hold all " + std::to_string(model.num_dofs()) + " joints of robot '" +
+                   model.name() + "': those outside the group are held at them");
     }
-    StoredRobot held;
-    held.id = std::move(id);
-    held.model = HoldJointsOutside(model, dofs, start);
-    return held;
+    const Eigen::VectorXd guess = ConfigurationFromProto(request->initial_guess(), model, "initial_guess");
+    request->clear_initial_guess();
+    for (int dof : group.dofs) request->add_initial_guess(guess[dof]);
+    return HoldOutside(robot, group, guess);
   }
 
   /// A plan's warnings: an inline robot's load warnings (an uploaded one reported them at

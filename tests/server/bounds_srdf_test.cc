@@ -339,5 +339,59 @@ TEST_F(RobotsAsShipped, APlanningGroupMovesOnlyItsJoints) {
             "'arm_with_torso')");
 }
 
+// InverseKinematicsRequest.group: only the group's joints move, the others held at
+// initial_guess; every solution, put back into the whole robot, reaches the pose (checked here
+// with the robot's own forward kinematics).
+TEST_F(RobotsAsShipped, InverseKinematicsSolvesForAPlanningGroup) {
+  v1::InverseKinematicsRequest request;
+  request.mutable_robot()->mutable_urdf()->set_urdf(ReadText(ExamplePath("robots/mobile_manipulator.urdf")));
+  request.mutable_robot()->mutable_urdf()->set_srdf(ReadText(ExamplePath("robots/mobile_manipulator.srdf")));
+  const auto full = RobotModel::FromUrdf(ReadText(ExamplePath("robots/mobile_manipulator.urdf")),
+                                         ReadText(ExamplePath("robots/mobile_manipulator.srdf")));
+  Eigen::VectorXd target(8);
+  target << 0.3, 0.5, -0.3, 0.4, 1.1, -0.2, 0.7, 0.1;
+  std::vector<Eigen::Isometry3d> poses;
+  full->ForwardKinematics(target, &poses);
+  const int link = full->FindLink("gripper_link");
+  ASSERT_GE(link, 0);
+  const Eigen::Isometry3d& pose = poses[static_cast<std::size_t>(link)];
+  const Eigen::Quaterniond rotation(pose.linear());
+  request.set_link("gripper_link");
+  request.mutable_pose()->mutable_position()->set_x(pose.translation().x());
+  request.mutable_pose()->mutable_position()->set_y(pose.translation().y());
+  request.mutable_pose()->mutable_position()->set_z(pose.translation().z());
+  request.mutable_pose()->mutable_orientation()->set_w(rotation.w());
+  request.mutable_pose()->mutable_orientation()->set_x(rotation.x());
+  request.mutable_pose()->mutable_orientation()->set_y(rotation.y());
+  request.mutable_pose()->mutable_orientation()->set_z(rotation.z());
+  request.set_group("arm");
+  request.set_max_solutions(3);
+  request.set_time_budget(1.0);
+  const double guess[8] = {0.3, 0.2, 0.0, 0.0, 0.9, 0.0, 0.5, 0.0};  // the torso held at 0.3 m
+  for (double v : guess) request.add_initial_guess(v);
+  v1::InverseKinematicsResponse response;
+  grpc::ClientContext context;
+  grpc::Status status = server_->stub().InverseKinematics(&context, request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_TRUE(response.solved()) << response.message();
+  ASSERT_EQ(response.joint_names_size(), 7);
+  EXPECT_EQ(response.joint_names(0), "shoulder_pan_joint");
+  for (const v1::JointState& solution : response.solutions()) {
+    ASSERT_EQ(solution.positions_size(), 7);
+    Eigen::VectorXd q(8);
+    q[0] = 0.3;
+    for (int i = 0; i < 7; ++i) q[i + 1] = solution.positions(i);
+    full->ForwardKinematics(q, &poses);
+    EXPECT_LT((poses[static_cast<std::size_t>(link)].translation() - pose.translation()).norm(), 1e-4 + 1e-9);
+  }
+  request.clear_initial_guess();
+  grpc::ClientContext again;
+  status = server_->stub().InverseKinematics(&again, request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message(),
+            "initial_guess has 0 values; with group 'arm' it must hold all 8 joints of robot 'mobile_manipulator': "
+            "those outside the group are held at them");
+}
+
 }  // namespace
 }  // namespace chasles::testing
