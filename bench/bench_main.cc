@@ -109,15 +109,6 @@ std::shared_ptr<const Scene> LoadScene(const std::string& name) {
   return SceneFromProto(scene);
 }
 
-Eigen::VectorXd RandomConfiguration(const RobotModel& robot, std::mt19937_64* rng) {
-  Eigen::VectorXd q(robot.num_dofs());
-  for (int i = 0; i < q.size(); ++i) {
-    const double u = static_cast<double>((*rng)() >> 11) * 0x1.0p-53;
-    q[i] = robot.lower_limits()[i] + u * (robot.upper_limits()[i] - robot.lower_limits()[i]);
-  }
-  return q;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Full-robot state checks per second.
 

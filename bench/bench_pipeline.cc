@@ -32,6 +32,15 @@
 
 namespace chasles {
 
+Eigen::VectorXd RandomConfiguration(const RobotModel& robot, std::mt19937_64* rng) {
+  Eigen::VectorXd q(robot.num_dofs());
+  for (int i = 0; i < q.size(); ++i) {
+    const double u = static_cast<double>((*rng)() >> 11) * 0x1.0p-53;
+    q[i] = robot.lower_limits()[i] + u * (robot.upper_limits()[i] - robot.lower_limits()[i]);
+  }
+  return q;
+}
+
 double QuantileOrNan(std::vector<double> values, double p) {
   return values.empty() ? std::nan("") : ::chasles::Quantile(std::move(values), p);
 }

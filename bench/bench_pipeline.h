@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,9 +20,14 @@
 namespace chasles {
 
 class CollisionChecker;
+class RobotModel;
 
 /// The whole file at `path` (the benches' robots and scenes). \throws std::runtime_error naming it.
 std::string ReadFile(const std::string& path);
+
+/// A configuration drawn uniformly within the robot's joint limits (uniform doubles from the
+/// generator's top 53 bits: the same sequence on every platform).
+Eigen::VectorXd RandomConfiguration(const RobotModel& robot, std::mt19937_64* rng);
 
 /// The report's quantile (linear interpolation), but nan for no values: a table cell, not a 0.
 double QuantileOrNan(std::vector<double> values, double p);

@@ -17,7 +17,7 @@
 #include <utility>
 #include <vector>
 
-#include "bench_pipeline.h"  // ReadFile, QuantileOrNan
+#include "bench_pipeline.h"  // ReadFile, QuantileOrNan, RandomConfiguration
 #include "chasles/collision/collision_checker.h"
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/planners/registry.h"
@@ -38,15 +38,6 @@ std::shared_ptr<Scene> ShelfScene() {
   box("post_left", 0.04, 0.04, 1.0, 0.45, 0.5, 0.6);
   box("post_right", 0.04, 0.04, 1.0, 0.45, -0.5, 0.6);
   return scene;
-}
-
-Eigen::VectorXd RandomConfiguration(const RobotModel& robot, std::mt19937_64* rng) {
-  Eigen::VectorXd q(robot.num_dofs());
-  for (int i = 0; i < q.size(); ++i) {
-    const double u = static_cast<double>((*rng)() >> 11) * 0x1.0p-53;
-    q[i] = robot.lower_limits()[i] + u * (robot.upper_limits()[i] - robot.lower_limits()[i]);
-  }
-  return q;
 }
 
 /// States every `step` of joint motion along each piece, and the end, on `fcl`: true when one collides.
