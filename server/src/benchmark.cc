@@ -253,6 +253,10 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
       const v1::PlanRequest& problem = r.problems(static_cast<int>(p)).request();
       const std::string prefix = "problems[" + std::to_string(p) + "].request.";
       if (problem.has_workcell()) ThrowInvalid(prefix + "workcell is set; benchmarks plan without workcells");
+      if (!problem.group().empty()) {
+        ThrowInvalid(prefix + "group = '" + problem.group() +
+                     "' is set; benchmark problems plan every joint of their robot (plan a group with Plan)");
+      }
       StoredRobot robot;
       StoredScene scene;
       double padding = 0.0;

@@ -343,6 +343,15 @@ TEST(Benchmark, BadInputGetsNamedErrors) {
   s = error(r);
   EXPECT_NE(s.error_message().find("configs has 0 entries"), std::string::npos) << s.error_message();
 
+  // A planning group is Plan's (and IK's); a benchmark problem naming one is refused, not run on
+  // every joint.
+  r = good;
+  r.mutable_problems(1)->mutable_request()->set_group("arm");
+  s = error(r);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(s.error_message(), "problems[1].request.group = 'arm' is set; benchmark problems plan every joint of "
+                               "their robot (plan a group with Plan)");
+
   r = good;
   r.mutable_configs(1)->mutable_planner()->set_planner_id("rrt_sideways");
   s = error(r);
