@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../box_arm.h"
 #include "dense_check.h"
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/planners/registry.h"
@@ -20,16 +21,7 @@
 namespace chasles {
 namespace {
 
-// Link 1: 1.0 m, link 2: 0.8 m, both 4 cm square boxes in the plane z = 0.
-constexpr const char* kBoxArm = R"(<robot name="box_2r">
-  <link name="base"/>
-  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>
-    <limit lower="-3.14159" upper="3.14159" velocity="2" effort="10"/></joint>
-  <link name="l1"><collision><origin xyz="0.5 0 0"/><geometry><box size="1.0 0.04 0.04"/></geometry></collision></link>
-  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="1.0 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-3.14159" upper="3.14159" velocity="2" effort="10"/></joint>
-  <link name="l2"><collision><origin xyz="0.4 0 0"/><geometry><box size="0.8 0.04 0.04"/></geometry></collision></link>
-</robot>)";
+using test::kBoxArmUrdf;
 
 /// A 2 mm plate along the x axis, from r = `inner` to r = 2.1 m, 1 m tall.
 std::shared_ptr<const Scene> Plate(double inner) {
@@ -65,7 +57,7 @@ class VerificationRepair : public ::testing::Test {
   VerificationRepair() : pipeline_(registry_) { RegisterDefaultPlanners(&registry_); }
   PlannerRegistry registry_;
   PlanningPipeline pipeline_;
-  std::shared_ptr<const RobotModel> robot_ = RobotModel::FromUrdf(kBoxArm);
+  std::shared_ptr<const RobotModel> robot_ = RobotModel::FromUrdf(kBoxArmUrdf);
 };
 
 TEST_F(VerificationRepair, PathsThroughAThinPlateAreReplannedAndReturnedFree) {

@@ -10,6 +10,7 @@
 
 #include "chasles/collision/collision_checker.h"
 #include "chasles/robot/robot_model.h"
+#include "../box_arm.h"
 #include "server_fixture.h"
 
 namespace chasles::testing {
@@ -217,15 +218,7 @@ TEST_F(RobotsAsShipped, AWorkcellPlanClampsWithinTheToleranceToo) {
 // checks step over the plate, the verification at 0.005 rad finds it.
 TEST_F(RobotsAsShipped, AVerificationFailureIsRepairedAndTheResponseSaysWhat) {
   v1::PlanRequest request;
-  request.mutable_robot()->mutable_urdf()->set_urdf(R"(<robot name="box_2r">
-  <link name="base"/>
-  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>
-    <limit lower="-3.14159" upper="3.14159" velocity="2" effort="10"/></joint>
-  <link name="l1"><collision><origin xyz="0.5 0 0"/><geometry><box size="1.0 0.04 0.04"/></geometry></collision></link>
-  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="1.0 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-3.14159" upper="3.14159" velocity="2" effort="10"/></joint>
-  <link name="l2"><collision><origin xyz="0.4 0 0"/><geometry><box size="0.8 0.04 0.04"/></geometry></collision></link>
-</robot>)");
+  request.mutable_robot()->mutable_urdf()->set_urdf(test::kBoxArmUrdf);
   v1::Box* plate = request.mutable_scene()->add_boxes();
   plate->set_name("plate");
   plate->mutable_size()->set_x(0.8);
