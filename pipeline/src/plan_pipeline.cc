@@ -31,6 +31,69 @@ std::string DescribeContact(const CollisionResult& c) {
                           : "link '" + c.link_a + "' touches '" + c.other + "'";
 }
 
+/// Indices k of the segments path[k] → path[k + 1] that are not free: certified when the checker
+/// certifies motions, else checked at `step`. Adds the states evaluated to *state_checks.
+std::vector<std::size_t> CollidingSegments(const JointPath& path, const CollisionChecker& checker, double step,
+                                           std::uint64_t* state_checks) {
+  std::vector<std::size_t> colliding;
+  CheckCounters counters;
+  for (std::size_t k = 0; k + 1 < path.size(); ++k) {
+    const bool free = checker.certifies_motion() ? checker.IsMotionCertified(path[k], path[k + 1], &counters)
+                                                 : checker.IsMotionValid(path[k], path[k + 1], step, &counters);
+    if (!free) colliding.push_back(k);
+  }
+  *state_checks += counters.state_checks;
+  return colliding;
+}
+
+/// `path` with each segment listed in `colliding` (ascending) replaced by an RRT-Connect path
+/// between its ends planned at `step` (segment k seeded seed + k), ending exactly at the next
+/// waypoint. Adds the planners' counts to *out; empty with *failed naming the segment (and
+/// `how` it was found colliding) when one finds no path.
+JointPath ReplanSegments(const PlannerRegistry& registry, const PlanQuery& query, const JointPath& path,
+                         const std::vector<std::size_t>& colliding, double step, std::uint64_t seed,
+                         const std::string& how, const Termination& termination, PlanOutcome* out,
+                         std::string* failed) {
+  JointPath replanned;
+  std::size_t next = 0;  // first waypoint of `path` not yet copied
+  for (std::size_t k : colliding) {
+    replanned.insert(replanned.end(), path.begin() + static_cast<std::ptrdiff_t>(next),
+                     path.begin() + static_cast<std::ptrdiff_t>(k));
+    std::unique_ptr<Planner> planner = registry.Create("rrt_connect");
+    PlanningProblem segment;
+    segment.checker = query.checker;
+    segment.start = path[k];
+    segment.goal = path[k + 1];
+    segment.goal_tolerance = 0.0;
+    segment.max_step = step;
+    segment.seed = seed + k;
+    planner->Setup(segment);
+    const PlannerResult result = planner->Solve(termination);
+    out->graph_states += result.graph_states;
+    out->state_checks += result.state_checks;
+    if (result.status != PlanStatus::kExactSolution || result.path.empty()) {
+      *failed = "replanning segment path[" + std::to_string(k) + "] → path[" + std::to_string(k + 1) + "] " + how +
+                " found no path: " + result.message;
+      return {};
+    }
+    replanned.insert(replanned.end(), result.path.begin(), result.path.end() - 1);
+    replanned.push_back(path[k + 1]);  // the segment ends exactly where the path goes on
+    next = k + 2;
+  }
+  replanned.insert(replanned.end(), path.begin() + static_cast<std::ptrdiff_t>(next), path.end());
+  return replanned;
+}
+
+/// "path[3] → path[4], path[7] → path[8]" (the first four, then "…").
+std::string DescribeSegments(const std::vector<std::size_t>& segments) {
+  std::string text;
+  for (std::size_t j = 0; j < segments.size() && j < 4; ++j) {
+    text += (j ? ", path[" : "path[") + std::to_string(segments[j]) + "] → path[" + std::to_string(segments[j] + 1) + "]";
+  }
+  if (segments.size() > 4) text += ", …";
+  return text;
+}
+
 }  // namespace
 
 const char* ToString(PlanOutcomeCode code) {
@@ -254,62 +317,25 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
         break;
       }
       const std::string how = checker.certifies_motion() ? std::string("certified") : "at " + FormatNumber(step) + " rad";
-      std::vector<std::size_t> colliding;
-      CheckCounters counters;
-      for (std::size_t k = 0; k + 1 < path.size(); ++k) {
-        const bool free = checker.certifies_motion() ? checker.IsMotionCertified(path[k], path[k + 1], &counters)
-                                                     : checker.IsMotionValid(path[k], path[k + 1], step, &counters);
-        if (!free) colliding.push_back(k);
-      }
-      out.state_checks += counters.state_checks;
+      const std::vector<std::size_t> colliding = CollidingSegments(path, checker, step, &out.state_checks);
       if (colliding.empty()) {
         out.repair.actions.push_back("re-checked the path's " + std::to_string(path.size() - 1) + " segments " + how +
                                      ": all free, so replanning cannot help");
         break;
       }
-      JointPath replanned;
       std::string failed;
-      std::size_t next = 0;  // first waypoint of `path` not yet copied
-      for (std::size_t k : colliding) {
-        replanned.insert(replanned.end(), path.begin() + static_cast<std::ptrdiff_t>(next),
-                         path.begin() + static_cast<std::ptrdiff_t>(k));
-        std::unique_ptr<Planner> segment_planner = registry_.Create("rrt_connect");
-        PlanningProblem segment;
-        segment.checker = query.checker;
-        segment.start = path[k];
-        segment.goal = path[k + 1];
-        segment.goal_tolerance = 0.0;
-        segment.max_step = step;
-        segment.seed = query.seed + 7919u * static_cast<std::uint64_t>(round + 1) + k;
-        segment_planner->Setup(segment);
-        const PlannerResult result = segment_planner->Solve(repair_termination);
-        out.graph_states += result.graph_states;
-        out.state_checks += result.state_checks;
-        if (result.status != PlanStatus::kExactSolution || result.path.empty()) {
-          failed = "replanning segment path[" + std::to_string(k) + "] → path[" + std::to_string(k + 1) + "] " + how +
-                   " found no path: " + result.message;
-          break;
-        }
-        replanned.insert(replanned.end(), result.path.begin(), result.path.end() - 1);
-        replanned.push_back(path[k + 1]);  // the segment ends exactly where the path goes on
-        next = k + 2;
-      }
-      if (!failed.empty()) {
+      const JointPath replanned =
+          ReplanSegments(registry_, query, path, colliding, step, query.seed + 7919u * static_cast<std::uint64_t>(round + 1),
+                         how, repair_termination, &out, &failed);
+      if (replanned.empty()) {
         out.repair.actions.push_back(failed);
         break;
       }
-      replanned.insert(replanned.end(), path.begin() + static_cast<std::ptrdiff_t>(next), path.end());
-      std::string segments;
-      for (std::size_t j = 0; j < colliding.size() && j < 4; ++j) {
-        segments += (j ? ", path[" : "path[") + std::to_string(colliding[j]) + "] → path[" +
-                    std::to_string(colliding[j] + 1) + "]";
-      }
-      if (colliding.size() > 4) segments += ", …";
       path = shortcut ? shorten(replanned, step) : replanned;
       timed = RunTrajectoryStage(path, checker, spec, verify_step, termination);
       std::string action = "replanned " + std::to_string(colliding.size()) + " segment" +
-                           std::string(colliding.size() == 1 ? " that collides " : "s that collide ") + how + " (" + segments +
-                           ") with RRT-Connect at " + FormatNumber(step) + " rad" + (shortcut ? ", shortened" : "") +
+                           std::string(colliding.size() == 1 ? " that collides " : "s that collide ") + how + " (" +
+                           DescribeSegments(colliding) + ") with RRT-Connect at " + FormatNumber(step) + " rad" + (shortcut ? ", shortened" : "") +
                            ", " + std::to_string(path.size()) + " waypoints: ";
       if (timed.code == TrajectoryStageCode::kSuccess) {
         action += "verified";

@@ -92,6 +92,14 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
   out.optimizer.requested = spec.method;
 
   // 1. The exact parameterisation: the answer for TOPP / NONE, the warm start otherwise.
+  const auto time_optimal_options = [&](double max_deviation) {
+    TimeOptimalOptions options;
+    options.max_deviation = max_deviation;
+    options.start_velocity = spec.start_velocity;
+    options.end_velocity = spec.end_velocity;
+    options.max_joint_step = max_joint_step;
+    return options;
+  };
   auto t = Clock::now();
   TimedTrajectory exact;
   PostProcessing exact_kind = method == PostProcessing::kNone ? PostProcessing::kNone : PostProcessing::kTimeOptimal;
@@ -104,12 +112,9 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
       exact = ParameterizeRestToRest(path, limits);
       exact_kind = PostProcessing::kNone;
     } else {
-      TimeOptimalOptions options;
-      options.max_deviation = method == PostProcessing::kNone ? 0.0 : spec.max_deviation;
-      options.start_velocity = spec.start_velocity;
-      options.end_velocity = spec.end_velocity;
-      options.max_joint_step = max_joint_step;
-      exact = ParameterizeTimeOptimal(path, limits, options, &checker, &out.optimizer.time_optimal);
+      exact = ParameterizeTimeOptimal(path, limits,
+                                      time_optimal_options(method == PostProcessing::kNone ? 0.0 : spec.max_deviation),
+                                      &checker, &out.optimizer.time_optimal);
     }
   } catch (const Error& e) {
     if (e.code() != ErrorCode::kFailedPrecondition) throw;
@@ -187,14 +192,9 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
     out.repair.failure = out.verification.reason;
     const int blends = out.optimizer.time_optimal.blends;
     if (exact_kind == PostProcessing::kTimeOptimal && blends > 0) {
-      TimeOptimalOptions options;
-      options.max_deviation = 0.0;
-      options.start_velocity = spec.start_velocity;
-      options.end_velocity = spec.end_velocity;
-      options.max_joint_step = max_joint_step;
       TimeOptimalReport report;
       try {
-        TimedTrajectory stopped = ParameterizeTimeOptimal(path, limits, options, &checker, &report);
+        TimedTrajectory stopped = ParameterizeTimeOptimal(path, limits, time_optimal_options(0.0), &checker, &report);
         const VerificationReport checked = VerifyTrajectory(stopped, path.front(), path.back(), checker, limits, verify);
         std::string action = "retimed without the " + std::to_string(blends) + " corner blend" +
                              (blends == 1 ? "" : "s") + " (stopping at every waypoint): ";

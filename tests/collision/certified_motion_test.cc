@@ -200,17 +200,6 @@ TEST(CertifiedCurve, FallsBackToDiscreteStatesWhenTheCheckerCannotCertify) {
   EXPECT_FALSE(checker.IsCurveCertified([](double s, Eigen::VectorXd* q) { *q = Q1(0.0025 * s); }, Q1(0.0025)));
 }
 
-/// The robot's collision sphere centres in their link frames, in the checker's sphere order
-/// (link order, then shape order), and each one's link.
-void SphereCentres(const RobotModel& robot, std::vector<Eigen::Vector3d>* centres, std::vector<int>* link_of) {
-  for (int l = 0; l < robot.num_links(); ++l) {
-    for (const Shape& s : robot.links()[l].collision) {
-      centres->push_back(s.pose.translation());
-      link_of->push_back(l);
-    }
-  }
-}
-
 TEST(CertifiedMotion, AStartInSelfCollisionIsRejected) {
   // a is checked by the advancement's first state (every pair at s = 0), self pairs included.
   auto panda = test::LoadRobot("panda");
@@ -235,7 +224,7 @@ TEST(CertifiedMotion, LeverArmBoundHoldsAlongSegments) {
   ASSERT_TRUE(checker.certifies_motion());
   std::vector<Eigen::Vector3d> centres;
   std::vector<int> link_of;
-  SphereCentres(*panda, &centres, &link_of);
+  test::SphereCentres(*panda, &centres, &link_of);
   std::mt19937_64 rng(7);
   std::vector<Eigen::Isometry3d> p0, p1;
   double worst = 0.0;  // largest displacement / bound seen
@@ -301,7 +290,7 @@ TEST(CertifiedMotion, LeverBoundsEveryJointsSpeedOfEverySphere) {
     ASSERT_TRUE(checker.certifies_motion()) << robot->name();
     std::vector<Eigen::Vector3d> centres;
     std::vector<int> link_of;
-    SphereCentres(*robot, &centres, &link_of);
+    test::SphereCentres(*robot, &centres, &link_of);
     std::mt19937_64 rng(11);
     std::vector<Eigen::Isometry3d> lo, hi;
     double closest = 0.0;  // largest speed / bound seen

@@ -84,15 +84,6 @@ std::shared_ptr<const RobotModel> CoupledRobot() {
 
 std::vector<std::shared_ptr<const RobotModel>> Robots() { return {CoupledRobot(), test::LoadRobot("dual_arm")}; }
 
-void SphereCentres(const RobotModel& robot, std::vector<Eigen::Vector3d>* centres, std::vector<int>* link_of) {
-  for (int l = 0; l < robot.num_links(); ++l) {
-    for (const Shape& s : robot.links()[l].collision) {
-      centres->push_back(s.pose.translation());
-      link_of->push_back(l);
-    }
-  }
-}
-
 TEST(CertifiedMimic, FastPathFkIsTheRobotModelsFkInEveryBuildVariant) {
   std::mt19937_64 rng(3);
   std::vector<Eigen::Isometry3d> poses;
@@ -131,7 +122,7 @@ TEST(CertifiedMimic, LeverBoundsEveryDofsSpeedOfEverySphere) {
     ASSERT_TRUE(checker.certifies_motion()) << robot->name();
     std::vector<Eigen::Vector3d> centres;
     std::vector<int> link_of;
-    SphereCentres(*robot, &centres, &link_of);
+    test::SphereCentres(*robot, &centres, &link_of);
     std::mt19937_64 rng(11);
     std::vector<Eigen::Isometry3d> lo, hi;
     double closest = 0.0;
@@ -162,7 +153,7 @@ TEST(CertifiedMimic, SweepBoundHoldsAlongStraightMotions) {
     CollisionChecker checker(robot, std::make_shared<Scene>());
     std::vector<Eigen::Vector3d> centres;
     std::vector<int> link_of;
-    SphereCentres(*robot, &centres, &link_of);
+    test::SphereCentres(*robot, &centres, &link_of);
     std::mt19937_64 rng(7);
     std::vector<Eigen::Isometry3d> p0, p1;
     double worst = 0.0;

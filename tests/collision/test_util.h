@@ -6,6 +6,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 #include <google/protobuf/util/json_util.h>
@@ -81,6 +82,17 @@ inline std::shared_ptr<const RobotModel> LoadRobot(const std::string& name) {
   std::string srdf;
   if (srdf_file) srdf = ReadFile(ExamplePath("robots/" + name + ".srdf"));
   return RobotModel::FromUrdf(urdf, srdf);
+}
+
+/// The robot's collision sphere centres in their link frames, in the checker's sphere order
+/// (link order, then shape order), and each one's link.
+inline void SphereCentres(const RobotModel& robot, std::vector<Eigen::Vector3d>* centres, std::vector<int>* link_of) {
+  for (int l = 0; l < robot.num_links(); ++l) {
+    for (const Shape& s : robot.links()[l].collision) {
+      centres->push_back(s.pose.translation());
+      link_of->push_back(l);
+    }
+  }
 }
 
 inline Eigen::VectorXd RandomConfig(const RobotModel& robot, std::mt19937_64& rng) {
