@@ -248,4 +248,89 @@ std::vector<LinkProximity> ObstacleProximity::Query(const Eigen::VectorXd& q, do
   return out;
 }
 
+struct LinkGroupDistance::Impl {
+  struct Placed {
+    int link = -1;
+    LinkShape shape;
+  };
+  std::vector<std::vector<Placed>> groups;  // shapes per group
+};
+
+LinkGroupDistance::LinkGroupDistance(std::shared_ptr<const RobotModel> robot, std::vector<std::vector<int>> groups)
+    : robot_(std::move(robot)), impl_(std::make_unique<Impl>()) {
+  if (!robot_) ThrowInvalid("link group distance: robot is null");
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    std::vector<Impl::Placed> shapes;
+    for (std::size_t i = 0; i < groups[g].size(); ++i) {
+      const int link = groups[g][i];
+      if (link < 0 || link >= robot_->num_links()) {
+        ThrowInvalid("link group distance: groups[" + std::to_string(g) + "][" + std::to_string(i) + "] = " +
+                     std::to_string(link) + " is not a link of robot '" + robot_->name() + "' (" +
+                     std::to_string(robot_->num_links()) + " links)");
+      }
+      for (const Shape& s : robot_->links()[link].collision) shapes.push_back({link, {MakeGeom(s), s.pose}});
+    }
+    impl_->groups.push_back(std::move(shapes));
+  }
+}
+
+LinkGroupDistance::~LinkGroupDistance() = default;
+
+double LinkGroupDistance::Min(const Eigen::VectorXd& q, double max_distance, int* group_a, int* group_b) const {
+  if (q.size() != robot_->num_dofs()) {
+    ThrowInvalid("link group distance: q has " + std::to_string(q.size()) + " values, robot '" + robot_->name() +
+                 "' has " + std::to_string(robot_->num_dofs()) + " joints");
+  }
+  if (!(max_distance > 0.0)) {
+    ThrowInvalid("link group distance: max_distance = " + FormatNumber(max_distance) + " must be > 0");
+  }
+  if (group_a != nullptr) *group_a = -1;
+  if (group_b != nullptr) *group_b = -1;
+  std::vector<Eigen::Isometry3d> poses;
+  robot_->ForwardKinematics(q, &poses);
+  struct World {
+    fcl::Transform3d tf;
+    Eigen::Vector3d center;
+    double radius;
+    const fcl::CollisionGeometryd* geom;
+  };
+  std::vector<std::vector<World>> world(impl_->groups.size());
+  for (std::size_t g = 0; g < impl_->groups.size(); ++g) {
+    for (const Impl::Placed& p : impl_->groups[g]) {
+      const Eigen::Isometry3d pose = poses[p.link] * p.shape.local;
+      world[g].push_back({pose, pose * p.shape.g.center, p.shape.g.radius, p.shape.g.geom.get()});
+    }
+  }
+  // Each group's bounding sphere (about the mean of its shapes' centres) prunes whole pairs.
+  std::vector<Eigen::Vector3d> group_center(world.size(), Eigen::Vector3d::Zero());
+  std::vector<double> group_radius(world.size(), -1.0);
+  for (std::size_t g = 0; g < world.size(); ++g) {
+    if (world[g].empty()) continue;
+    for (const World& w : world[g]) group_center[g] += w.center;
+    group_center[g] /= static_cast<double>(world[g].size());
+    for (const World& w : world[g]) group_radius[g] = std::max(group_radius[g], (w.center - group_center[g]).norm() + w.radius);
+  }
+  double best = max_distance;
+  for (std::size_t g = 0; g < world.size(); ++g) {
+    for (std::size_t h = g + 1; h < world.size(); ++h) {
+      if (world[g].empty() || world[h].empty()) continue;
+      if ((group_center[g] - group_center[h]).norm() - group_radius[g] - group_radius[h] >= best) continue;
+      for (const World& a : world[g]) {
+        for (const World& b : world[h]) {
+          if ((a.center - b.center).norm() - a.radius - b.radius >= best) continue;
+          fcl::DistanceRequestd request;
+          fcl::DistanceResultd result(best);
+          fcl::distance(a.geom, a.tf, b.geom, b.tf, request, result);
+          if (result.o1 == nullptr || !(result.min_distance < best)) continue;
+          best = std::max(0.0, result.min_distance);
+          if (group_a != nullptr) *group_a = static_cast<int>(g);
+          if (group_b != nullptr) *group_b = static_cast<int>(h);
+          if (best <= 0.0) return 0.0;
+        }
+      }
+    }
+  }
+  return best;
+}
+
 }  // namespace chasles

@@ -35,12 +35,14 @@ void ToProto(const Eigen::VectorXd& v, google::protobuf::RepeatedField<double>* 
 
 CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& request, std::shared_ptr<const Scene> scene,
                                              const TeamRobotResolver& resolve, const PlannerRegistry& registry,
-                                             std::vector<std::string>* warnings) {
+                                             std::vector<std::string>* warnings, int max_robots) {
   CoordinationQuery query;
   const double bounds_tolerance = BoundsToleranceFromProto(request.bounds_tolerance());
   query.scene = std::move(scene);
-  if (request.robots_size() == 0 || request.robots_size() > 16) {
-    ThrowInvalid("robots has " + std::to_string(request.robots_size()) + " entries; a team has 1 to 16 robots");
+  query.max_robots = max_robots;
+  if (request.robots_size() == 0 || request.robots_size() > max_robots) {
+    ThrowInvalid("robots has " + std::to_string(request.robots_size()) + " entries; a team has 1 to " +
+                 std::to_string(max_robots) + " robots on this server (chasles-server --max-team-robots)");
   }
   for (int k = 0; k < request.robots_size(); ++k) {
     const v1::TeamRobot& r = request.robots(k);
@@ -194,6 +196,7 @@ void CoordinationOutcomeToProto(const CoordinationOutcome& outcome, const Coordi
   verification->set_max_joint_step(query.collision_resolution);
   verification->set_max_velocity_ratio(outcome.verification.max_velocity_ratio);
   verification->set_max_acceleration_ratio(outcome.verification.max_acceleration_ratio);
+  verification->set_min_robot_distance(outcome.verification.min_robot_distance);
   verification->set_collision_guarantee(outcome.verification.collision_guarantee);
   verification->set_collision_guarantee_reason(outcome.verification.collision_guarantee_reason);
   for (std::size_t k = 0; k < outcome.robots.size(); ++k) {

@@ -37,6 +37,8 @@ void AddFlags(CLI::App& app, chasles::ServerOptions& o, std::size_t& document_mb
                  "trajectory samples in one reply (per robot) and points in one committed trajectory; the count "
                  "is estimated from the duration before sampling")
       ->capture_default_str()->group(caps);
+  app.add_option("--max-team-robots", o.max_team_robots, "robots of one Coordinate request")
+      ->capture_default_str()->group(caps);
   app.add_option("--request-memory-mb", o.request_memory_mb,
                  "heap one call may hold [MiB]; beyond it the call is abandoned with RESOURCE_EXHAUSTED (0 = no cap)")
       ->capture_default_str()->group(caps);

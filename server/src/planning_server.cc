@@ -426,7 +426,7 @@ class PlanningService final : public RawService {
           CoordinationQuery query = CoordinationQueryFromProto(
               request, scene.scene,
               [this](const v1::TeamRobot& robot, const std::string& field) { return TeamRobotOf(robot, field).model; },
-              registry_, &warnings);
+              registry_, &warnings, options_.max_team_robots);
           for (int k = 0; k < request.robots_size(); ++k) {
             if (!request.robots(k).has_robot()) continue;  // an uploaded robot reported them at upload
             const std::string field = "robots[" + std::to_string(k) + "].robot";
@@ -1019,6 +1019,7 @@ void ServerOptions::Validate() const {
   }
   if (cache_mb < 1 || cache_mb > (1ull << 30)) ThrowInvalid("--cache-mb = " + std::to_string(cache_mb) + " must be within [1, 2^30]");
   if (max_samples < 1) ThrowInvalid("--max-samples = 0 must be >= 1");
+  if (max_team_robots < 1) ThrowInvalid("--max-team-robots = " + std::to_string(max_team_robots) + " must be >= 1");
   if (request_memory_mb > (1ull << 30)) {
     ThrowInvalid("--request-memory-mb = " + std::to_string(request_memory_mb) + " must be within [0, 2^30] (0 = no cap)");
   }

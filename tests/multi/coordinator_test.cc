@@ -277,6 +277,54 @@ TEST(CoordinatorTest, AvoidsCommittedMotions) {
   EXPECT_THAT(FindMotionConflict(mine, crossing, 0.0, 1e-3, 0.005), HasSubstr("collide at t = "));
 }
 
+/// min_robot_distance: two discs of radius 0.3 m passing on parallel lines 4 m apart and one
+/// overtaking-free pair: the smallest centre distance minus both radii, by the exact formula.
+TEST(CoordinatorTest, ReportsTheSmallestDistanceBetweenRobots) {
+  // a: (-3, -2) → (3, -2); b: (3, 2) → (-3, 2). Centres stay exactly 4 m apart in y; in x they
+  // cross, so the smallest centre distance is 4 m and the shapes are 4 − 0.6 = 3.4 m apart.
+  const CoordinationQuery query =
+      Query({Disc("a", {-3, -2}, {3, -2}), Disc("b", {3, 2}, {-3, 2})}, CoordinationMethod::kPrioritized);
+  const CoordinationOutcome outcome = Coordinate(query, Registry(), Termination());
+  ExpectJointlyValid(query, outcome);
+  // Straight lines at the same speed meet at x = 0 at the same instant, a distance instant of
+  // the 0.01 s grid (the motions are symmetric), so the measured minimum is the exact one up to
+  // how far the crossing lies from an instant: 4 − 0.6 ≤ d ≤ √(4² + (2·0.01)²) − 0.6.
+  EXPECT_GE(outcome.verification.min_robot_distance, 3.4 - 1e-9);
+  EXPECT_LE(outcome.verification.min_robot_distance, std::hypot(4.0, 0.02) - 0.6 + 1e-9);
+  // One robot: nothing to measure against, the cap.
+  const CoordinationQuery alone = Query({Disc("a", {-3, -2}, {3, -2})}, CoordinationMethod::kPrioritized);
+  EXPECT_EQ(Coordinate(alone, Registry(), Termination()).verification.min_robot_distance, kMaxReportedRobotDistance);
+}
+
+/// A robot walled in cannot be proven to have no path by a sampling planner that ran out of
+/// time: the attempts say it found none within its share, and AUTO comes back to the methods its
+/// shares stopped once the others have failed.
+TEST(CoordinatorTest, AutoReturnsToMethodsItsSharesStoppedAndSaysWhyTheyStopped) {
+  auto scene = std::make_shared<Scene>();
+  // A closed square of walls around (3, 3); robot "b" stands inside, its goal is outside.
+  test::AddWall(scene.get(), "n", 3.0, 4.2, 2.6, 0.2);
+  test::AddWall(scene.get(), "s", 3.0, 1.8, 2.6, 0.2);
+  test::AddWall(scene.get(), "e", 4.2, 3.0, 0.2, 2.6);
+  test::AddWall(scene.get(), "w", 1.8, 3.0, 0.2, 2.6);
+  CoordinationQuery query =
+      Query({Disc("a", {-3, -3}, {-3, 3}), Disc("b", {3, 3}, {-1, 0})}, CoordinationMethod::kAuto, scene);
+  query.time_budget = 1.0;
+  const CoordinationOutcome outcome = Coordinate(query, Registry(), Termination());
+  EXPECT_EQ(outcome.code, CoordinationCode::kNoSolution) << outcome.message;
+  int prioritized = 0;
+  for (const MethodAttemptReport& a : outcome.attempts) {
+    EXPECT_FALSE(a.succeeded);
+    EXPECT_THAT(a.message, ::testing::Not(HasSubstr("even alone"))) << ToString(a.method);
+    if (a.method == CoordinationMethod::kPrioritized) {
+      ++prioritized;
+      // Its share ends while 'b' (or 'a' around it) is still being planned.
+      EXPECT_THAT(a.message, ::testing::AnyOf(HasSubstr("robot 'b' found no path alone within"),
+                                              HasSubstr("stopped while robot"), HasSubstr("stopped before every robot")));
+    }
+  }
+  EXPECT_GE(prioritized, 2) << outcome.message;
+}
+
 TEST(CoordinatorTest, NamedErrors) {
   const auto expect_invalid = [](CoordinationQuery query, const std::string& text) {
     try {

@@ -144,6 +144,7 @@ struct Member {
 /// What one method produced: per member, a trajectory from t = 0.
 struct Attempt {
   bool ok = false;
+  bool out_of_time = false;  ///< failed because its budget ran out
   std::string message;
   std::vector<TimedTrajectory> trajectories;
   std::vector<JointPath> paths;
@@ -229,6 +230,7 @@ class Coordinator {
   // --- single-robot planning ------------------------------------------------------------------
   struct SinglePlan {
     bool ok = false;
+    bool out_of_time = false;  ///< failed because its budget ran out (not proof that none exists)
     std::string message;
     JointPath path;
     TimedTrajectory trajectory;
@@ -258,6 +260,8 @@ class Coordinator {
     plan.sample_period = 1.0;
     const PlanOutcome outcome = pipeline_.Plan(plan, termination);
     if (outcome.code != PlanOutcomeCode::kSuccess) {
+      result.out_of_time = outcome.code == PlanOutcomeCode::kNoPathWithinBudget ||
+                           outcome.code == PlanOutcomeCode::kApproximateOnly || termination.ShouldStop();
       result.message = std::string(ToString(outcome.code)) + (outcome.message.empty() ? "" : ": " + outcome.message);
       return result;
     }
@@ -266,12 +270,17 @@ class Coordinator {
     result.trajectory = outcome.trajectory;
     return result;
   }
-  /// Robot k's path planned alone (cached).
+  /// Robot k's path planned alone (cached; a plan that ran out of time is tried again, with the
+  /// share of the budget left then, on the next call).
   const SinglePlan& Alone(int k) {
     auto it = alone_.find(k);
-    if (it == alone_.end()) {
-      const double share = std::max(0.05, termination_.SecondsLeft() / (2.0 * members_.size()));
-      it = alone_.emplace(k, PlanSingle(k, members_[k].own, termination_.WithBudget(std::chrono::duration<double>(std::min(share, 10.0))), 0)).first;
+    if (it == alone_.end() || (it->second.out_of_time && !termination_.ShouldStop())) {
+      const double share = std::min(10.0, std::max(0.05, termination_.SecondsLeft() / (2.0 * members_.size())));
+      SinglePlan plan = PlanSingle(k, members_[k].own, termination_.WithBudget(std::chrono::duration<double>(share)), 0);
+      if (plan.out_of_time) {
+        plan.message = "found no path alone within " + FormatNumber(share) + " s (" + plan.message + ")";
+      }
+      it = alone_.insert_or_assign(k, std::move(plan)).first;
     }
     return it->second;
   }
@@ -334,13 +343,16 @@ Attempt Coordinator::RunPriorityLoop(bool prm, const Termination& termination) {
     for (int position = 0; position < n && failed < 0; ++position) {
       if (termination.ShouldStop()) {
         attempt.message = "stopped before every robot was planned (time budget, deadline or cancellation)";
+        attempt.out_of_time = true;
         return attempt;
       }
       const int k = order[position];
       const Member& m = members_[k];
       const SinglePlan& alone = Alone(k);
       if (!alone.ok) {
-        attempt.message = "robot '" + m.placement.name + "' has no path even alone: " + alone.message;
+        attempt.message = "robot '" + m.placement.name + "' " +
+                          (alone.out_of_time ? alone.message : "has no path even alone: " + alone.message);
+        attempt.out_of_time = alone.out_of_time;
         return attempt;
       }
       // Moving obstacles: the robots planned before it, then the committed motions.
@@ -411,6 +423,12 @@ Attempt Coordinator::RunPriorityLoop(bool prm, const Termination& termination) {
       const double alone_time = alone.trajectory.duration();
       options.horizon = std::max(60.0, options.hold_until + 4.0 * alone_time + 10.0);
       const SpaceTimeResult found = SearchSpaceTime(roadmap, 0, goal_vertex, m.limits, conflict_free, options, termination);
+      if (!found.found && termination.ShouldStop()) {
+        attempt.message = "stopped while robot '" + m.placement.name + "' searched space-time (" +
+                          std::to_string(position) + " robots planned before it): " + found.message;
+        attempt.out_of_time = true;
+        return attempt;
+      }
       if (!found.found) {
         failed = k;
         last_failure = "robot '" + m.placement.name + "' found no way past the robots before it (" +
@@ -586,7 +604,9 @@ std::string Coordinator::Verify(const Attempt& attempt, TeamVerificationReport* 
     CollisionOptions padded;
     padded.padding = ExactPadding();
     const CollisionChecker apart(ComposeRobots(placements, pairs_only), std::make_shared<Scene>(), padded);
-    const TeamVerificationReport spacing = VerifyTeam(apart, attempt.trajectories, starts, goals, limits, options);
+    TeamVerificationOptions spacing_options = options;
+    spacing_options.measure_robot_distance = false;  // measured on the unpadded shapes above
+    const TeamVerificationReport spacing = VerifyTeam(apart, attempt.trajectories, starts, goals, limits, spacing_options);
     report->states_checked += spacing.states_checked;
     if (!spacing.ok) return "robots closer than robot_padding = " + FormatNumber(query_.robot_padding) + " m: " + spacing.reason;
     if (spacing.collision_guarantee != "certified" && report->collision_guarantee == "certified") {
@@ -600,7 +620,7 @@ std::string Coordinator::Verify(const Attempt& attempt, TeamVerificationReport* 
     report->collision_guarantee_reason =
         "certified against the scene, itself and each other, but against the workcell's committed trajectories "
         "only at states at most " + FormatNumber(query_.time_step) + " s and " +
-        FormatNumber(query_.collision_resolution) + " rad apart";
+        FormatNumber(query_.collision_resolution) + " rad (m for prismatic and base joints) apart";
   }
   for (std::size_t k = 0; k < members_.size(); ++k) {
     CommittedMotion mine;
@@ -730,38 +750,67 @@ CoordinationOutcome Coordinator::Run() {
   } else {
     methods = {query_.method};
   }
-  const std::vector<double> shares = {0.4, 0.5, 0.6, 1.0};  // of what is left, per AUTO step
-  for (std::size_t i = 0; i < methods.size(); ++i) {
-    if (termination_.ShouldStop()) break;
-    const double share = methods.size() == 1 ? 1.0 : shares[std::min(i, shares.size() - 1)];
-    const Termination stage = termination_.WithBudget(std::chrono::duration<double>(share * termination_.SecondsLeft()));
+  // AUTO: each method gets a share of what is left; a method stopped by its share (not by the
+  // request's budget) is tried again, with all that is left, once the others have had their
+  // turn or one of them has succeeded; the verified result with the smallest makespan is kept.
+  const std::vector<double> shares = {0.4, 0.5, 0.6, 0.7};  // of what is left, per first try
+  struct Verified {
+    Attempt attempt;
+    TeamVerificationReport verification;
+    CoordinationMethod method = CoordinationMethod::kAuto;
+    double makespan = 0.0;
+  };
+  std::optional<Verified> best;
+  std::vector<CoordinationMethod> stopped;  // methods whose share ran out, in order
+  const auto run = [&](CoordinationMethod method, const Termination& stage) {
     const Clock::time_point t_method = Clock::now();
     MethodAttemptReport report;
-    report.method = methods[i];
-    Attempt attempt = RunMethod(methods[i], stage);
+    report.method = method;
+    Attempt attempt = RunMethod(method, stage);
+    TeamVerificationReport verification;
     if (attempt.ok) {
-      TeamVerificationReport verification;
       const std::string failure = Verify(attempt, &verification);
       if (!failure.empty()) {
         attempt.ok = false;
         attempt.message = "its result failed the joint verification: " + failure;
-      } else {
-        out.verification = verification;
       }
     }
     report.seconds = SecondsSince(t_method);
     report.succeeded = attempt.ok;
     report.message = attempt.message;
     if (attempt.ok) {
-      double makespan = 0.0;
-      for (const TimedTrajectory& t : attempt.trajectories) makespan = std::max(makespan, t.duration());
-      report.makespan = makespan;
+      for (const TimedTrajectory& t : attempt.trajectories) report.makespan = std::max(report.makespan, t.duration());
+      if (!best || report.makespan < best->makespan) {
+        best = Verified{std::move(attempt), verification, method, report.makespan};
+      }
+    } else if ((attempt.out_of_time || stage.ShouldStop()) && !termination_.ShouldStop()) {
+      stopped.push_back(method);
     }
     out.attempts.push_back(report);
-    if (!attempt.ok) continue;
-
+  };
+  for (std::size_t i = 0; i < methods.size() && !best; ++i) {
+    if (termination_.ShouldStop()) break;
+    // The last method takes all that is left when no earlier one is waiting to come back.
+    const bool last = i + 1 == methods.size();
+    const double share = methods.size() == 1 || (last && stopped.empty()) ? 1.0 : shares[std::min(i, shares.size() - 1)];
+    run(methods[i], termination_.WithBudget(std::chrono::duration<double>(share * termination_.SecondsLeft())));
+  }
+  if (methods.size() > 1) {
+    // After a success, only the methods tried before it come back (they may find a shorter
+    // makespan); each gets an equal part of what is left.
+    const std::vector<CoordinationMethod> again = stopped;
+    for (std::size_t j = 0; j < again.size(); ++j) {
+      if (termination_.ShouldStop()) break;
+      const double share = 1.0 / static_cast<double>(again.size() - j);
+      run(again[j], termination_.WithBudget(std::chrono::duration<double>(share * termination_.SecondsLeft())));
+    }
+  }
+  if (best) {
+    Attempt& attempt = best->attempt;
+    out.verification = best->verification;
+    const CoordinationMethod method = best->method;
     // 4. The result.
-    out.method = methods[i];
+    out.method = method;
     for (int k : attempt.order) out.order.push_back(members_[k].placement.name);
     out.reorderings = attempt.reorderings;
     for (int k = 0; k < n; ++k) {
@@ -783,7 +832,7 @@ CoordinationOutcome Coordinator::Run() {
       out.sum_of_durations += plan.duration;
       out.robots.push_back(std::move(plan));
     }
-    return finish(CoordinationCode::kSuccess, std::string(ToString(methods[i])) + ": " + attempt.message);
+    return finish(CoordinationCode::kSuccess, std::string(ToString(method)) + ": " + attempt.message);
   }
   const StopReason reason = termination_.Reason();
   if (reason == StopReason::kCancelled) return finish(CoordinationCode::kCancelled, "cancelled");
@@ -798,8 +847,10 @@ CoordinationOutcome Coordinator::Run() {
 
 void CoordinationQuery::Validate(const PlannerRegistry& registry) const {
   if (!scene) ThrowInvalid("scene: no scene was given");
-  if (robots.empty() || robots.size() > 16) {
-    ThrowInvalid("robots has " + std::to_string(robots.size()) + " entries; a team has 1 to 16 robots");
+  if (max_robots < 1) ThrowInvalid("max_robots = " + std::to_string(max_robots) + " must be >= 1");
+  if (robots.empty() || robots.size() > static_cast<std::size_t>(max_robots)) {
+    ThrowInvalid("robots has " + std::to_string(robots.size()) + " entries; a team has 1 to " +
+                 std::to_string(max_robots) + " robots on this server (chasles-server --max-team-robots)");
   }
   std::map<std::string, int> names;
   for (std::size_t k = 0; k < robots.size(); ++k) {

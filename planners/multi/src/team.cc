@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
 
+#include "chasles/collision/proximity.h"
 #include "chasles/optimizers/verification.h"
 #include "chasles/robot/error.h"
 
@@ -289,6 +291,38 @@ KinematicLimits ComposeLimits(const std::vector<KinematicLimits>& limits) {
   return out;
 }
 
+namespace {
+
+/// The smallest distance between two robots of the team composite (links grouped by their
+/// "<name>/" prefix) at instants distance_period apart (fewer on long motions), capped.
+double MinRobotDistance(const CollisionChecker& team_checker, const std::vector<TimedTrajectory>& trajectories,
+                        const TeamVerificationOptions& options) {
+  const RobotModel& team = team_checker.robot();
+  std::map<std::string, std::vector<int>> by_robot;
+  for (int l = 0; l < team.num_links(); ++l) {
+    const std::string& name = team.links()[l].name;
+    const std::size_t slash = name.find('/');
+    if (slash != std::string::npos) by_robot[name.substr(0, slash)].push_back(l);
+  }
+  if (by_robot.size() < 2) return kMaxReportedRobotDistance;
+  std::vector<std::vector<int>> groups;
+  for (auto& [name, links] : by_robot) groups.push_back(std::move(links));
+  const LinkGroupDistance distance(team_checker.robot_ptr(), std::move(groups));
+  const TimedTrajectory motion = ComposeTrajectories(trajectories);
+  const double duration = motion.duration();
+  const int instants = std::max(
+      1, std::min(std::max(1, options.max_distance_instants),
+                  static_cast<int>(std::ceil(duration / std::max(options.distance_period, 1e-9)))));
+  double best = kMaxReportedRobotDistance;
+  for (int k = 0; k <= instants && best > 0.0; ++k) {
+    const double t = k == instants ? duration : duration * k / instants;
+    best = std::min(best, distance.Min(motion.Evaluate(t).q, best));
+  }
+  return best;
+}
+
+}  // namespace
+
 TeamVerificationReport VerifyTeam(const CollisionChecker& team_checker, const std::vector<TimedTrajectory>& trajectories,
                                   const std::vector<Eigen::VectorXd>& starts, const std::vector<Eigen::VectorXd>& goals,
                                   const std::vector<KinematicLimits>& limits, const TeamVerificationOptions& options) {
@@ -355,6 +389,7 @@ TeamVerificationReport VerifyTeam(const CollisionChecker& team_checker, const st
   report.max_acceleration_ratio = own.max_acceleration_ratio;
   report.collision_guarantee = own.collision_guarantee;
   report.collision_guarantee_reason = own.collision_guarantee_reason;
+  if (report.ok && options.measure_robot_distance) report.min_robot_distance = MinRobotDistance(team_checker, trajectories, options);
   return report;
 }
 

@@ -78,4 +78,29 @@ class ObstacleProximity {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Distances between groups of links of one robot — the robots of a team composite
+/// (ComposeRobots): the smallest distance between the collision shapes of two different groups,
+/// by FCL distance on the unpadded shapes. Shape pairs whose bounding spheres are farther apart
+/// than the best distance so far are skipped. Const and thread-safe.
+class LinkGroupDistance {
+ public:
+  /// `groups`: disjoint lists of link indices (links without collision geometry are ignored).
+  /// \throws Error(kInvalidArgument) for a null robot or a link index out of range.
+  LinkGroupDistance(std::shared_ptr<const RobotModel> robot, std::vector<std::vector<int>> groups);
+  ~LinkGroupDistance();
+  LinkGroupDistance(const LinkGroupDistance&) = delete;
+  LinkGroupDistance& operator=(const LinkGroupDistance&) = delete;
+
+  /// The smallest distance [m] between shapes of two different groups at q: 0 on contact or
+  /// overlap, `max_distance` when no pair is nearer (also with fewer than two groups).
+  /// *group_a < *group_b (optional) receive the nearest pair of groups, -1 when none is nearer.
+  /// \throws Error(kInvalidArgument) when q.size() != num_dofs() or max_distance is not > 0.
+  double Min(const Eigen::VectorXd& q, double max_distance, int* group_a = nullptr, int* group_b = nullptr) const;
+
+ private:
+  struct Impl;
+  std::shared_ptr<const RobotModel> robot_;
+  std::unique_ptr<Impl> impl_;
+};
+
 }  // namespace chasles

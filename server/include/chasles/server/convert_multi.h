@@ -20,11 +20,12 @@ using TeamRobotResolver = std::function<std::shared_ptr<const RobotModel>(const 
 /// A CoordinateRequest with the proto's defaults (scene and robots resolved by the caller; the
 /// workcell's committed motions are the caller's too). Also returns the request's time budget.
 /// Start and goal values within `bounds_tolerance` outside a limit are clamped, each reported in
-/// *warnings (robots[k].start.positions[i] …).
+/// *warnings (robots[k].start.positions[i] …). More than `max_robots` robots (the server's
+/// --max-team-robots) is INVALID_ARGUMENT, checked before any robot is resolved.
 /// \throws Error(kInvalidArgument / kNotFound / kFailedPrecondition) naming the field.
 CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& request, std::shared_ptr<const Scene> scene,
                                              const TeamRobotResolver& resolve, const PlannerRegistry& registry,
-                                             std::vector<std::string>* warnings);
+                                             std::vector<std::string>* warnings, int max_robots = 1000);
 
 /// A Plan request with a WorkcellContext as a team of one (PRIORITIZED: its path, a roadmap and
 /// the space-time search around the committed motions). Trajectory options beyond the velocity

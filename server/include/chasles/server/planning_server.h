@@ -23,6 +23,7 @@ struct ServerOptions {
   // Memory: every size a client controls is capped before the work it drives.
   std::uint64_t cache_mb = 256;          ///< uploaded robots, scenes and checkers together [MiB], >= 1
   std::uint64_t max_samples = 1000000;   ///< trajectory samples in one reply (per robot), >= 1
+  int max_team_robots = 1000;            ///< robots of one Coordinate request, >= 1
   std::uint64_t request_memory_mb = 4096;  ///< operator-new bytes one call may hold [MiB]; 0 = no cap
   InputLimits limits;  ///< documents, links, DOF, mesh triangles, OctoMap nodes, cloud points
 

@@ -49,7 +49,8 @@ struct CommittedMotion {
 
 struct CoordinationQuery {
   std::shared_ptr<const Scene> scene;
-  std::vector<TeamRobotSpec> robots;   ///< 1 to 16
+  std::vector<TeamRobotSpec> robots;   ///< 1 to max_robots
+  int max_robots = 1000;               ///< the server's cap (--max-team-robots)
   CoordinationMethod method = CoordinationMethod::kAuto;
   std::string planner_id = "rrt_connect";
   ParameterValues parameters;

@@ -73,9 +73,17 @@ TimedTrajectory ComposeTrajectories(const std::vector<TimedTrajectory>& trajecto
 ///         max_acceleration and max_velocity of different sizes (naming `limits[k]`).
 KinematicLimits ComposeLimits(const std::vector<KinematicLimits>& limits);
 
+/// The largest robot-to-robot distance VerifyTeam reports [m].
+constexpr double kMaxReportedRobotDistance = 10.0;
+
 struct TeamVerificationOptions {
   double time_step = 1e-3;       ///< [s] largest time step between checked team states
   double max_joint_step = 0.005; ///< [rad] largest joint step of any robot between checked states
+  /// min_robot_distance is measured at instants this far apart [s] (more apart when the motion
+  /// is long: at most max_distance_instants instants), and at the end.
+  double distance_period = 0.01;
+  int max_distance_instants = 2000;
+  bool measure_robot_distance = true;  ///< false: min_robot_distance is left 0 (a second pass)
 };
 
 struct TeamVerificationReport {
@@ -84,6 +92,10 @@ struct TeamVerificationReport {
   std::uint64_t states_checked = 0;
   double max_velocity_ratio = 0.0;
   double max_acceleration_ratio = 0.0;
+  /// Smallest distance [m] between the collision shapes of two different robots (frozen ones
+  /// included) at the distance instants (TeamVerificationOptions), capped at
+  /// kMaxReportedRobotDistance; the cap when the team has one robot. Measured only when ok.
+  double min_robot_distance = 0.0;
   /// As VerificationReport: "certified" (the team's continuous motion) or "discrete", and why.
   std::string collision_guarantee;
   std::string collision_guarantee_reason;
