@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <assimp/Importer.hpp>
+#include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
@@ -57,6 +58,10 @@ std::vector<std::pair<const aiMesh*, aiMatrix4x4>> PlacedMeshes(const aiScene& s
 std::shared_ptr<const TriangleMesh> TryRead(const std::string& bytes, const char* hint, const Eigen::Vector3d& scale,
                                             const std::string& field, const InputLimits& limits, std::string* why) {
   Assimp::Importer importer;
+  // COLLADA: keep the axes as written. assimp would turn a Z_UP document to its own Y-up
+  // convention; robot description files are Z-up and ROS tools (RViz, MoveIt's
+  // geometric_shapes) undo that turn. The document's <unit meter=…> is still applied.
+  importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
   const aiScene* scene = importer.ReadFileFromMemory(
       bytes.data(), bytes.size(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices, hint);
   if (scene == nullptr || scene->mRootNode == nullptr) {
@@ -127,7 +132,7 @@ std::shared_ptr<const TriangleMesh> ParseMesh(const std::string& bytes, const Ei
       ThrowInvalid(os.str());
     }
   }
-  if (bytes.empty()) ThrowInvalid(field + " is empty (expected STL or OBJ file bytes)");
+  if (bytes.empty()) ThrowInvalid(field + " is empty (expected STL, OBJ or COLLADA file bytes)");
   if (bytes.size() > limits.max_document_bytes) {
     ThrowResourceExhausted(field + " holds " + std::to_string(bytes.size()) + " bytes, more than the cap of " +
                            std::to_string(limits.max_document_bytes) +
@@ -143,13 +148,19 @@ std::shared_ptr<const TriangleMesh> ParseMesh(const std::string& bytes, const Ei
     }
   }
   std::string why;
+  // A COLLADA document is XML whose root element is <COLLADA>: read as such and only as such.
+  const std::size_t first = bytes.find_first_not_of(" \t\r\n\xEF\xBB\xBF");  // whitespace, UTF-8 BOM
+  if (first != std::string::npos && bytes[first] == '<' && bytes.find("<COLLADA") < 4096) {
+    if (auto mesh = TryRead(bytes, "dae", scale, field, limits, &why)) return mesh;
+    ThrowInvalid(field + " is not a readable COLLADA mesh" + (why.empty() ? "" : ": " + why));
+  }
   // Binary STL has no magic number, so try the formats we accept explicitly, STL first.
   for (const char* hint : {"stl", "obj"}) {
     if (auto mesh = TryRead(bytes, hint, scale, field, limits, &why)) return mesh;
     if (!why.empty() && why.rfind("it holds", 0) == 0) break;
     if (why.rfind("a face refers", 0) == 0) break;
   }
-  ThrowInvalid(field + " is not a readable STL or OBJ mesh" + (why.empty() ? "" : ": " + why));
+  ThrowInvalid(field + " is not a readable STL, OBJ or COLLADA mesh" + (why.empty() ? "" : ": " + why));
 }
 
 }  // namespace chasles

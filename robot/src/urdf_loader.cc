@@ -60,8 +60,10 @@ void CheckPositive(double value, const std::string& what) {
   }
 }
 
-Shape ConvertGeometry(const urdf::Collision& collision, const std::string& where,
-                      const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes) {
+/// A mesh the resolver does not have is recorded in *missing (all are reported together) and
+/// its shape is left without a mesh.
+Shape ConvertGeometry(const urdf::Collision& collision, const std::string& where, const RobotModel::MeshResolver& meshes,
+                      std::vector<std::string>* missing) {
   const Eigen::Isometry3d pose = ToIsometry(collision.origin);
   if (!pose.matrix().allFinite()) ThrowInvalid(where + " origin must be finite");
   if (!collision.geometry) ThrowInvalid(where + " has no geometry");
@@ -86,9 +88,10 @@ Shape ConvertGeometry(const urdf::Collision& collision, const std::string& where
     }
     case urdf::Geometry::MESH: {
       const auto& g = static_cast<const urdf::Mesh&>(*collision.geometry);
-      const auto it = meshes.find(g.filename);
-      if (it == meshes.end() || !it->second) {
-        ThrowInvalid(where + " mesh filename '" + g.filename + "' is not in the supplied meshes");
+      const std::shared_ptr<const TriangleMesh> mesh = meshes ? meshes(g.filename) : nullptr;
+      if (!mesh) {
+        missing->push_back(where.substr(where.find("link")) + " mesh filename '" + g.filename + "'");
+        return Shape{};
       }
       const Eigen::Vector3d scale = ToVector(g.scale);
       CheckPositive(scale.x(), where + " mesh scale x");
@@ -98,9 +101,9 @@ Shape ConvertGeometry(const urdf::Collision& collision, const std::string& where
       shape.type = ShapeType::kMesh;
       shape.pose = pose;
       if (scale == Eigen::Vector3d::Ones()) {
-        shape.mesh = it->second;
+        shape.mesh = mesh;
       } else {
-        auto scaled = std::make_shared<TriangleMesh>(*it->second);
+        auto scaled = std::make_shared<TriangleMesh>(*mesh);
         for (Eigen::Vector3d& v : scaled->vertices) v = v.cwiseProduct(scale);
         shape.mesh = std::move(scaled);
       }
@@ -227,6 +230,19 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
     std::string_view urdf_text, std::string_view srdf_text,
     const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes, const InputLimits& limits,
     bool strict_srdf) {
+  return FromUrdfResolvingMeshes(
+      urdf_text, srdf_text,
+      [&meshes](const std::string& filename) -> std::shared_ptr<const TriangleMesh> {
+        const auto it = meshes.find(filename);
+        return it == meshes.end() ? nullptr : it->second;
+      },
+      limits, strict_srdf);
+}
+
+std::shared_ptr<const RobotModel> RobotModel::FromUrdfResolvingMeshes(std::string_view urdf_text,
+                                                                      std::string_view srdf_text,
+                                                                      const MeshResolver& meshes,
+                                                                      const InputLimits& limits, bool strict_srdf) {
   // 0. Sizes first, before any parser (tinyxml recurses once per nesting level): document
   //    bytes, element nesting, and the links, joints and moving joints the document declares.
   const robot_internal::XmlScan scan =
@@ -300,12 +316,13 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
   std::vector<Joint> joints;
   std::unordered_map<std::string, int> link_index;
 
+  std::vector<std::string> missing_meshes;  // every collision mesh not supplied, reported together
   auto add_link = [&](const urdf::Link& ulink) {
     Link link;
     link.name = ulink.name;
     for (size_t c = 0; c < ulink.collision_array.size(); ++c) {
       const std::string where = "urdf: link '" + ulink.name + "' collision[" + std::to_string(c) + "]";
-      link.collision.push_back(ConvertGeometry(*ulink.collision_array[c], where, meshes));
+      link.collision.push_back(ConvertGeometry(*ulink.collision_array[c], where, meshes, &missing_meshes));
     }
     if (ulink.inertial) {
       const urdf::Inertial& in = *ulink.inertial;
@@ -432,6 +449,13 @@ std::shared_ptr<const RobotModel> RobotModel::FromUrdf(
     joint.child_link = link_index.at(child->name);
     joints.push_back(std::move(joint));
     stack.push_back({child.get(), children_of(*child)});
+  }
+  if (!missing_meshes.empty()) {
+    std::string list;
+    for (std::size_t i = 0; i < missing_meshes.size() && i < 50; ++i) list += (i ? "; " : "") + missing_meshes[i];
+    if (missing_meshes.size() > 50) list += "; and " + std::to_string(missing_meshes.size() - 50) + " more";
+    ThrowInvalid("urdf: " + std::to_string(missing_meshes.size()) + " collision mesh" +
+                 (missing_meshes.size() == 1 ? " is" : "es are") + " not in the supplied meshes: " + list);
   }
 
   // 5. Mimic joints: the followed joint by name; FromTree resolves chains and narrows limits.

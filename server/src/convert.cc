@@ -389,16 +389,19 @@ std::shared_ptr<const RobotModel> RobotFromProto(const v1::RobotModel& robot, co
   }
   const v1::UrdfRobot& urdf = robot.urdf();
   if (urdf.urdf().empty()) ThrowInvalid(field + ".urdf.urdf is empty: it must hold the URDF XML text");
-  std::map<std::string, std::shared_ptr<const TriangleMesh>> meshes;
   CheckMeshFileCount(static_cast<std::size_t>(urdf.mesh_files_size()), field + ".urdf.mesh_files", limits);
-  // Sorted iteration keeps error messages deterministic.
-  std::map<std::string, const std::string*> files;
-  for (const auto& [name, bytes] : urdf.mesh_files()) files[name] = &bytes;
-  for (const auto& [name, bytes] : files) {
-    meshes[name] = ParseMesh(*bytes, Eigen::Vector3d::Ones(), field + ".urdf.mesh_files['" + name + "']", limits);
-  }
+  // Only the meshes collision geometry names are parsed, each once, when the loader meets it:
+  // visual meshes may be sent along (a whole meshes folder) and are never read.
+  std::map<std::string, std::shared_ptr<const TriangleMesh>> parsed;
+  const auto resolve = [&](const std::string& name) -> std::shared_ptr<const TriangleMesh> {
+    const auto done = parsed.find(name);
+    if (done != parsed.end()) return done->second;
+    const auto it = urdf.mesh_files().find(name);
+    if (it == urdf.mesh_files().end()) return nullptr;
+    return parsed[name] = ParseMesh(it->second, Eigen::Vector3d::Ones(), field + ".urdf.mesh_files['" + name + "']", limits);
+  };
   try {
-    return RobotModel::FromUrdf(urdf.urdf(), urdf.srdf(), meshes, limits, urdf.strict_srdf());
+    return RobotModel::FromUrdfResolvingMeshes(urdf.urdf(), urdf.srdf(), resolve, limits, urdf.strict_srdf());
   } catch (const Error& e) {
     const std::string what = e.what();
     // Prefix the proto field unless the robot module already named it.
@@ -514,7 +517,7 @@ std::shared_ptr<const Scene> SceneFromProto(const v1::Scene& proto, const std::s
       RequirePositive(scale.y(), f + ".scale.y");
       RequirePositive(scale.z(), f + ".scale.z");
     }
-    if (mesh.data().empty()) ThrowInvalid(f + ".data is empty: it must hold STL or OBJ bytes");
+    if (mesh.data().empty()) ThrowInvalid(f + ".data is empty: it must hold STL, OBJ or COLLADA bytes");
     Shape shape;
     shape.type = ShapeType::kMesh;
     shape.mesh = ParseMesh(mesh.data(), scale, f + ".data", limits);

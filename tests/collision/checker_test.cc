@@ -5,6 +5,7 @@
 #include <random>
 #include <thread>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "chasles/collision/collision_checker.h"
@@ -202,6 +203,66 @@ TEST(Mesh, ParsesObjAndStlAndNamesErrors) {
   }
   EXPECT_THROW(ParseMesh("", Eigen::Vector3d::Ones(), "m"), Error);
   EXPECT_THROW(ParseMesh(kCubeObj, Eigen::Vector3d(1, 0, 1), "m"), Error);
+}
+
+/// A COLLADA document as CAD tools write them: Z_UP, millimetres, the geometry placed by a node
+/// transform. Expected vertices by hand: the box [0, 100] × [0, 200] × [0, 300] mm moved by
+/// (10, 0, 0) mm is [0.01, 0.11] × [0, 0.2] × [0, 0.3] m with z still up (the up axis is not turned).
+std::string BoxDae(const std::string& up_axis) {
+  std::string positions;
+  for (int i = 0; i < 8; ++i) {
+    positions += std::to_string((i & 1) ? 100 : 0) + " " + std::to_string((i & 2) ? 200 : 0) + " " +
+                 std::to_string((i & 4) ? 300 : 0) + " ";
+  }
+  // 12 triangles of the cube over corner indices (bit 0 = x, bit 1 = y, bit 2 = z).
+  const char* triangles = "0 2 1 1 2 3 4 5 6 5 7 6 0 1 4 1 5 4 2 6 3 3 6 7 0 4 2 2 4 6 1 3 5 3 7 5";
+  return std::string(R"(<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="millimeter" meter="0.001"/><up_axis>)") + up_axis + R"(</up_axis></asset>
+  <library_geometries>
+    <geometry id="box" name="box"><mesh>
+      <source id="box-pos"><float_array id="box-pos-array" count="24">)" + positions + R"(</float_array>
+        <technique_common><accessor source="#box-pos-array" count="8" stride="3">
+          <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+        </accessor></technique_common></source>
+      <vertices id="box-vtx"><input semantic="POSITION" source="#box-pos"/></vertices>
+      <triangles count="12"><input semantic="VERTEX" source="#box-vtx" offset="0"/><p>)" + triangles + R"(</p></triangles>
+    </mesh></geometry>
+  </library_geometries>
+  <library_visual_scenes>
+    <visual_scene id="scene"><node id="part"><translate>10 0 0</translate>
+      <instance_geometry url="#box"/></node></visual_scene>
+  </library_visual_scenes>
+  <scene><instance_visual_scene url="#scene"/></scene>
+</COLLADA>
+)";
+}
+
+TEST(Mesh, ParsesColladaWithItsUnitsAndNodeTransformAndKeepsItsAxes) {
+  for (const std::string up : {"Z_UP", "Y_UP"}) {
+    const auto mesh = ParseMesh(BoxDae(up), Eigen::Vector3d::Ones(), "robot.urdf.mesh_files['box.dae']");
+    ASSERT_EQ(mesh->triangles.size(), 12u) << up;
+    // assimp keeps vertices in single precision: 0.3 is 0.30000001 (float), hence 1e-7.
+    constexpr double kFloat = 1e-7;
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = -lo;
+    for (const Eigen::Vector3d& v : mesh->vertices) {
+      lo = lo.cwiseMin(v);
+      hi = hi.cwiseMax(v);
+    }
+    EXPECT_NEAR(lo.x(), 0.01, kFloat) << up;
+    EXPECT_NEAR(lo.y(), 0.0, kFloat) << up;
+    EXPECT_NEAR(lo.z(), 0.0, kFloat) << up;
+    EXPECT_NEAR(hi.x(), 0.11, kFloat) << up;
+    EXPECT_NEAR(hi.y(), 0.2, kFloat) << up;
+    EXPECT_NEAR(hi.z(), 0.3, kFloat) << up;
+  }
+  // A COLLADA document that is not one is named as COLLADA, with the field.
+  try {
+    ParseMesh("<?xml version=\"1.0\"?><COLLADA version=\"1.4.1\"><library_geometries>", Eigen::Vector3d::Ones(), "m.dae");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("m.dae is not a readable COLLADA mesh"));
+  }
 }
 
 TEST(Mesh, SphereVsMeshObstacleOnBothPaths) {

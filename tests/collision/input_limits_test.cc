@@ -45,7 +45,7 @@ const char kCubeObj[] =
 TEST(InputLimitsCollision, MeshErrorsNameTheFieldNotAssimpsFileName) {
   // assimp's message quotes the name it gives memory input ("$$$___magic___$$$.stl").
   ExpectError(ErrorCode::kInvalidArgument, [] { ParseMesh("v 1 2\nf 1 2 3\n", Eigen::Vector3d::Ones(), kMeshField); },
-              "scene.meshes[0].data is not a readable STL or OBJ mesh: Failed to determine STL storage "
+              "scene.meshes[0].data is not a readable STL, OBJ or COLLADA mesh: Failed to determine STL storage "
               "representation for scene.meshes[0].data.");
 }
 

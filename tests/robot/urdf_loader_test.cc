@@ -112,6 +112,31 @@ TEST(UrdfLoaderTest, ReadsGeometryInertiaLimitsAndJointTypes) {
   EXPECT_EQ(robot->home_pose(3).translation(), Eigen::Vector3d(1, 2, 3));
 }
 
+TEST(UrdfLoaderTest, NamesEveryCollisionMeshThatWasNotSuppliedInOneError) {
+  const std::string mesh = [](const char* file) {
+    return std::string("<collision><geometry><mesh filename=\"") + file + "\"/></geometry></collision>";
+  }("package://r/a.stl");
+  const std::string urdf = Urdf(std::string("  <link name=\"base\">") + mesh + "</link>\n" +
+                                "  <link name=\"arm\"><collision><geometry><mesh filename=\"package://r/b.stl\"/>"
+                                "</geometry></collision><visual><geometry><mesh filename=\"package://r/v.dae\"/>"
+                                "</geometry></visual></link>\n" +
+                                RevoluteJoint("j", "base", "arm"));
+  ExpectInvalid([&] { RobotModel::FromUrdf(urdf); },
+                "urdf: 2 collision meshes are not in the supplied meshes: link 'base' collision[0] mesh filename "
+                "'package://r/a.stl'; link 'arm' collision[0] mesh filename 'package://r/b.stl'");
+  // The resolver is asked for collision meshes only (never the visual one), once per use.
+  std::vector<std::string> asked;
+  const auto cube = std::make_shared<TriangleMesh>();
+  cube->vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  cube->triangles = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
+  const auto model = RobotModel::FromUrdfResolvingMeshes(urdf, {}, [&](const std::string& name) {
+    asked.push_back(name);
+    return cube;
+  });
+  EXPECT_EQ(asked, (std::vector<std::string>{"package://r/a.stl", "package://r/b.stl"}));
+  EXPECT_EQ(model->links()[0].collision.size(), 1u);
+}
+
 TEST(UrdfLoaderTest, RejectsMalformedXmlSayingWhere) {
   ExpectInvalid([] { RobotModel::FromUrdf("<robot name=\"r\">\n  <link name=\"a\">\n</robot>\n"); },
                 "urdf: malformed XML at line 3, column 1: Error reading end tag.");
@@ -166,8 +191,8 @@ TEST(UrdfLoaderTest, RejectsUnknownMeshesAndBadPrimitives) {
     <collision><geometry><mesh filename="package://r/hand.stl"/></geometry></collision></link>
 )");
   ExpectInvalid([&] { RobotModel::FromUrdf(urdf); },
-                "urdf: link 'a' collision[1] mesh filename 'package://r/hand.stl' is not in the "
-                "supplied meshes");
+                "urdf: 1 collision mesh is not in the supplied meshes: link 'a' collision[1] mesh filename "
+                "'package://r/hand.stl'");
   ExpectInvalid(
       [] {
         RobotModel::FromUrdf(Urdf(R"(<link name="a"><collision><geometry><box size="0.1 0 0.1"/></geometry></collision></link>)"));

@@ -125,6 +125,32 @@ class MeshRobot : public SharedServerTest<> {
   }
 };
 
+/// A whole meshes folder may be sent: files no collision geometry names (visual meshes, here a
+/// COLLADA file and bytes that are no mesh at all) are never read.
+TEST_F(MeshRobot, MeshFilesNoCollisionGeometryNamesAreNotRead) {
+  v1::UploadRobotRequest request;
+  *request.mutable_robot() = MeshUr5(/*exact_meshes=*/true);
+  auto& files = *request.mutable_robot()->mutable_urdf()->mutable_mesh_files();
+  files["package://ur5_meshes/visual/base.dae"] = "<?xml version=\"1.0\"?><COLLADA>not really</COLLADA>";
+  files["package://ur5_meshes/readme.txt"] = "not a mesh";
+  v1::UploadRobotResponse response;
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  const grpc::Status status = server_->stub().UploadRobot(&context, request, &response);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  // A collision mesh that is missing is still an error, naming it.
+  v1::UploadRobotRequest missing;
+  *missing.mutable_robot() = MeshUr5(/*exact_meshes=*/true);
+  missing.mutable_robot()->mutable_urdf()->mutable_mesh_files()->erase("package://ur5_meshes/forearm_link_0.stl");
+  grpc::ClientContext context2;
+  const grpc::Status refused = server_->stub().UploadRobot(&context2, missing, &response);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(refused.error_message().find("1 collision mesh is not in the supplied meshes: link 'forearm_link' "
+                                         "collision[1] mesh filename 'package://ur5_meshes/forearm_link_0.stl'"),
+            std::string::npos)
+      << refused.error_message();
+}
+
 TEST_F(MeshRobot, ItsMeshesAreCoveredBySpheresAtUploadAndItPlansCertified) {
   const v1::UploadRobotResponse uploaded = Upload(false);
   const v1::CollisionModel& model = uploaded.collision_model();

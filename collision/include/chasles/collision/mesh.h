@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Mesh input (STL, OBJ) through assimp.
+/// Mesh input (STL, OBJ, COLLADA) through assimp.
 
 #include <memory>
 #include <string>
@@ -12,8 +12,10 @@
 
 namespace chasles {
 
-/// Parses STL (ASCII or binary) or OBJ bytes with assimp (aiProcess_Triangulate |
-/// aiProcess_JoinIdenticalVertices), applying `scale` per axis.
+/// Parses STL (ASCII or binary), OBJ or COLLADA (.dae: XML with a <COLLADA> root) bytes with
+/// assimp (aiProcess_Triangulate | aiProcess_JoinIdenticalVertices), applying `scale` per axis.
+/// COLLADA: every node's transform and the document's <unit meter=…> are applied; <up_axis> is
+/// not (the axes stay as written, Z up as in robot description files — what RViz and MoveIt do).
 /// `field` names the input in error messages, e.g. `scene.meshes[1].data`.
 /// \throws Error(kInvalidArgument) when assimp cannot read the bytes, the mesh holds no
 ///         triangles, or a scale component is not finite and > 0.

@@ -4,6 +4,7 @@
 /// forward kinematics in product-of-exponentials form (Lynch & Park, Modern Robotics, ch. 4).
 /// Twists are (ω, v). SI units and radians throughout.
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -94,10 +95,21 @@ class RobotModel {
   /// SRDF entries that name a link the URDF lacks (published SRDFs routinely keep pairs of
   /// links a variant of the robot no longer has) are skipped, each reported in load_warnings(),
   /// as MoveIt does; with `strict_srdf` they are an error instead.
+  /// Collision meshes missing from `meshes` are all named in one error.
   static std::shared_ptr<const RobotModel> FromUrdf(
       std::string_view urdf, std::string_view srdf = {},
       const std::map<std::string, std::shared_ptr<const TriangleMesh>>& meshes = {},
       const InputLimits& limits = {}, bool strict_srdf = false);
+
+  /// The mesh of a URDF mesh filename (as written in the URDF), or null when it was not supplied.
+  using MeshResolver = std::function<std::shared_ptr<const TriangleMesh>(const std::string& filename)>;
+  /// FromUrdf asking `meshes` for each collision mesh as it is met, so a caller holding mesh
+  /// bytes parses only the meshes collision geometry uses (visual meshes are never read). An
+  /// exception from the resolver propagates unchanged.
+  static std::shared_ptr<const RobotModel> FromUrdfResolvingMeshes(std::string_view urdf, std::string_view srdf,
+                                                                   const MeshResolver& meshes,
+                                                                   const InputLimits& limits = {},
+                                                                   bool strict_srdf = false);
 
   const std::string& name() const { return name_; }
   /// Configuration coordinates: one per actuated joint (moving, not a mimic joint).
