@@ -21,6 +21,7 @@
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
 
+#include "chasles/robot/error.h"
 #include "chasles/v1/chasles.grpc.pb.h"
 #include "commands.h"
 #include "connection.h"
@@ -108,7 +109,7 @@ const char kUsage[] =
     "Options (before COMMAND or among its arguments):\n"
     "%s"
     "  --timeout S            gRPC deadline in seconds (default: 10; plan, optimize, coordinate: the\n"
-    "                         request's budget + 30)\n"
+    "                         request's budget + 30; upload-robot: 300, upload-scene: 30)\n"
     "  --help                 show this help\n";
 
 struct Options {
@@ -326,11 +327,18 @@ void PrintOptimizer(const v1::OptimizerStatistics& o, const v1::TrajectoryQualit
   if (o.blends() > 0 || o.blends_tightened() > 0) {
     std::printf("blends      %d corners blended (%d tightened off obstacles)\n", o.blends(), o.blends_tightened());
   }
-  std::printf("quality     max |qd|/v %.3f  |qdd|/a %.3f  |jerk| %.4g rad/s³%s  deviation %.4g rad  clearance %.4g m  "
+  // An empty scene has no clearance to report (the server sends the largest double).
+  char clearance[64];
+  if (q.min_clearance() > 1e300) {
+    std::snprintf(clearance, sizeof clearance, "none (no obstacle)");
+  } else {
+    std::snprintf(clearance, sizeof clearance, "%.4g m", q.min_clearance());
+  }
+  std::printf("quality     max |qd|/v %.3f  |qdd|/a %.3f  |jerk| %.4g rad/s³%s  deviation %.4g rad  clearance %s  "
               "∫jerk² %.4g\n",
               q.max_velocity_ratio(), q.max_acceleration_ratio(), q.max_jerk(),
               q.max_effort_ratio() > 0 ? (" |τ|/τmax " + std::to_string(q.max_effort_ratio())).c_str() : "",
-              q.max_deviation(), q.min_clearance(), q.jerk_integral());
+              q.max_deviation(), clearance, q.jerk_integral());
 }
 
 /// Writes the response (.json) or its trajectory (.csv); prints where. False on failure.
@@ -406,7 +414,7 @@ int Plan(const Options& options) {
   std::printf("duration    %.4f s\n", response.duration());
   std::printf("waypoints   %d (planner returned %u)\n", response.path_size(), response.statistics().raw_waypoints());
   std::printf("samples     %d\n", response.trajectory().points_size());
-  std::printf("path length %.4f rad\n", response.statistics().path_length());
+  std::printf("path length %.4f (joint space: rad, m for prismatic joints)\n", response.statistics().path_length());
   std::printf("timings ms  validate %.1f  plan %.1f  shortcut %.1f  parameterize %.1f  optimize %.1f  verify %.1f  "
               "repair %.1f  total %.1f\n",
               1e3 * t.validate(), 1e3 * t.plan(), 1e3 * t.shortcut(), 1e3 * t.parameterize(), 1e3 * t.optimize(),
@@ -526,7 +534,8 @@ int UploadRobot(const Options& options) {
   }
   auto stub = v1::Planning::NewStub(MakeChannel(options));
   grpc::ClientContext context;
-  SetDeadline(&context, options.timeout > 0 ? options.timeout : 30.0);
+  // An upload of a mesh robot fits its spheres once, which can take a while for a big robot.
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : 300.0);
   v1::UploadRobotResponse response;
   const grpc::Status status = stub->UploadRobot(&context, request, &response);
   if (!status.ok()) return ReportRpcError("UploadRobot", options, status);
@@ -547,8 +556,12 @@ int UploadRobot(const Options& options) {
     std::printf("collision model: %s\n", collision.kind().c_str());
   }
   for (int i = 0; i < response.joint_names_size(); ++i) {
-    std::printf("  %-24s [%.4f, %.4f]  v_max %.4f\n", response.joint_names(i).c_str(), response.lower_limits(i),
-                response.upper_limits(i), response.velocity_limits(i));
+    // Limits as the server holds them (shortest text that reads back exactly), never rounded:
+    // a value compared against them must see the same number.
+    std::printf("  %-24s [%s, %s]  v_max %s\n", response.joint_names(i).c_str(),
+                chasles::FormatNumber(response.lower_limits(i)).c_str(),
+                chasles::FormatNumber(response.upper_limits(i)).c_str(),
+                chasles::FormatNumber(response.velocity_limits(i)).c_str());
   }
   return kExitOk;
 }
@@ -710,7 +723,8 @@ int Coordinate(const Options& options) {
   }
   if (response.has_verification()) {
     const v1::TeamVerification& v = response.verification();
-    std::printf("verified    %llu team states at <= %.4g s and <= %.4g rad; min robot distance %.4g m; "
+    std::printf("verified    %llu team states at <= %.4g s and joint steps <= %.4g (rad, m for bases); "
+                "min robot distance %.4g m; "
                 "max |qd|/v %.3f, max |qdd|/a %.3f\n",
                 static_cast<unsigned long long>(v.states_checked()), v.time_step(), v.max_joint_step(),
                 v.min_robot_distance(), v.max_velocity_ratio(), v.max_acceleration_ratio());
