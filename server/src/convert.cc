@@ -633,6 +633,18 @@ void ClampOntoLimits(const RobotModel& robot, double tolerance, const std::strin
   for (int i = 0; i < q->size() && i < robot.num_dofs(); ++i) {
     double& x = (*q)[i];
     const double lo = robot.lower_limits()[i], hi = robot.upper_limits()[i];
+    // A continuous joint has no limit: a value outside the range it is planned in ([-π, π]) is
+    // the same angle as its equivalent inside, which is used instead.
+    if (robot.joints()[robot.dof_joint(i)].type == JointType::kContinuous && std::isfinite(x) &&
+        (x < lo - tolerance || x > hi + tolerance)) {
+      const double wrapped = std::max(lo, std::min(hi, std::remainder(x, 2.0 * M_PI)));
+      warnings->push_back(field + "[" + std::to_string(i) + "] = " + FormatNumber(x) + " on continuous joint '" +
+                          robot.dof_names()[i] + "' is the angle " + FormatNumber(wrapped) +
+                          " of the range it is planned in [" + FormatNumber(lo) + ", " + FormatNumber(hi) +
+                          "]: wrapped");
+      x = wrapped;
+      continue;
+    }
     const bool below = x < lo && x >= lo - tolerance;
     const bool above = x > hi && x <= hi + tolerance;
     if (!below && !above) continue;  // inside, NaN, or too far out: ValidateConfiguration decides

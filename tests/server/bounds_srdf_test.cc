@@ -3,12 +3,14 @@
 // joint limit are clamped onto it within a documented tolerance, reported in the response;
 // farther out they are refused, the message printing the value and the limit exactly.
 
+#include <cmath>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "chasles/collision/collision_checker.h"
+#include "chasles/robot/error.h"
 #include "chasles/robot/robot_model.h"
 #include "../box_arm.h"
 #include "server_fixture.h"
@@ -330,6 +332,42 @@ TEST_F(RobotsAsShipped, APlanningGroupMovesOnlyItsJoints) {
   EXPECT_EQ(status.error_message(),
             "group = 'legs' is not a planning group of robot 'mobile_manipulator' (its groups: 'arm', "
             "'arm_with_torso')");
+}
+
+// A continuous joint has no limit: values beyond the range it is planned in ([-π, π]) are the
+// same angles as their equivalents inside it, used with a warning (not refused).
+TEST_F(RobotsAsShipped, ContinuousJointValuesOutsideTheirPlanningRangeAreWrapped) {
+  v1::UploadRobotRequest upload;
+  upload.mutable_robot()->mutable_urdf()->set_urdf(ReadText(ExamplePath("robots/mobile_manipulator.urdf")));
+  upload.mutable_robot()->mutable_urdf()->set_srdf(ReadText(ExamplePath("robots/mobile_manipulator.srdf")));
+  v1::UploadRobotResponse uploaded;
+  ASSERT_TRUE(Upload(upload, &uploaded).ok());
+  v1::PlanRequest request;
+  request.set_robot_id(uploaded.robot_id());
+  request.mutable_scene();
+  // Joint 5 (forearm_roll_joint) starts at -7 rad; joint 3 (upperarm_roll_joint) ends at 3.5 rad.
+  const double start[8] = {0.2, 0.0, 0.3, 0.0, 1.0, -7.0, 0.6, 0.0};
+  const double goal[8] = {0.2, 0.9, -0.4, 3.5, 1.2, -0.4, 0.9, 0.3};
+  for (double v : start) request.mutable_start()->add_positions(v);
+  for (double v : goal) request.mutable_goal()->add_positions(v);
+  v1::PlanResponse response;
+  const grpc::Status status = server_->Plan(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  ASSERT_EQ(response.warnings_size(), 2);
+  EXPECT_EQ(response.warnings(0), "start.positions[5] = -7 on continuous joint 'forearm_roll_joint' is the angle " +
+                                      FormatNumber(-7.0 + 2.0 * M_PI) +
+                                      " of the range it is planned in [-3.141592653589793, 3.141592653589793]: wrapped");
+  EXPECT_NE(response.warnings(1).find("goal.positions[3] = 3.5 on continuous joint 'upperarm_roll_joint' is the angle " +
+                                      FormatNumber(3.5 - 2.0 * M_PI)),
+            std::string::npos)
+      << response.warnings(1);
+  const auto& points = response.trajectory().points();
+  EXPECT_NEAR(points[0].positions(5), -7.0 + 2.0 * M_PI, 1e-12);
+  EXPECT_NEAR(points[points.size() - 1].positions(3), 3.5 - 2.0 * M_PI, 1e-12);
+  // A prismatic or revolute joint far outside its limits is still refused.
+  request.mutable_goal()->set_positions(0, 0.6);
+  EXPECT_EQ(server_->Plan(request, &response).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
 }
 
 // InverseKinematicsRequest.group: only the group's joints move, the others held at

@@ -100,8 +100,9 @@ inline constexpr double kDefaultBoundsTolerance = 1e-6;
 double BoundsToleranceFromProto(double value);
 
 /// Values of q at most `tolerance` outside a joint limit are set onto it, each reported in
-/// *warnings naming `field`, the index, the value, the limit and the joint. Values farther out
-/// (and NaN) are left for RobotModel::ValidateConfiguration to refuse.
+/// *warnings naming `field`, the index, the value, the limit and the joint. A continuous joint's
+/// value farther out is wrapped by a multiple of 2π into its planning range [-π, π] (reported
+/// too). Other values farther out (and NaN) are left for RobotModel::ValidateConfiguration to refuse.
 void ClampOntoLimits(const RobotModel& robot, double tolerance, const std::string& field, Eigen::VectorXd* q,
                      std::vector<std::string>* warnings);
 
