@@ -372,7 +372,9 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
   out.quality = timed.quality;
   out.seconds.quality = timed.quality_seconds;
   const auto t_sample = Clock::now();
-  out.samples = SampleTrajectory(out.trajectory, checker.robot(), query.sample_period, query.gravity, query.sample_cap);
+  if (!query.knots_replace_samples || out.trajectory.degree() > 2) {
+    out.samples = SampleTrajectory(out.trajectory, checker.robot(), query.sample_period, query.gravity, query.sample_cap);
+  }
   out.seconds.sample = SecondsSince(t_sample);
   const RobotModel& robot = checker.robot();
   if (query.pose_goal) {

@@ -332,8 +332,10 @@ OptimizeOutcome OptimizePath(const OptimizeQuery& query, const Termination& term
                                  termination);
   if (out.stage.code != TrajectoryStageCode::kSuccess) return finish(out.stage.code, out.stage.message);
   const auto t_sample = Clock::now();
-  out.samples =
-      SampleTrajectory(out.stage.trajectory, robot, query.sample_period, query.trajectory.gravity, query.sample_cap);
+  if (!query.knots_replace_samples || out.stage.trajectory.degree() > 2) {
+    out.samples =
+        SampleTrajectory(out.stage.trajectory, robot, query.sample_period, query.trajectory.gravity, query.sample_cap);
+  }
   out.sample_seconds = SecondsSince(t_sample);
   std::string message = std::string(ToString(out.stage.optimizer.used)) + " trajectory of " +
                         FormatNumber(out.stage.trajectory.duration()) + " s, verified at " +

@@ -707,6 +707,7 @@ PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<con
   const double period = trajectory.sample_period() == 0.0 ? 0.01 : trajectory.sample_period();
   RequireInRange(period, 1e-4, 1.0, "trajectory.sample_period");
   query.sample_period = period;
+  query.knots_replace_samples = trajectory.knots_only() && trajectory.sample_period() == 0.0;
 
   if (trajectory.shortcut_attempts() < -1) {
     ThrowInvalid("trajectory.shortcut_attempts = " + std::to_string(trajectory.shortcut_attempts()) +
@@ -941,6 +942,7 @@ OptimizeQuery OptimizeQueryFromProto(const v1::OptimizeRequest& request, std::sh
   const double period = request.options().sample_period() == 0.0 ? 0.01 : request.options().sample_period();
   RequireInRange(period, 1e-4, 1.0, "options.sample_period");
   query.sample_period = period;
+  query.knots_replace_samples = request.options().knots_only() && request.options().sample_period() == 0.0;
   const double resolution = request.collision_resolution() == 0.0 ? 0.005 : request.collision_resolution();
   RequireInRange(resolution, 1e-4, 0.1, "collision_resolution");
   query.collision_resolution = resolution;
@@ -969,7 +971,27 @@ static void RepairToProto(const VerificationRepair& repair, v1::VerificationRepa
   out->set_repaired(repair.repaired);
 }
 
-void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery& query, v1::OptimizeResponse* response) {
+bool KnotsToProto(const TimedTrajectory& trajectory, const std::vector<std::string>& joint_names,
+                  v1::TrajectoryKnots* out) {
+  out->Clear();
+  if (trajectory.empty() || trajectory.degree() > 2) return false;
+  const int n = trajectory.num_dofs();
+  for (const std::string& name : joint_names) out->add_joint_names(name);
+  const auto add = [&](double t, const TrajectorySample& state) {
+    out->add_times(t);
+    for (int j = 0; j < n; ++j) out->add_positions(state.q[j]);
+    for (int j = 0; j < n; ++j) out->add_velocities(state.qd[j]);
+  };
+  for (const TimedTrajectory::Piece& piece : trajectory.pieces()) {
+    if (piece.duration <= 0.0) continue;
+    add(piece.t0, piece.State(0.0));
+  }
+  add(trajectory.duration(), trajectory.Evaluate(trajectory.duration()));
+  return true;
+}
+
+void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery& query, v1::OptimizeResponse* response,
+                            bool knots) {
   response->set_outcome(StageCodeToProto(outcome.code));
   response->set_message(outcome.message);
   const TrajectoryStageResult& stage = outcome.stage;
@@ -988,6 +1010,7 @@ void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery&
   QualityToProto(stage.quality, response->mutable_quality());
   LimitsToProto(stage.limits, response->mutable_limits());
   SamplesToProto(outcome.samples, query.checker->robot(), response->mutable_trajectory());
+  if (knots) KnotsToProto(stage.trajectory, query.checker->robot().dof_names(), response->mutable_knots());
   response->set_duration(stage.trajectory.duration());
 }
 
@@ -1008,7 +1031,7 @@ v1::PlanOutcome OutcomeToProto(PlanOutcomeCode code) {
   return v1::PLAN_OUTCOME_UNSPECIFIED;
 }
 
-void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::PlanResponse* response) {
+void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::PlanResponse* response, bool knots) {
   const RobotModel& robot = query.checker->robot();
   response->set_outcome(OutcomeToProto(outcome.code));
   response->set_message(outcome.message);
@@ -1040,6 +1063,7 @@ void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::
   if (outcome.code != PlanOutcomeCode::kSuccess) return;  // nothing unverified leaves the server
   for (const Eigen::VectorXd& q : outcome.path) ToProto(q, response->add_path()->mutable_positions());
   SamplesToProto(outcome.samples, robot, response->mutable_trajectory());
+  if (knots) KnotsToProto(outcome.trajectory, robot.dof_names(), response->mutable_knots());
   QualityToProto(outcome.quality, response->mutable_quality());
   LimitsToProto(outcome.limits, response->mutable_limits());
   response->set_duration(outcome.trajectory.duration());

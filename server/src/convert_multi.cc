@@ -33,6 +33,10 @@ void ToProto(const Eigen::VectorXd& v, google::protobuf::RepeatedField<double>* 
 
 }  // namespace
 
+bool KnotsFor(const v1::CoordinateRequest& request) {
+  return request.knots_only() || request.robots_size() > kMaxTeamForSamplesByDefault;
+}
+
 CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& request, std::shared_ptr<const Scene> scene,
                                              const TeamRobotResolver& resolve, const PlannerRegistry& registry,
                                              std::vector<std::string>* warnings, int max_robots) {
@@ -97,6 +101,7 @@ CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& reques
   query.collision_resolution = Defaulted(request.collision_resolution(), 0.005, 1e-4, 0.1, "collision_resolution");
   query.time_step = Defaulted(request.time_step(), 1e-3, 1e-4, 0.01, "time_step");
   query.sample_period = Defaulted(request.sample_period(), 0.01, 1e-4, 1.0, "sample_period");
+  query.knots_replace_samples = KnotsFor(request) && request.sample_period() == 0.0;
   if (!std::isfinite(request.robot_padding()) || request.robot_padding() < 0.0 || request.robot_padding() > 0.5) {
     ThrowInvalid("robot_padding = " + FormatNumber(request.robot_padding()) + " must be within [0, 0.5] m");
   }
@@ -172,7 +177,7 @@ v1::PlanOutcome CoordinationCodeToProto(CoordinationCode code) {
 }
 
 void CoordinationOutcomeToProto(const CoordinationOutcome& outcome, const CoordinationQuery& query,
-                                v1::CoordinateResponse* response) {
+                                v1::CoordinateResponse* response, bool knots) {
   response->set_outcome(CoordinationCodeToProto(outcome.code));
   response->set_message(outcome.message);
   response->set_seconds(outcome.seconds);
@@ -204,6 +209,7 @@ void CoordinationOutcomeToProto(const CoordinationOutcome& outcome, const Coordi
     v1::RobotTrajectory* robot = response->add_robots();
     robot->set_name(plan.name);
     SamplesToProto(plan.samples, *query.robots[k].placement.model, robot->mutable_trajectory());
+    if (knots) KnotsToProto(plan.trajectory, query.robots[k].placement.model->dof_names(), robot->mutable_knots());
     robot->set_duration(plan.duration);
     robot->set_start_delay(plan.start_delay);
     robot->set_wait_time(plan.wait_time);

@@ -252,11 +252,19 @@ class PlanningService final : public RawService {
   grpc::ServerUnaryReactor* Optimize(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
                                      grpc::ByteBuffer* out) override {
     return Serve<v1::OptimizeRequest, v1::OptimizeResponse>("Optimize", context, in, out, Where::kPool, [this](auto& call) {
-      const v1::OptimizeRequest& request = call.request;
       v1::OptimizeResponse& response = call.response;
-      call.record.request_id = RequestId(request.request_id(), "opt");
+      call.record.request_id = RequestId(call.request.request_id(), "opt");
       response.set_request_id(call.record.request_id);
-      const StoredRobot robot = RobotOfRequest(*store_, request);
+      StoredRobot robot = RobotOfRequest(*store_, call.request);
+      // A planning group: the other joints held where the first waypoint puts them.
+      v1::OptimizeRequest grouped;
+      std::vector<std::string> warnings;
+      if (!call.request.group().empty()) {
+        grouped = call.request;
+        robot = NarrowToGroup(robot, &grouped, &warnings);
+        call.record.fields.push_back({"group", call.request.group()});
+      }
+      const v1::OptimizeRequest& request = call.request.group().empty() ? call.request : grouped;
       const StoredScene scene = SceneOfRequest(*store_, request);
       response.set_robot_id(robot.id);
       response.set_scene_id(scene.id);
@@ -268,15 +276,16 @@ class PlanningService final : public RawService {
       ApplyReplyCap(&query.sample_cap);
       const Termination termination = call.Start(BudgetEnd(settings.time_budget, call.deadline), call.deadline);
       const OptimizeOutcome outcome = OptimizePath(query, termination);
-      OptimizeOutcomeToProto(outcome, query, &response);
+      OptimizeOutcomeToProto(outcome, query, &response, request.options().knots_only());
       response.set_input_duration(input_duration);
+      for (const std::string& w : warnings) response.add_warnings(w);
       call.record.outcome = v1::PlanOutcome_Name(response.outcome());
-      call.record.fields = {{"robot", IdPrefix(robot.id)},
+      call.record.fields.insert(call.record.fields.end(), {{"robot", IdPrefix(robot.id)},
                             {"scene", IdPrefix(scene.id)},
                             {"waypoints", std::to_string(query.path.size())},
                             {"method", ToString(outcome.stage.optimizer.requested)},
                             {"used", ToString(outcome.stage.optimizer.used)},
-                            {"duration_s", FormatNumber(response.duration())}};
+                            {"duration_s", FormatNumber(response.duration())}});
       call.record.stages = {{"parameterize", outcome.stage.parameterize_seconds},
                             {"optimize", outcome.stage.optimize_seconds},
                             {"verify", outcome.stage.verify_seconds}};
@@ -423,16 +432,51 @@ class PlanningService final : public RawService {
           const StoredScene scene = SceneOfRequest(*store_, request);
           response.set_scene_id(scene.id);
           std::vector<std::string> warnings;
+          // Robots with a planning group: held outside it where their start puts them, their
+          // start and goal narrowed to the group ("robots[k]" → the held model).
+          v1::CoordinateRequest grouped;
+          std::map<std::string, std::shared_ptr<const RobotModel>> held;
+          if (std::any_of(request.robots().begin(), request.robots().end(),
+                          [](const v1::TeamRobot& r) { return !r.group().empty(); })) {
+            if (request.robots_size() > options_.max_team_robots) {
+              ThrowInvalid("robots has " + std::to_string(request.robots_size()) + " entries; a team has 1 to " +
+                           std::to_string(options_.max_team_robots) + " robots on this server");
+            }
+            grouped = request;
+            const double tolerance = BoundsToleranceFromProto(request.bounds_tolerance());
+            for (int k = 0; k < grouped.robots_size(); ++k) {
+              v1::TeamRobot& robot = *grouped.mutable_robots(k);
+              if (robot.group().empty()) continue;
+              const std::string field = "robots[" + std::to_string(k) + "]";
+              if (robot.target_case() == v1::TeamRobot::kPoseGoal) {
+                ThrowInvalid(field + ".group = '" + robot.group() + "' cannot be combined with " + field +
+                             ".pose_goal: give a joint goal");
+              }
+              const StoredRobot stored = TeamRobotOf(robot, field);
+              const PlanningGroup& group = FindGroup(stored, robot.group(), field + ".group");
+              const Eigen::VectorXd start = TakeHeldState(robot.mutable_start()->mutable_positions(), *stored.model, group,
+                                                          field + ".start.positions", tolerance, &warnings);
+              NarrowPositions(robot.mutable_goal()->mutable_positions(), *stored.model, group, start,
+                              field + ".goal.positions", field + ".start.positions", "the start", tolerance, &warnings);
+              held[field] = HoldOutside(stored, group, start).model;
+            }
+          }
+          const v1::CoordinateRequest& team = grouped.robots_size() > 0 ? grouped : request;
           CoordinationQuery query = CoordinationQueryFromProto(
-              request, scene.scene,
-              [this](const v1::TeamRobot& robot, const std::string& field) { return TeamRobotOf(robot, field).model; },
+              team, scene.scene,
+              [this, &held](const v1::TeamRobot& robot, const std::string& field) {
+                const auto it = held.find(field);
+                return it != held.end() ? it->second : TeamRobotOf(robot, field).model;
+              },
               registry_, &warnings, options_.max_team_robots);
           for (int k = 0; k < request.robots_size(); ++k) {
             if (!request.robots(k).has_robot()) continue;  // an uploaded robot reported them at upload
             const std::string field = "robots[" + std::to_string(k) + "].robot";
-            for (const std::string& w : RobotWarnings(*query.robots[static_cast<std::size_t>(k)].placement.model, field)) {
-              response.add_warnings(w);
-            }
+            // A grouped robot's held model has no load warnings: they are the described robot's.
+            const std::shared_ptr<const RobotModel> described =
+                request.robots(k).group().empty() ? query.robots[static_cast<std::size_t>(k)].placement.model
+                                                  : TeamRobotOf(request.robots(k), "robots[" + std::to_string(k) + "]").model;
+            for (const std::string& w : RobotWarnings(*described, field)) response.add_warnings(w);
           }
           for (const std::string& w : warnings) response.add_warnings(w);
           ApplyReplyCap(&query.sample_cap, query.robots.size());
@@ -449,7 +493,7 @@ class PlanningService final : public RawService {
           }
           const Termination termination = call.Start(BudgetEnd(query.time_budget, call.deadline), call.deadline);
           const CoordinationOutcome outcome = chasles::Coordinate(query, registry_, termination);
-          CoordinationOutcomeToProto(outcome, query, &response);
+          CoordinationOutcomeToProto(outcome, query, &response, KnotsFor(team));
           call.record.outcome = v1::PlanOutcome_Name(response.outcome());
           call.record.fields = {
               {"scene", IdPrefix(scene.id)},
@@ -848,7 +892,7 @@ class PlanningService final : public RawService {
                           {"shortcut", outcome.seconds.shortcut},   {"parameterize", outcome.seconds.parameterize},
                           {"optimize", outcome.seconds.optimize},   {"verify", outcome.seconds.verify}};
     outcome.seconds.total = SecondsSince(call.arrival);
-    PlanOutcomeToProto(outcome, query, &response);
+    PlanOutcomeToProto(outcome, query, &response, request.trajectory().knots_only());
     group_warnings.insert(group_warnings.end(), settings.warnings.begin(), settings.warnings.end());
     AddPlanWarnings(request, described, group_warnings, &response);
     grpc::Status status = StatusFromOutcome(outcome.code, outcome.message);
@@ -859,14 +903,16 @@ class PlanningService final : public RawService {
     if (!status.ok()) throw StatusError{status};
   }
 
-  /// The planning group `name` of `robot`. \throws Error(kInvalidArgument) listing its groups.
-  static const PlanningGroup& FindGroup(const StoredRobot& robot, const std::string& name) {
+  /// The planning group `name` of `robot`. \throws Error(kInvalidArgument) naming `field` and
+  /// listing its groups.
+  static const PlanningGroup& FindGroup(const StoredRobot& robot, const std::string& name,
+                                        const std::string& field = "group") {
     const auto group = std::find_if(robot.groups.begin(), robot.groups.end(),
                                     [&](const PlanningGroup& g) { return g.name == name; });
     if (group == robot.groups.end()) {
       std::string known;
       for (const PlanningGroup& g : robot.groups) known += (known.empty() ? "'" : ", '") + g.name + "'";
-      ThrowInvalid("group = '" + name + "' is not a planning group of robot '" + robot.model->name() + "' (" +
+      ThrowInvalid(field + " = '" + name + "' is not a planning group of robot '" + robot.model->name() + "' (" +
                    (known.empty() ? std::string("its SRDF defines none") : "its groups: " + known) + ")");
     }
     return *group;
@@ -898,6 +944,50 @@ class PlanningService final : public RawService {
     return names;
   }
 
+  /// Positions of a robot narrowed to `group`: given for the group's joints (kept as they are),
+  /// or for every joint (validated and clamped as ConfigurationFromProto does, those outside the
+  /// group equal to `held`, which `held_field` gives — `held_name` in messages: "the start",
+  /// "the first waypoint"), rewritten to the group's values. \throws Error(kInvalidArgument)
+  /// naming `field`.
+  static void NarrowPositions(google::protobuf::RepeatedField<double>* values, const RobotModel& model,
+                              const PlanningGroup& group, const Eigen::VectorXd& held, const std::string& field,
+                              const std::string& held_field, const std::string& held_name, double tolerance,
+                              std::vector<std::string>* warnings) {
+    const std::vector<int>& dofs = group.dofs;
+    const int given = values->size();
+    if (given == model.num_dofs() && static_cast<int>(dofs.size()) != model.num_dofs()) {
+      const Eigen::VectorXd full = ConfigurationFromProto(*values, model, field, tolerance, warnings);
+      std::vector<char> in_group(static_cast<std::size_t>(model.num_dofs()), 0);
+      for (int dof : dofs) in_group[static_cast<std::size_t>(dof)] = 1;
+      for (int i = 0; i < model.num_dofs(); ++i) {
+        if (in_group[static_cast<std::size_t>(i)] || full[i] == held[i]) continue;
+        ThrowInvalid(field + "[" + std::to_string(i) + "] = " + FormatNumber(full[i]) + " differs from " +
+                     held_field + "[" + std::to_string(i) + "] = " + FormatNumber(held[i]) + ", but joint '" +
+                     model.dof_names()[i] + "' is not in group '" + group.name + "' and stays where " + held_name +
+                     " puts it: give the group's joints (" + GroupJointNames(model, group) +
+                     "), or every joint with those outside the group equal to " + held_name + "'s");
+      }
+      values->Clear();
+      for (int dof : dofs) values->Add(full[dof]);
+    } else if (given != static_cast<int>(dofs.size())) {
+      ThrowInvalid(field + " has " + std::to_string(given) + " values; group '" + group.name + "' of robot '" +
+                   model.name() + "' has " + std::to_string(dofs.size()) + " joints (" +
+                   GroupJointNames(model, group) + "): give those, or all " + std::to_string(model.num_dofs()) +
+                   " of the robot's joints");
+    }
+  }
+
+  /// The full state a grouped request holds the other joints at (every joint, validated and
+  /// clamped), its field rewritten to the group's values.
+  static Eigen::VectorXd TakeHeldState(google::protobuf::RepeatedField<double>* values, const RobotModel& model,
+                                       const PlanningGroup& group, const std::string& field, double tolerance,
+                                       std::vector<std::string>* warnings) {
+    const Eigen::VectorXd held = ConfigurationFromProto(*values, model, field, tolerance, warnings);
+    values->Clear();
+    for (int dof : group.dofs) values->Add(held[dof]);
+    return held;
+  }
+
   /// PlanRequest.group: the robot with every joint outside the group held where the start puts
   /// it, and the request's start and goal narrowed to the group's joints; start values clamped
   /// within bounds_tolerance are reported in *warnings. \throws Error(kInvalidArgument) naming
@@ -906,38 +996,70 @@ class PlanningService final : public RawService {
                                    std::vector<std::string>* warnings) {
     const RobotModel& model = *robot.model;
     const PlanningGroup& group = FindGroup(robot, request->group());
-    const std::vector<int>& dofs = group.dofs;
-    std::vector<char> in_group(static_cast<std::size_t>(model.num_dofs()), 0);
-    for (int dof : dofs) in_group[static_cast<std::size_t>(dof)] = 1;
     const double tolerance = BoundsToleranceFromProto(request->bounds_tolerance());
     const Eigen::VectorXd start =
-        ConfigurationFromProto(request->start().positions(), model, "start.positions", tolerance, warnings);
+        TakeHeldState(request->mutable_start()->mutable_positions(), model, group, "start.positions", tolerance, warnings);
     if (request->target_case() == v1::PlanRequest::kGoal) {
-      const int given = request->goal().positions_size();
-      if (given == model.num_dofs() && static_cast<int>(dofs.size()) != model.num_dofs()) {
-        const Eigen::VectorXd goal =
-            ConfigurationFromProto(request->goal().positions(), model, "goal.positions", tolerance, warnings);
-        for (int i = 0; i < model.num_dofs(); ++i) {
-          if (in_group[static_cast<std::size_t>(i)] || goal[i] == start[i]) continue;
-          ThrowInvalid("goal.positions[" + std::to_string(i) + "] = " + FormatNumber(goal[i]) +
-                       " differs from start.positions[" + std::to_string(i) + "] = " + FormatNumber(start[i]) +
-                       ", but joint '" + model.dof_names()[i] + "' is not in group '" + group.name +
-                       "' and stays where the start puts it: give the group's joints (" +
-                       GroupJointNames(model, group) + "), or every joint with those outside the group equal to "
-                       "the start's");
-        }
-        request->mutable_goal()->clear_positions();
-        for (int dof : dofs) request->mutable_goal()->add_positions(goal[dof]);
-      } else if (given != static_cast<int>(dofs.size())) {
-        ThrowInvalid("goal.positions has " + std::to_string(given) + " values; group '" + group.name +
-                     "' of robot '" + model.name() + "' has " + std::to_string(dofs.size()) + " joints (" +
-                     GroupJointNames(model, group) + "): give those, or all " + std::to_string(model.num_dofs()) +
-                     " of the robot's joints");
-      }
+      NarrowPositions(request->mutable_goal()->mutable_positions(), model, group, start, "goal.positions",
+                      "start.positions", "the start", tolerance, warnings);
     }
-    request->mutable_start()->clear_positions();
-    for (int dof : dofs) request->mutable_start()->add_positions(start[dof]);
     return HoldOutside(robot, group, start);
+  }
+
+  /// OptimizeRequest.group: the robot held outside the group where the first waypoint (path[0] or
+  /// the trajectory's first point, every joint) puts it; every waypoint narrowed to the group's
+  /// joints (velocities and accelerations of trajectory points too, given for the group or for
+  /// every joint). \throws Error(kInvalidArgument) naming the field.
+  static StoredRobot NarrowToGroup(const StoredRobot& robot, v1::OptimizeRequest* request,
+                                   std::vector<std::string>* warnings) {
+    const RobotModel& model = *robot.model;
+    const PlanningGroup& group = FindGroup(robot, request->group());
+    const double tolerance = kDefaultBoundsTolerance;
+    Eigen::VectorXd held;
+    if (request->path_size() > 0) {
+      held = TakeHeldState(request->mutable_path(0)->mutable_positions(), model, group, "path[0].positions", tolerance,
+                           warnings);
+      for (int k = 1; k < request->path_size(); ++k) {
+        NarrowPositions(request->mutable_path(k)->mutable_positions(), model, group, held,
+                        "path[" + std::to_string(k) + "].positions", "path[0].positions", "the first waypoint",
+                        tolerance, warnings);
+      }
+    } else if (request->trajectory().points_size() > 0) {
+      v1::JointTrajectory* trajectory = request->mutable_trajectory();
+      held = TakeHeldState(trajectory->mutable_points(0)->mutable_positions(), model, group,
+                           "trajectory.points[0].positions", tolerance, warnings);
+      for (int k = 0; k < trajectory->points_size(); ++k) {
+        const std::string field = "trajectory.points[" + std::to_string(k) + "]";
+        v1::TrajectoryPoint* point = trajectory->mutable_points(k);
+        if (k > 0) {
+          NarrowPositions(point->mutable_positions(), model, group, held, field + ".positions",
+                          "trajectory.points[0].positions", "the first waypoint", tolerance, warnings);
+        }
+        // Derivatives of every joint: those outside the group must be 0 (they stand still).
+        for (auto* values : {point->mutable_velocities(), point->mutable_accelerations()}) {
+          if (values->size() != model.num_dofs() || static_cast<int>(group.dofs.size()) == model.num_dofs()) continue;
+          const Eigen::VectorXd zero = Eigen::VectorXd::Zero(model.num_dofs());
+          Eigen::VectorXd full(model.num_dofs());
+          for (int i = 0; i < model.num_dofs(); ++i) full[i] = values->Get(i);
+          std::vector<char> in_group(static_cast<std::size_t>(model.num_dofs()), 0);
+          for (int dof : group.dofs) in_group[static_cast<std::size_t>(dof)] = 1;
+          for (int i = 0; i < model.num_dofs(); ++i) {
+            if (!in_group[static_cast<std::size_t>(i)] && full[i] != 0.0) {
+              ThrowInvalid(field + (values == point->mutable_velocities() ? ".velocities[" : ".accelerations[") +
+                           std::to_string(i) + "] = " + FormatNumber(full[i]) + " but joint '" + model.dof_names()[i] +
+                           "' is not in group '" + group.name + "' and stands still");
+            }
+          }
+          values->Clear();
+          for (int dof : group.dofs) values->Add(full[dof]);
+        }
+      }
+      trajectory->clear_joint_names();
+      for (int dof : group.dofs) trajectory->add_joint_names(model.dof_names()[dof]);
+    } else {
+      ThrowInvalid("path and trajectory are both empty: give the waypoints to optimize");
+    }
+    return HoldOutside(robot, group, held);
   }
 
   /// InverseKinematicsRequest.group: the robot with every joint outside the group held where

@@ -370,6 +370,99 @@ TEST_F(RobotsAsShipped, ContinuousJointValuesOutsideTheirPlanningRangeAreWrapped
   EXPECT_EQ(server_->Plan(request, &response).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
 }
 
+// OptimizeRequest.group: the first waypoint gives every joint; the others the group's joints or
+// every joint with the held ones unchanged. The trajectory names and moves only the group's joints.
+TEST_F(RobotsAsShipped, OptimizeTimesAPlanningGroupsPath) {
+  v1::UploadRobotRequest upload;
+  upload.mutable_robot()->mutable_urdf()->set_urdf(ReadText(ExamplePath("robots/mobile_manipulator.urdf")));
+  upload.mutable_robot()->mutable_urdf()->set_srdf(ReadText(ExamplePath("robots/mobile_manipulator.srdf")));
+  v1::UploadRobotResponse uploaded;
+  ASSERT_TRUE(Upload(upload, &uploaded).ok());
+  v1::OptimizeRequest request;
+  request.set_robot_id(uploaded.robot_id());
+  request.mutable_scene();
+  request.set_group("arm");
+  const double first[8] = {0.2, 0.0, 0.3, 0.0, 1.0, 0.0, 0.6, 0.0};
+  const double middle[7] = {0.3, 0.1, 0.2, 1.1, 0.0, 0.7, 0.1};
+  const double last[8] = {0.2, 0.6, -0.2, 0.4, 1.2, -0.3, 0.9, 0.3};
+  v1::JointState* a = request.add_path();
+  for (double v : first) a->add_positions(v);
+  v1::JointState* b = request.add_path();
+  for (double v : middle) b->add_positions(v);
+  v1::JointState* c = request.add_path();
+  for (double v : last) c->add_positions(v);
+  v1::OptimizeResponse response;
+  grpc::ClientContext context;
+  grpc::Status status = server_->stub().Optimize(&context, request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  ASSERT_EQ(response.trajectory().joint_names_size(), 7);
+  EXPECT_EQ(response.trajectory().joint_names(0), "shoulder_pan_joint");
+  const auto& points = response.trajectory().points();
+  ASSERT_GT(points.size(), 2);
+  for (int i = 0; i < 7; ++i) {
+    EXPECT_NEAR(points[0].positions(i), first[i + 1], 1e-12);
+    EXPECT_NEAR(points[points.size() - 1].positions(i), last[i + 1], 1e-12);
+  }
+  // A held joint that moves between waypoints is refused, naming it.
+  request.mutable_path(2)->set_positions(0, 0.25);
+  grpc::ClientContext context2;
+  status = server_->stub().Optimize(&context2, request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("path[2].positions[0] = 0.25 differs from path[0].positions[0] = 0.2, but "
+                                        "joint 'torso_lift_joint' is not in group 'arm' and stays where the first "
+                                        "waypoint puts it"),
+            std::string::npos)
+      << status.error_message();
+}
+
+// TeamRobot.group: two mobile manipulators side by side move their arms only; the team is
+// verified with every robot's other joints standing where their starts put them.
+TEST_F(RobotsAsShipped, CoordinateMovesEachRobotsPlanningGroup) {
+  v1::UploadRobotRequest upload;
+  upload.mutable_robot()->mutable_urdf()->set_urdf(ReadText(ExamplePath("robots/mobile_manipulator.urdf")));
+  upload.mutable_robot()->mutable_urdf()->set_srdf(ReadText(ExamplePath("robots/mobile_manipulator.srdf")));
+  v1::UploadRobotResponse uploaded;
+  ASSERT_TRUE(Upload(upload, &uploaded).ok());
+  v1::CoordinateRequest request;
+  request.mutable_scene();
+  const double start[8] = {0.1, 0.0, 0.3, 0.0, 1.0, 0.0, 0.6, 0.0};
+  const double goal[7] = {0.9, -0.4, 0.5, 1.2, -0.4, 0.9, 0.3};
+  for (int k = 0; k < 2; ++k) {
+    v1::TeamRobot* robot = request.add_robots();
+    robot->set_name(k == 0 ? "left" : "right");
+    robot->set_robot_id(uploaded.robot_id());
+    robot->set_group("arm");
+    robot->mutable_base_pose()->mutable_position()->set_y(k == 0 ? 1.5 : -1.5);
+    robot->mutable_base_pose()->mutable_orientation()->set_w(1.0);
+    for (double v : start) robot->mutable_start()->add_positions(v);
+    for (double v : goal) robot->mutable_goal()->add_positions(v);
+  }
+  request.set_time_budget(20.0);
+  v1::CoordinateResponse response;
+  {
+    grpc::ClientContext context;
+    const grpc::Status status = server_->stub().Coordinate(&context, request, &response);
+    ASSERT_TRUE(status.ok()) << status.error_message();
+  }
+  ASSERT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  ASSERT_EQ(response.robots_size(), 2);
+  for (const v1::RobotTrajectory& robot : response.robots()) {
+    ASSERT_EQ(robot.trajectory().joint_names_size(), 7) << robot.name();
+    const auto& points = robot.trajectory().points();
+    for (int i = 0; i < 7; ++i) EXPECT_NEAR(points[points.size() - 1].positions(i), goal[i], 1e-9);
+  }
+  // 3 m apart: the arms (reach < 1.2 m each) never come near each other.
+  EXPECT_GT(response.verification().min_robot_distance(), 0.2);
+  request.mutable_robots(1)->set_group("legs");
+  grpc::ClientContext context;
+  const grpc::Status status = server_->stub().Coordinate(&context, request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message(),
+            "robots[1].group = 'legs' is not a planning group of robot 'mobile_manipulator' (its groups: 'arm', "
+            "'arm_with_torso')");
+}
+
 // InverseKinematicsRequest.group: only the group's joints move, the others held at
 // initial_guess; every solution, put back into the whole robot, reaches the pose (checked here
 // with the robot's own forward kinematics).

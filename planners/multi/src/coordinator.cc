@@ -826,8 +826,10 @@ CoordinationOutcome Coordinator::Run() {
       plan.limits = m.limits;
       // Gravity in the robot's base frame, for its torques.
       const Eigen::Vector3d gravity = m.placement.base_pose.linear().transpose() * Eigen::Vector3d(0.0, 0.0, -9.81);
-      plan.samples = SampleTrajectory(plan.trajectory, *m.placement.model, query_.sample_period, gravity,
-                                      query_.sample_cap);
+      if (!query_.knots_replace_samples || plan.trajectory.degree() > 2) {
+        plan.samples = SampleTrajectory(plan.trajectory, *m.placement.model, query_.sample_period, gravity,
+                                        query_.sample_cap);
+      }
       out.makespan = std::max(out.makespan, plan.duration);
       out.sum_of_durations += plan.duration;
       out.robots.push_back(std::move(plan));

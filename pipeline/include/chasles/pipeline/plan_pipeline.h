@@ -47,6 +47,9 @@ struct PlanQuery {
   double collision_resolution = 0.005;  ///< [rad], in [1e-4, 0.1]
   TrajectorySpec trajectory;          ///< limits and post-processing (gravity: set from `gravity`)
   double sample_period = 0.01;        ///< [s], in [1e-4, 1]
+  /// true: no samples when the trajectory has a knots form (degree <= 2; the caller returns
+  /// knots instead); a trajectory of higher degree is still sampled.
+  bool knots_replace_samples = false;
   SampleCap sample_cap;               ///< checked before sampling (server flags set it)
   int shortcut_attempts = 100;        ///< -1 = off; never applied to a car's path (its shape is kept)
   /// Shortcutting stops after this many consecutive attempts that each shorten the path by less

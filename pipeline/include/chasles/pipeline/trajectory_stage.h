@@ -144,6 +144,9 @@ struct OptimizeQuery {
   JointPath path;                 ///< >= 1 waypoint
   TrajectorySpec trajectory;      ///< gravity included
   double sample_period = 0.01;    ///< [s], in [1e-4, 1]
+  /// true: no samples when the trajectory has a knots form (degree <= 2; the caller returns
+  /// knots instead); a trajectory of higher degree is still sampled.
+  bool knots_replace_samples = false;
   double collision_resolution = 0.005;  ///< [rad], in [1e-4, 0.1]
   SampleCap sample_cap{1000000, 64ull << 20, "options.sample_period"};
 };

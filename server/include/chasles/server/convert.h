@@ -123,8 +123,16 @@ PlanQuery PlanQueryFromProto(const v1::PlanRequest& request,
 v1::PlanOutcome OutcomeToProto(PlanOutcomeCode code);
 
 /// Fills outcome, message, path, trajectory (with efforts when computed), duration, timings,
-/// statistics, verification and, for a pose goal, reached_goal and goal_manipulability.
-void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::PlanResponse* response);
+/// statistics, verification and, for a pose goal, reached_goal and goal_manipulability; with
+/// `knots`, also the trajectory's knots (KnotsToProto).
+void PlanOutcomeToProto(const PlanOutcome& outcome, const PlanQuery& query, v1::PlanResponse* response,
+                        bool knots = false);
+
+/// The trajectory as TrajectoryKnots (one knot per piece start, and the end): exact for pieces
+/// of degree <= 2 (constant acceleration between knots). False, and *out left empty, when a
+/// piece has a higher degree.
+bool KnotsToProto(const TimedTrajectory& trajectory, const std::vector<std::string>& joint_names,
+                  v1::TrajectoryKnots* out);
 
 /// Trajectory options (limits, post-processing and its options) with the proto's defaults;
 /// `field` prefixes the names in errors ("trajectory" in PlanRequest, "options" in
@@ -139,8 +147,9 @@ OptimizeQuery OptimizeQueryFromProto(const v1::OptimizeRequest& request, std::sh
                                      RequestSettings* settings, double* input_duration);
 
 /// Fills outcome, message, timings, verification, optimizer and (on success) quality,
-/// trajectory and duration.
-void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery& query, v1::OptimizeResponse* response);
+/// trajectory, duration and, with `knots`, the knots.
+void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery& query, v1::OptimizeResponse* response,
+                            bool knots = false);
 
 /// Fills a catalogue entry.
 void PlannerSpecToProto(const PlannerSpec& spec, v1::PlannerDescription* description);

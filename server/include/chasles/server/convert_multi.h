@@ -37,8 +37,16 @@ CoordinationQuery WorkcellPlanQuery(const v1::PlanRequest& request, std::shared_
 
 v1::PlanOutcome CoordinationCodeToProto(CoordinationCode code);
 
+
+/// With `knots` (KnotsFor), each robot's trajectory also as knots (KnotsToProto).
 void CoordinationOutcomeToProto(const CoordinationOutcome& outcome, const CoordinationQuery& query,
-                                v1::CoordinateResponse* response);
+                                v1::CoordinateResponse* response, bool knots = false);
+
+/// Teams larger than this get knots and no samples unless sample_period is set.
+inline constexpr int kMaxTeamForSamplesByDefault = 16;
+/// Whether a Coordinate response carries knots: knots_only, or a team of more than
+/// kMaxTeamForSamplesByDefault robots.
+bool KnotsFor(const v1::CoordinateRequest& request);
 
 /// A team-of-one outcome as a PlanResponse (outcome, message, path, trajectory, duration).
 void WorkcellPlanToProto(const CoordinationOutcome& outcome, const CoordinationQuery& query, v1::PlanResponse* response);

@@ -59,6 +59,8 @@ struct CoordinationQuery {
   double collision_resolution = 0.005; ///< [rad]
   double time_step = 1e-3;             ///< [s] joint verification
   double sample_period = 0.01;         ///< [s]
+  /// true: no samples for trajectories with a knots form (degree <= 2; the caller returns knots)
+  bool knots_replace_samples = false;
   SampleCap sample_cap{1000000, 64ull << 20, "sample_period"};  ///< per robot; checked before sampling
   double robot_padding = 0.0;          ///< [m] kept between robots
   int max_reorderings = 0;             ///< 0 = 2 × robots
