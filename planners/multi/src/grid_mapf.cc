@@ -1,0 +1,934 @@
+// Grid MAPF: LaCAM* over joint configurations with PIBT as its successor generator, written from
+// the papers (Okumura et al., "Priority inheritance with backtracking for iterative multi-agent
+// path finding", AIJ 2022; Okumura, "LaCAM: search-based algorithm for quick multi-agent
+// pathfinding", AAAI 2023; Okumura, "Improving LaCAM for scalable eventually optimal multi-agent
+// pathfinding", IJCAI 2023), adapted to forbid rotation cycles (grid_mapf.h).
+//
+// Inside the solver a cell is a compact id over the free cells (a "vertex"); configurations are
+// vectors of vertices, one per robot. CheckMapfPlan at the end of this file shares nothing with
+// the solver but DescribeCell.
+
+#include "chasles/multi/grid_mapf.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <memory>
+#include <queue>
+#include <random>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include "chasles/robot/error.h"
+
+namespace chasles {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr int kMaxSide = 4096;
+/// Distance-table entries (robots × free cells) the solver allocates at most: 256 MB.
+constexpr std::int64_t kMaxDistanceEntries = std::int64_t{1} << 26;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// Uniform integer in [0, n), n >= 1, by rejection: the same stream on every standard library.
+std::uint64_t Below(std::mt19937_64& rng, std::uint64_t n) {
+  const std::uint64_t threshold = (0 - n) % n;  // 2^64 mod n
+  for (;;) {
+    const std::uint64_t r = rng();
+    if (r >= threshold) return r % n;
+  }
+}
+
+template <class T>
+void Shuffle(std::vector<T>* values, std::mt19937_64& rng) {
+  for (std::size_t i = values->size(); i > 1; --i) {
+    std::swap((*values)[i - 1], (*values)[Below(rng, i)]);
+  }
+}
+
+void ValidateMap(const GridMap& map) {
+  if (map.width < 1 || map.width > kMaxSide || map.height < 1 || map.height > kMaxSide) {
+    ThrowInvalid("map is " + std::to_string(map.width) + " × " + std::to_string(map.height) +
+                 " cells; width and height must be within [1, " + std::to_string(kMaxSide) + "]");
+  }
+  const std::size_t cells = static_cast<std::size_t>(map.width) * static_cast<std::size_t>(map.height);
+  if (map.blocked.size() != cells) {
+    ThrowInvalid("map.blocked has " + std::to_string(map.blocked.size()) + " entries; width * height = " +
+                 std::to_string(cells));
+  }
+}
+
+void ValidateSide(const char* name, int value) {
+  if (value < 1 || value > kMaxSide) {
+    ThrowInvalid(std::string(name) + " = " + std::to_string(value) + " must be within [1, " +
+                 std::to_string(kMaxSide) + "]");
+  }
+}
+
+/// Cells of the largest 4-connected free component (ties: the one holding the lowest cell),
+/// in increasing order.
+std::vector<GridCell> LargestComponent(const GridMap& map) {
+  const int cells = map.width * map.height;
+  std::vector<int> label(cells, -1);
+  std::vector<GridCell> best, current, queue;
+  for (GridCell seed = 0; seed < cells; ++seed) {
+    if (map.blocked[seed] || label[seed] >= 0) continue;
+    current.clear();
+    queue.assign(1, seed);
+    label[seed] = seed;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const GridCell c = queue[head];
+      current.push_back(c);
+      const int x = c % map.width, y = c / map.width;
+      const GridCell around[4] = {x > 0 ? c - 1 : -1, x + 1 < map.width ? c + 1 : -1, y > 0 ? c - map.width : -1,
+                                  y + 1 < map.height ? c + map.width : -1};
+      for (GridCell n : around) {
+        if (n >= 0 && !map.blocked[n] && label[n] < 0) {
+          label[n] = seed;
+          queue.push_back(n);
+        }
+      }
+    }
+    if (current.size() > best.size()) best = current;
+  }
+  std::sort(best.begin(), best.end());
+  return best;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The free cells as a graph of compact vertex ids, and per-robot distances to the goal.
+
+struct Graph {
+  std::vector<GridCell> cell;           ///< vertex -> cell
+  std::vector<int> vertex;              ///< cell -> vertex, -1 for blocked
+  std::vector<std::array<int, 4>> neighbors;
+  std::vector<std::uint8_t> degree;
+  /// dead_end[4 * v + k]: moving from v to its k-th neighbour enters a dead-end corridor (cells
+  /// with a single way on, ending in a cell with none).
+  std::vector<std::uint8_t> dead_end;
+
+  explicit Graph(const GridMap& map) : vertex(map.blocked.size(), -1) {
+    for (GridCell c = 0; c < static_cast<GridCell>(map.blocked.size()); ++c) {
+      if (map.blocked[c]) continue;
+      vertex[c] = static_cast<int>(cell.size());
+      cell.push_back(c);
+    }
+    neighbors.resize(cell.size());
+    degree.assign(cell.size(), 0);
+    for (int v = 0; v < static_cast<int>(cell.size()); ++v) {
+      const GridCell c = cell[v];
+      const int x = c % map.width, y = c / map.width;
+      const GridCell around[4] = {x > 0 ? c - 1 : -1, x + 1 < map.width ? c + 1 : -1, y > 0 ? c - map.width : -1,
+                                  y + 1 < map.height ? c + map.width : -1};
+      for (GridCell n : around) {
+        if (n >= 0 && vertex[n] >= 0) neighbors[v][degree[v]++] = vertex[n];
+      }
+    }
+    dead_end.assign(4 * cell.size(), 0);
+    for (int v = 0; v < size(); ++v) {
+      for (int k = 0; k < degree[v]; ++k) {
+        int previous = v, at = neighbors[v][k];
+        for (int steps = 0; steps < size(); ++steps) {
+          if (degree[at] == 1) {
+            dead_end[4 * v + k] = 1;
+            break;
+          }
+          if (degree[at] != 2) break;
+          const int on = neighbors[at][0] == previous ? neighbors[at][1] : neighbors[at][0];
+          previous = at;
+          at = on;
+        }
+      }
+    }
+  }
+  int size() const { return static_cast<int>(cell.size()); }
+};
+
+constexpr std::int32_t kUnreachable = std::numeric_limits<std::int32_t>::max();
+
+/// Breadth-first distances from `goal` over the graph into `out` (graph.size() entries).
+void DistancesTo(const Graph& graph, int goal, std::int32_t* out, std::vector<int>* queue) {
+  std::fill(out, out + graph.size(), kUnreachable);
+  queue->assign(1, goal);
+  out[goal] = 0;
+  for (std::size_t head = 0; head < queue->size(); ++head) {
+    const int v = (*queue)[head];
+    for (int k = 0; k < graph.degree[v]; ++k) {
+      const int u = graph.neighbors[v][k];
+      if (out[u] == kUnreachable) {
+        out[u] = out[v] + 1;
+        queue->push_back(u);
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// LaCAM*.
+
+/// A constraint of the low-level search: robot `who` moves to vertex `where` at the next step,
+/// together with every constraint on the chain to the root (depth 0, no constraint).
+struct LowNode {
+  int parent = -1;
+  int who = -1;
+  int where = -1;
+  int depth = 0;
+};
+
+struct HighNode;
+
+struct Edge {
+  HighNode* to = nullptr;
+  std::int64_t cost = 0;
+};
+
+/// A configuration of the high-level search.
+struct HighNode {
+  std::vector<int> config;      ///< vertex per robot
+  std::vector<float> priority;  ///< PIBT priorities: + 1 per step away from the goal
+  std::vector<int> order;       ///< robots by decreasing priority; filled when first needed
+  std::vector<int> constrain;   ///< the order of the low-level search; filled when first needed
+  HighNode* parent = nullptr;   ///< on the cheapest known way from the start
+  std::vector<Edge> successors; ///< configurations generated from this one (LaCAM*)
+  std::vector<int> pending;     ///< low-level nodes not yet tried (a queue from pending_head)
+  std::size_t pending_head = 0;
+  std::int64_t g = 0;           ///< cost from the start along parent links (sum of loss)
+  std::int64_t h = 0;           ///< sum of the robots' distances to their goals
+  int id = 0;                   ///< creation order
+};
+
+struct ConfigHash {
+  int n = 0;
+  std::size_t operator()(const int* config) const {
+    std::uint64_t h = 0x9E3779B97F4A7C15ull;
+    for (int i = 0; i < n; ++i) {
+      h ^= static_cast<std::uint64_t>(static_cast<std::uint32_t>(config[i])) + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
+    }
+    h ^= h >> 31;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 29;
+    return static_cast<std::size_t>(h);
+  }
+};
+
+struct ConfigEqual {
+  int n = 0;
+  bool operator()(const int* a, const int* b) const { return std::equal(a, a + n, b); }
+};
+
+class LacamSearch {
+ public:
+  LacamSearch(const Graph& graph, int width, std::vector<int> starts, std::vector<int> goals, std::vector<std::int32_t> distances,
+              std::uint64_t seed)
+      : graph_(graph),
+        width_(width),
+        n_(static_cast<int>(starts.size())),
+        starts_(std::move(starts)),
+        goals_(std::move(goals)),
+        distances_(std::move(distances)),
+        rng_(seed),
+        explored_(1024, ConfigHash{n_}, ConfigEqual{n_}),
+        occupied_now_(graph.size(), -1),
+        occupied_next_(graph.size(), -1),
+        next_(n_, -1) {
+    low_nodes_.push_back(LowNode{});  // the root: no constraint
+  }
+
+  /// Runs until the first plan is found (then, with `refine`, until `refine_budget` [s] more has
+  /// passed or the search is exhausted) or `termination` stops. Fills `result` but its paths.
+  void Run(const Termination& termination, bool refine, double refine_budget, Clock::time_point began,
+           MapfResult* result) {
+    HighNode* root = NewNode(starts_, nullptr);
+    std::vector<HighNode*> open = {root};
+    HighNode* goal = nullptr;
+    Clock::time_point refine_end = Clock::time_point::max();
+    bool stopped = false;
+    while (!open.empty()) {
+      if (termination.ShouldStop() || (goal != nullptr && Clock::now() >= refine_end)) {
+        stopped = true;
+        break;
+      }
+      HighNode* node = open.back();
+      if (goal == nullptr && node->h == 0) {
+        goal = node;
+        ShortestCostsFromStart(root);
+        result->first_solution_seconds = SecondsSince(began);
+        if (!refine) break;
+        refine_end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                                        std::min(refine_budget, 1e7)));
+        continue;
+      }
+      // LaCAM*: nothing below this node can beat the plan found.
+      if (goal != nullptr && goal->g <= node->g + node->h) {
+        open.pop_back();
+        continue;
+      }
+      if (node->pending_head == node->pending.size()) {
+        open.pop_back();
+        std::vector<int>().swap(node->pending);
+        node->pending_head = 0;
+        continue;
+      }
+      const int low = node->pending[node->pending_head++];
+      const LowNode constraint = low_nodes_[low];
+      if (constraint.depth < n_) Branch(node, low);
+      if (!NextConfiguration(*node, low)) continue;
+      ++result->nodes_expanded;
+      const auto known = explored_.find(next_config_.data());
+      if (known != explored_.end()) {
+        HighNode* other = known->second;
+        AddSuccessor(node, other);
+        open.push_back(other);  // LaCAM: revisit the known configuration (depth first)
+        if (goal != nullptr) Rewire(node, goal, &open);
+      } else {
+        HighNode* created = NewNode(next_config_, node);
+        AddSuccessor(node, created);
+        open.push_back(created);
+      }
+    }
+    result->nodes_created = nodes_.size();
+    if (goal == nullptr) {
+      result->solved = false;
+      if (stopped) {
+        const StopReason reason = termination.Reason();
+        result->message = std::string("no plan within the budget: the search stopped (") +
+                          (reason == StopReason::kCancelled ? "cancelled"
+                           : reason == StopReason::kDeadline ? "deadline"
+                                                             : "time budget") +
+                          ") after " + std::to_string(nodes_.size()) + " configurations in " +
+                          FormatNumber(std::round(SecondsSince(began) * 1e3) / 1e3) + " s";
+      } else {
+        result->message = "no plan exists under the conflict rules (no swaps, no rotation cycles): all " +
+                          std::to_string(nodes_.size()) + " reachable configurations were explored";
+      }
+      return;
+    }
+    result->solved = true;
+    result->proven_optimal = open.empty();
+    plan_.clear();
+    for (const HighNode* at = goal; at != nullptr; at = at->parent) plan_.push_back(&at->config);
+    std::reverse(plan_.begin(), plan_.end());
+    result->sum_of_loss = goal->g;
+    if (!refine) {
+      result->message = "first plan (refinement off)";
+    } else if (open.empty()) {
+      result->message = "plan proven optimal in the sum of loss: the search was exhausted";
+    } else {
+      result->message = "best plan when the refinement budget ended (" + std::to_string(nodes_.size()) +
+                        " configurations)";
+    }
+  }
+
+  /// The configurations of the plan found, from the start.
+  const std::vector<const std::vector<int>*>& plan() const { return plan_; }
+
+ private:
+  std::int32_t Distance(int robot, int v) const {
+    return distances_[static_cast<std::size_t>(robot) * graph_.size() + v];
+  }
+
+  /// LaCAM*'s transition cost (sum of loss): robots not both at their goal before and after.
+  std::int64_t Cost(const std::vector<int>& from, const std::vector<int>& to) const {
+    std::int64_t cost = 0;
+    for (int i = 0; i < n_; ++i) cost += !(from[i] == goals_[i] && to[i] == goals_[i]);
+    return cost;
+  }
+
+  HighNode* NewNode(const std::vector<int>& config, HighNode* parent) {
+    nodes_.emplace_back(std::make_unique<HighNode>());
+    HighNode* node = nodes_.back().get();
+    node->id = static_cast<int>(nodes_.size()) - 1;
+    node->config = config;
+    node->priority.resize(n_);
+    node->parent = parent;
+    for (int i = 0; i < n_; ++i) {
+      const float d = static_cast<float>(Distance(i, config[i]));
+      node->h += Distance(i, config[i]);
+      if (parent == nullptr) {
+        node->priority[i] = d / static_cast<float>(graph_.size() + 1);  // farther first, in [0, 1)
+      } else if (config[i] != goals_[i]) {
+        node->priority[i] = parent->priority[i] + 1.0f;
+      } else {
+        node->priority[i] = parent->priority[i] - std::floor(parent->priority[i]);
+      }
+    }
+    if (parent != nullptr) node->g = parent->g + Cost(parent->config, config);
+    node->pending.push_back(0);  // the root of the low-level search
+    explored_.emplace(node->config.data(), node);
+    return node;
+  }
+
+  void AddSuccessor(HighNode* from, HighNode* to) {
+    const std::uint64_t key = static_cast<std::uint64_t>(from->id) << 32 | static_cast<std::uint32_t>(to->id);
+    if (!edges_.insert(key).second) return;
+    from->successors.push_back(Edge{to, Cost(from->config, to->config)});
+  }
+
+  /// Costs-to-come and parents by Dijkstra from the start over every edge found so far. Run once,
+  /// when the first plan is found: until then the costs are not needed (LaCAM* keeps them
+  /// current from the beginning by Rewire; the result is the same).
+  void ShortestCostsFromStart(HighNode* root) {
+    for (const auto& node : nodes_) node->g = std::numeric_limits<std::int64_t>::max();
+    root->g = 0;
+    root->parent = nullptr;
+    Rewire(root, nullptr, nullptr);
+  }
+
+  /// LaCAM*: after a new edge out of `from`, lowers costs-to-come through it (Dijkstra), and
+  /// sends back to the search every node that could now lead to a cheaper plan.
+  void Rewire(HighNode* from, const HighNode* goal, std::vector<HighNode*>* open) {
+    using Entry = std::pair<std::int64_t, HighNode*>;
+    const auto later = [](const Entry& a, const Entry& b) { return a.first > b.first; };
+    std::priority_queue<Entry, std::vector<Entry>, decltype(later)> queue(later);
+    queue.emplace(from->g, from);
+    while (!queue.empty()) {
+      const auto [g, node] = queue.top();
+      queue.pop();
+      if (g != node->g) continue;  // stale
+      for (const Edge& e : node->successors) {
+        HighNode* to = e.to;
+        if (node->g + e.cost >= to->g) continue;
+        to->g = node->g + e.cost;
+        to->parent = node;
+        queue.emplace(to->g, to);
+        if (goal != nullptr && to->g + to->h < goal->g) open->push_back(to);
+      }
+    }
+  }
+
+  void EnsureOrder(HighNode* node) {
+    if (!node->order.empty() || n_ == 0) return;
+    node->order.resize(n_);
+    for (int i = 0; i < n_; ++i) node->order[i] = i;
+    const std::vector<float>& p = node->priority;
+    std::stable_sort(node->order.begin(), node->order.end(), [&](int a, int b) { return p[a] > p[b]; });
+  }
+
+  /// The order in which the low-level search constrains the robots of `node`: the robot of
+  /// highest priority, then the others by grid (Manhattan) distance from it, nearest first
+  /// (ties by priority). LaCAM constrains in priority order; any fixed order keeps it complete,
+  /// and this one reaches the robots that hold up the most delayed one first: robots parked at
+  /// their goals, of low priority, in the pocket it cannot get through.
+  void EnsureConstraintOrder(HighNode* node) {
+    if (!node->constrain.empty() || n_ == 0) return;
+    EnsureOrder(node);
+    const int width = width_;
+    const GridCell at = graph_.cell[node->config[node->order[0]]];
+    const auto distance = [&](int robot) {
+      const GridCell c = graph_.cell[node->config[robot]];
+      return std::abs(c % width - at % width) + std::abs(c / width - at / width);
+    };
+    node->constrain = node->order;
+    std::stable_sort(node->constrain.begin(), node->constrain.end(),
+                     [&](int a, int b) { return distance(a) < distance(b); });
+  }
+
+  /// Low-level search: the children of constraint node `low` fix the next robot in the node's
+  /// constraint order to each of its moves (stay included), in a seeded random order.
+  void Branch(HighNode* node, int low) {
+    EnsureConstraintOrder(node);
+    const LowNode parent = low_nodes_[low];
+    const int robot = node->constrain[parent.depth];
+    const int v = node->config[robot];
+    std::vector<int>& moves = scratch_moves_;
+    moves.assign(1, v);
+    for (int k = 0; k < graph_.degree[v]; ++k) moves.push_back(graph_.neighbors[v][k]);
+    Shuffle(&moves, rng_);
+    for (int u : moves) {
+      low_nodes_.push_back(LowNode{low, robot, u, parent.depth + 1});
+      node->pending.push_back(static_cast<int>(low_nodes_.size()) - 1);
+    }
+  }
+
+  /// Whether robot `robot`, moving into the vertex `target` that a robot `ahead` (decided to
+  /// move) vacates, would close a cycle of robots each following the next: walks the chain of
+  /// decided moves from `ahead`. A cycle of two is a swap.
+  bool ClosesCycle(int robot, int ahead) const {
+    int at = ahead;
+    for (int steps = 0; steps <= n_; ++steps) {
+      const int to = next_[at];
+      if (to < 0 || to == current_[at]) return false;  // undecided, or stays
+      const int occupant = occupied_now_[to];
+      if (occupant < 0) return false;
+      if (occupant == robot) return true;
+      at = occupant;
+    }
+    return true;  // unreachable: the decided moves never form a cycle
+  }
+
+  void Reserve(int robot, int v) {
+    next_[robot] = v;
+    occupied_next_[v] = robot;
+    reserved_.push_back(v);
+  }
+
+  /// Whether robot `robot` standing in `v` would lead into a dead-end corridor by moving to its
+  /// neighbour slot `k` (u) in which `other` must get deeper than `robot`'s own goal: true unless
+  /// `robot`'s goal lies in that corridor beyond the goal of `other`. Distances decide "inside"
+  /// and "deeper": in a corridor entered from v, a goal lies inside iff it is nearer to u than to
+  /// v, and its depth is its distance from u.
+  bool ShouldLeaveCorridorTo(int robot, int v, int k, int other) const {
+    if (!graph_.dead_end[4 * v + k]) return false;
+    const int u = graph_.neighbors[v][k];
+    if (Distance(other, u) >= Distance(other, v)) return false;  // `other` does not go in
+    const bool inside = Distance(robot, v) == Distance(robot, u) + 1;
+    return !(inside && Distance(robot, u) > Distance(other, u));
+  }
+
+  /// One move of PIBT: reserves u for `robot` unless another robot has, or it would close a cycle
+  /// of followers; a robot standing in u that has not decided yet must move away first (it
+  /// inherits the priority). False, with nothing reserved for `robot`, when u cannot be had.
+  bool TryMove(int robot, int u) {
+    if (occupied_next_[u] >= 0) return false;
+    const int occupant = occupied_now_[u];
+    const bool follows = occupant >= 0 && occupant != robot && next_[occupant] >= 0;
+    if (follows && ClosesCycle(robot, occupant)) return false;
+    Reserve(robot, u);
+    if (occupant < 0 || occupant == robot || follows) return true;
+    if (Pibt(occupant, robot)) return true;
+    next_[robot] = -1;  // the occupant stays in u (it took over the reservation)
+    return false;
+  }
+
+  /// PIBT (priority inheritance with backtracking) for `robot`, pushed by `pusher` (-1 when not):
+  /// the robot takes its best move that TryMove grants. Moves are ranked by distance to the goal,
+  /// then vertices nobody stands on, then seeded random; a pushed robot ranks last the moves
+  /// into a dead-end corridor its pusher must enter deeper (it would only be pushed in again).
+  /// Pull (our corridor rule, after LaCAM*'s swap): when the best move enters a dead-end
+  /// corridor held by an undecided robot that cannot make room by going deeper, the robot backs
+  /// off instead and that robot follows it out, one step at a time, until they can pass.
+  /// A robot without any move stays: a pushed robot takes its vertex back from the pusher, which
+  /// tries its next move; at the top level the vertex was reserved by a constrained robot, and
+  /// the configuration fails.
+  bool Pibt(int robot, int pusher) {
+    const int v = current_[robot];
+    std::array<int, 5> candidates, slot;
+    std::array<std::int64_t, 5> key;
+    int count = 0;
+    candidates[count] = v;
+    slot[count++] = -1;
+    for (int k = 0; k < graph_.degree[v]; ++k) {
+      candidates[count] = graph_.neighbors[v][k];
+      slot[count++] = k;
+    }
+    for (int k = count; k > 1; --k) {
+      const int r = static_cast<int>(Below(rng_, k));
+      std::swap(candidates[k - 1], candidates[r]);
+      std::swap(slot[k - 1], slot[r]);
+    }
+    constexpr std::int64_t kLast = std::int64_t{1} << 40;
+    for (int k = 0; k < count; ++k) {
+      const int u = candidates[k];
+      const int occupant = occupied_now_[u];
+      key[k] = 2 * static_cast<std::int64_t>(Distance(robot, u)) + (occupant >= 0 && occupant != robot ? 1 : 0);
+      if (pusher >= 0 && slot[k] >= 0 && ShouldLeaveCorridorTo(robot, v, slot[k], pusher)) key[k] += kLast;
+    }
+    for (int a = 1; a < count; ++a) {  // stable insertion sort by key
+      for (int b = a; b > 0 && key[b] < key[b - 1]; --b) {
+        std::swap(key[b], key[b - 1]);
+        std::swap(candidates[b], candidates[b - 1]);
+        std::swap(slot[b], slot[b - 1]);
+      }
+    }
+    const int best = candidates[0];
+    const int blocker = occupied_now_[best];
+    if (pusher < 0 && best != v && blocker >= 0 && next_[blocker] < 0 && occupied_next_[v] < 0 &&
+        ShouldLeaveCorridorTo(blocker, v, slot[0], robot)) {
+      for (int k = 1; k < count; ++k) {
+        if (candidates[k] == v || !TryMove(robot, candidates[k])) continue;
+        if (next_[blocker] < 0 && occupied_next_[v] < 0 && !ClosesCycle(blocker, robot)) Reserve(blocker, v);
+        return true;
+      }
+    }
+    for (int k = 0; k < count; ++k) {
+      if (TryMove(robot, candidates[k])) return true;
+    }
+    Reserve(robot, v);
+    return false;
+  }
+
+  /// The configuration following `node` under the constraints of low-level node `low`, in
+  /// next_config_: the constrained robots first, then PIBT for the others in the node's order.
+  /// False when the constraints conflict or a robot cannot be placed.
+  bool NextConfiguration(HighNode& node, int low) {
+    EnsureOrder(&node);
+    current_ = node.config.data();
+    for (int i = 0; i < n_; ++i) occupied_now_[current_[i]] = i;
+    bool ok = true;
+    for (int k = low; ok && low_nodes_[k].depth > 0; k = low_nodes_[k].parent) {
+      const LowNode& c = low_nodes_[k];
+      const int occupant = occupied_now_[c.where];
+      if (occupied_next_[c.where] >= 0) {
+        ok = false;
+      } else if (occupant >= 0 && occupant != c.who && next_[occupant] >= 0 && ClosesCycle(c.who, occupant)) {
+        ok = false;
+      } else {
+        Reserve(c.who, c.where);
+      }
+    }
+    for (int k = 0; ok && k < n_; ++k) {
+      const int robot = node.order[k];
+      if (next_[robot] < 0 && !Pibt(robot, -1)) ok = false;
+    }
+    if (ok) next_config_.assign(next_.begin(), next_.end());
+    for (int v : reserved_) occupied_next_[v] = -1;
+    reserved_.clear();
+    for (int i = 0; i < n_; ++i) {
+      occupied_now_[current_[i]] = -1;
+      next_[i] = -1;
+    }
+    return ok;
+  }
+
+  const Graph& graph_;
+  const int width_;  ///< of the map
+  const int n_;
+  const std::vector<int> starts_;
+  const std::vector<int> goals_;
+  const std::vector<std::int32_t> distances_;  ///< robot-major: distances_[i * |V| + v]
+  std::mt19937_64 rng_;
+  std::vector<std::unique_ptr<HighNode>> nodes_;
+  std::deque<LowNode> low_nodes_;
+  std::unordered_set<std::uint64_t> edges_;  ///< (from id, to id) of every successor edge
+  std::unordered_map<const int*, HighNode*, ConfigHash, ConfigEqual> explored_;
+  std::vector<const std::vector<int>*> plan_;
+  // Scratch of NextConfiguration / Pibt.
+  const int* current_ = nullptr;
+  std::vector<int> occupied_now_;   ///< vertex -> robot in the current configuration
+  std::vector<int> occupied_next_;  ///< vertex -> robot that reserved it for the next one
+  std::vector<int> next_;           ///< robot -> reserved vertex, -1 while undecided
+  std::vector<int> reserved_;       ///< vertices written to occupied_next_
+  std::vector<int> next_config_;
+  std::vector<int> scratch_moves_;
+};
+
+void ValidateRobots(const GridMap& map, const std::vector<GridCell>& cells, const char* field) {
+  const GridCell count = static_cast<GridCell>(map.blocked.size());
+  std::unordered_map<GridCell, std::size_t> seen;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const std::string name = std::string(field) + "[" + std::to_string(i) + "]";
+    const GridCell c = cells[i];
+    if (c < 0 || c >= count) {
+      ThrowInvalid(name + " = cell " + std::to_string(c) + " is outside the map (cells 0 to " + std::to_string(count - 1) +
+                   ")");
+    }
+    if (map.blocked[c]) ThrowInvalid(name + " = " + DescribeCell(map, c) + " is blocked");
+    const auto [at, inserted] = seen.emplace(c, i);
+    if (!inserted) {
+      ThrowInvalid(name + " = " + DescribeCell(map, c) + " is also " + field + "[" + std::to_string(at->second) +
+                   "]; " + field + " must be distinct");
+    }
+  }
+}
+
+}  // namespace
+
+std::string DescribeCell(const GridMap& map, GridCell cell) {
+  if (map.width <= 0) return "cell " + std::to_string(cell);
+  return "cell " + std::to_string(cell) + " (x=" + std::to_string(cell % map.width) +
+         ", y=" + std::to_string(cell / map.width) + ")";
+}
+
+MapfResult SolveMapf(const GridMap& map, const std::vector<GridCell>& starts, const std::vector<GridCell>& goals,
+                     const MapfOptions& options, const Termination& termination) {
+  const Clock::time_point began = Clock::now();
+  ValidateMap(map);
+  if (starts.size() != goals.size()) {
+    ThrowInvalid("starts has " + std::to_string(starts.size()) + " entries and goals " +
+                 std::to_string(goals.size()) + "; there must be one of each per robot");
+  }
+  ValidateRobots(map, starts, "starts");
+  ValidateRobots(map, goals, "goals");
+  if (!(options.refine_budget >= 0.0)) {
+    ThrowInvalid("options.refine_budget = " + FormatNumber(options.refine_budget) + " must be >= 0");
+  }
+  MapfResult result;
+  const int n = static_cast<int>(starts.size());
+  if (n == 0) {
+    result.solved = true;
+    result.proven_optimal = true;
+    result.message = "no robots";
+    result.seconds = SecondsSince(began);
+    return result;
+  }
+  const Graph graph(map);
+  if (static_cast<std::int64_t>(n) * graph.size() > kMaxDistanceEntries) {
+    ThrowResourceExhausted(std::to_string(n) + " robots × " + std::to_string(graph.size()) +
+                           " free cells = " + std::to_string(static_cast<std::int64_t>(n) * graph.size()) +
+                           " distance-table entries; at most " + std::to_string(kMaxDistanceEntries) +
+                           " (fewer robots or a smaller map)");
+  }
+  std::vector<int> start_vertex(n), goal_vertex(n);
+  for (int i = 0; i < n; ++i) {
+    start_vertex[i] = graph.vertex[starts[i]];
+    goal_vertex[i] = graph.vertex[goals[i]];
+  }
+  std::vector<std::int32_t> distances(static_cast<std::size_t>(n) * graph.size());
+  std::vector<int> queue;
+  std::vector<int> unreachable;
+  for (int i = 0; i < n; ++i) {
+    if (termination.ShouldStop()) {
+      result.message = "no plan within the budget: stopped while computing the robots' distances";
+      result.seconds = SecondsSince(began);
+      return result;
+    }
+    std::int32_t* row = distances.data() + static_cast<std::size_t>(i) * graph.size();
+    DistancesTo(graph, goal_vertex[i], row, &queue);
+    if (row[start_vertex[i]] == kUnreachable) {
+      unreachable.push_back(i);
+    } else {
+      result.sum_of_lower_bounds += row[start_vertex[i]];
+    }
+  }
+  if (!unreachable.empty()) {
+    result.sum_of_lower_bounds = 0;
+    std::string message = "no plan exists: ";
+    for (std::size_t k = 0; k < unreachable.size() && k < 5; ++k) {
+      const int i = unreachable[k];
+      if (k > 0) message += "; ";
+      message += "robots[" + std::to_string(i) + "]: goal " + DescribeCell(map, goals[i]) +
+                 " is not reachable from its start " + DescribeCell(map, starts[i]);
+    }
+    if (unreachable.size() > 5) message += "; and " + std::to_string(unreachable.size() - 5) + " more robots";
+    result.message = message + " (another connected component)";
+    result.seconds = SecondsSince(began);
+    return result;
+  }
+
+  LacamSearch search(graph, map.width, start_vertex, goal_vertex, std::move(distances), options.seed);
+  search.Run(termination, options.refine, options.refine_budget, began, &result);
+  if (result.solved) {
+    const auto& plan = search.plan();
+    result.makespan = static_cast<int>(plan.size()) - 1;
+    result.paths.assign(n, std::vector<GridCell>(plan.size()));
+    for (std::size_t t = 0; t < plan.size(); ++t) {
+      for (int i = 0; i < n; ++i) result.paths[i][t] = graph.cell[(*plan[t])[i]];
+    }
+    for (int i = 0; i < n; ++i) {
+      int last_away = -1;
+      for (int t = result.makespan; t >= 0; --t) {
+        if (result.paths[i][t] != goals[i]) {
+          last_away = t;
+          break;
+        }
+      }
+      result.sum_of_costs += last_away + 1;
+    }
+  }
+  result.seconds = SecondsSince(began);
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Maps and scenarios.
+
+GridMap RandomGridMap(int width, int height, double blocked_fraction, std::uint64_t seed) {
+  ValidateSide("width", width);
+  ValidateSide("height", height);
+  if (!(blocked_fraction >= 0.0 && blocked_fraction < 1.0)) {
+    ThrowInvalid("blocked_fraction = " + FormatNumber(blocked_fraction) + " must be within [0, 1)");
+  }
+  GridMap map;
+  map.width = width;
+  map.height = height;
+  const int cells = width * height;
+  map.blocked.assign(cells, 0);
+  std::vector<GridCell> order(cells);
+  for (GridCell c = 0; c < cells; ++c) order[c] = c;
+  std::mt19937_64 rng(seed);
+  Shuffle(&order, rng);
+  const int count = static_cast<int>(std::lround(blocked_fraction * cells));
+  for (int k = 0; k < count; ++k) map.blocked[order[k]] = 1;
+  const std::vector<GridCell> keep = LargestComponent(map);
+  std::fill(map.blocked.begin(), map.blocked.end(), 1);
+  for (GridCell c : keep) map.blocked[c] = 0;
+  return map;
+}
+
+GridMap RoomsGridMap(int width, int height, int room_size, std::uint64_t seed) {
+  ValidateSide("width", width);
+  ValidateSide("height", height);
+  if (room_size < 1) ThrowInvalid("room_size = " + std::to_string(room_size) + " must be >= 1");
+  GridMap map;
+  map.width = width;
+  map.height = height;
+  map.blocked.assign(width * height, 1);
+  const int period = room_size + 1;
+  const int rooms_x = width >= room_size ? (width - room_size) / period + 1 : 0;
+  const int rooms_y = height >= room_size ? (height - room_size) / period + 1 : 0;
+  const auto open = [&](int x, int y) { map.blocked[y * width + x] = 0; };
+  for (int ry = 0; ry < rooms_y; ++ry) {
+    for (int rx = 0; rx < rooms_x; ++rx) {
+      for (int y = 0; y < room_size; ++y) {
+        for (int x = 0; x < room_size; ++x) open(rx * period + x, ry * period + y);
+      }
+    }
+  }
+  std::mt19937_64 rng(seed);
+  for (int ry = 0; ry < rooms_y; ++ry) {
+    for (int rx = 0; rx < rooms_x; ++rx) {
+      if (rx + 1 < rooms_x) open(rx * period + room_size, ry * period + static_cast<int>(Below(rng, room_size)));
+      if (ry + 1 < rooms_y) open(rx * period + static_cast<int>(Below(rng, room_size)), ry * period + room_size);
+    }
+  }
+  return map;
+}
+
+GridMap WarehouseGridMap(int width, int height, int shelf_length, int aisle_width, int dock_width) {
+  ValidateSide("width", width);
+  ValidateSide("height", height);
+  if (shelf_length < 1) ThrowInvalid("shelf_length = " + std::to_string(shelf_length) + " must be >= 1");
+  if (aisle_width < 1) ThrowInvalid("aisle_width = " + std::to_string(aisle_width) + " must be >= 1");
+  if (dock_width < 0) ThrowInvalid("dock_width = " + std::to_string(dock_width) + " must be >= 0");
+  GridMap map;
+  map.width = width;
+  map.height = height;
+  map.blocked.assign(width * height, 0);
+  const int inner_width = width - 2 * dock_width;
+  const int inner_height = height - 2 * aisle_width;
+  // k shelves and k - 1 aisles between them must fit.
+  const int columns = inner_width >= shelf_length ? (inner_width + aisle_width) / (shelf_length + aisle_width) : 0;
+  const int rows = inner_height >= 1 ? (inner_height + aisle_width) / (1 + aisle_width) : 0;
+  if (columns == 0 || rows == 0) return map;
+  const int x0 = dock_width + (inner_width - (columns * (shelf_length + aisle_width) - aisle_width)) / 2;
+  const int y0 = aisle_width + (inner_height - (rows * (1 + aisle_width) - aisle_width)) / 2;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < columns; ++c) {
+      const int y = y0 + r * (1 + aisle_width);
+      for (int x = x0 + c * (shelf_length + aisle_width); x < x0 + c * (shelf_length + aisle_width) + shelf_length;
+           ++x) {
+        map.blocked[y * width + x] = 1;
+      }
+    }
+  }
+  return map;
+}
+
+void RandomScenario(const GridMap& map, int robots, std::uint64_t seed, std::vector<GridCell>* starts,
+                    std::vector<GridCell>* goals) {
+  ValidateMap(map);
+  if (robots < 0) ThrowInvalid("robots = " + std::to_string(robots) + " must be >= 0");
+  std::vector<GridCell> component = LargestComponent(map);
+  if (static_cast<int>(component.size()) < robots) {
+    ThrowInvalid("robots = " + std::to_string(robots) + " exceeds the " + std::to_string(component.size()) +
+                 " cells of the map's largest connected component");
+  }
+  std::mt19937_64 rng(seed);
+  std::vector<GridCell> goal_cells = component;
+  Shuffle(&component, rng);
+  Shuffle(&goal_cells, rng);
+  starts->assign(component.begin(), component.begin() + robots);
+  goals->assign(goal_cells.begin(), goal_cells.begin() + robots);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The independent plan check: written apart from the solver on purpose (no shared conflict code).
+
+std::string CheckMapfPlan(const GridMap& map, const std::vector<GridCell>& starts, const std::vector<GridCell>& goals,
+                          const std::vector<std::vector<GridCell>>& paths) {
+  if (map.width < 1 || map.height < 1 ||
+      map.blocked.size() != static_cast<std::size_t>(map.width) * static_cast<std::size_t>(map.height)) {
+    return "the map is malformed (" + std::to_string(map.width) + " × " + std::to_string(map.height) + ", " +
+           std::to_string(map.blocked.size()) + " blocked entries)";
+  }
+  const std::size_t robots = starts.size();
+  if (goals.size() != robots) {
+    return std::to_string(robots) + " starts but " + std::to_string(goals.size()) + " goals";
+  }
+  if (paths.size() != robots) {
+    return std::to_string(paths.size()) + " paths for " + std::to_string(robots) + " robots";
+  }
+  if (robots == 0) return "";
+  const std::size_t length = paths[0].size();
+  for (std::size_t i = 0; i < robots; ++i) {
+    if (paths[i].empty()) return "robot " + std::to_string(i) + ": empty path";
+    if (paths[i].size() != length) {
+      return "robot " + std::to_string(i) + ": path of " + std::to_string(paths[i].size()) +
+             " steps, robot 0's has " + std::to_string(length) + " (paths must have one length)";
+    }
+  }
+  const long long cells = static_cast<long long>(map.blocked.size());
+  const auto where = [&](GridCell c) {
+    return "cell " + std::to_string(c) + " (x=" + std::to_string(c % map.width) + ", y=" + std::to_string(c / map.width) +
+           ")";
+  };
+  for (std::size_t i = 0; i < robots; ++i) {
+    if (paths[i].front() != starts[i]) {
+      return "robot " + std::to_string(i) + " begins at cell " + std::to_string(paths[i].front()) +
+             ", its start is cell " + std::to_string(starts[i]);
+    }
+    if (paths[i].back() != goals[i]) {
+      return "robot " + std::to_string(i) + " ends at cell " + std::to_string(paths[i].back()) +
+             ", its goal is cell " + std::to_string(goals[i]);
+    }
+  }
+  std::vector<int> holder(cells, -1);  // cell -> robot at the step being checked
+  std::vector<int> ahead(robots);      // robot -> the robot whose cell it enters, or -1
+  std::vector<int> mark(robots);
+  for (std::size_t t = 0; t < length; ++t) {
+    for (std::size_t i = 0; i < robots; ++i) {
+      const GridCell c = paths[i][t];
+      const std::string who = "robot " + std::to_string(i) + " at step " + std::to_string(t);
+      if (c < 0 || c >= cells) return who + " is at cell " + std::to_string(c) + ", outside the map";
+      if (map.blocked[c]) return who + " is in blocked " + where(c);
+      if (holder[c] >= 0) {
+        return "vertex conflict at step " + std::to_string(t) + ": robots " + std::to_string(holder[c]) + " and " +
+               std::to_string(i) + " both in " + where(c);
+      }
+      holder[c] = static_cast<int>(i);
+    }
+    if (t + 1 < length) {
+      for (std::size_t i = 0; i < robots; ++i) {
+        const GridCell a = paths[i][t], b = paths[i][t + 1];
+        ahead[i] = -1;
+        if (a == b) continue;
+        const std::string move = "robot " + std::to_string(i) + " at step " + std::to_string(t) + " -> " +
+                                 std::to_string(t + 1);
+        if (b < 0 || b >= cells) return move + " moves to cell " + std::to_string(b) + ", outside the map";
+        const int dx = std::abs(a % map.width - b % map.width), dy = std::abs(a / map.width - b / map.width);
+        if (dx + dy != 1) return move + " jumps from " + where(a) + " to " + where(b) + ", not a neighbouring cell";
+        ahead[i] = holder[b];
+      }
+      for (std::size_t i = 0; i < robots; ++i) {
+        const int j = ahead[i];
+        if (j >= 0 && ahead[j] == static_cast<int>(i)) {
+          return "swap at step " + std::to_string(t) + " -> " + std::to_string(t + 1) + ": robots " +
+                 std::to_string(std::min<std::size_t>(i, j)) + " and " + std::to_string(std::max<std::size_t>(i, j)) +
+                 " exchange " + where(paths[i][t]) + " and " + where(paths[j][t]);
+        }
+      }
+      // Rotation cycles: a cycle in robot -> ahead (every robot has at most one `ahead`).
+      std::fill(mark.begin(), mark.end(), 0);  // 0 unseen, 1 on the current walk, 2 done
+      for (std::size_t i = 0; i < robots; ++i) {
+        int r = static_cast<int>(i);
+        while (r >= 0 && mark[r] == 0) {
+          mark[r] = 1;
+          r = ahead[r];
+        }
+        if (r >= 0 && mark[r] == 1) {
+          std::string cycle;
+          int k = r;
+          do {
+            cycle += "robot " + std::to_string(k) + " " + where(paths[k][t]) + " -> ";
+            k = ahead[k];
+          } while (k != r);
+          return "rotation cycle at step " + std::to_string(t) + " -> " + std::to_string(t + 1) + ": " + cycle +
+                 "robot " + std::to_string(r) + ", each moving into the cell the next vacates";
+        }
+        for (r = static_cast<int>(i); r >= 0 && mark[r] == 1; r = ahead[r]) mark[r] = 2;
+      }
+    }
+    for (std::size_t i = 0; i < robots; ++i) holder[paths[i][t]] = -1;
+  }
+  return "";
+}
+
+}  // namespace chasles
