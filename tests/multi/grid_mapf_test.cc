@@ -408,7 +408,7 @@ TEST(SolveMapfTest, RefinementNeverWorsensAndIsDeterministic) {
   ASSERT_TRUE(refined.solved) << refined.message;
   EXPECT_EQ(CheckMapfPlan(map, starts, goals, refined.paths), "");
   // The same seed finds the same first plan, which refinement can only improve.
-  EXPECT_LE(refined.sum_of_loss, first.sum_of_loss);
+  EXPECT_LE(refined.sum_of_costs, first.sum_of_costs);
   EXPECT_GE(refined.nodes_expanded, first.nodes_expanded);
   const MapfResult again = SolveMapf(map, starts, goals, first_only, Termination::After(std::chrono::seconds(20)));
   EXPECT_EQ(again.paths, first.paths);

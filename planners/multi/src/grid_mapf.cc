@@ -14,9 +14,11 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <deque>
 #include <limits>
 #include <memory>
+#include <new>
 #include <queue>
 #include <random>
 #include <unordered_map>
@@ -152,24 +154,79 @@ struct Graph {
   int size() const { return static_cast<int>(cell.size()); }
 };
 
-constexpr std::int32_t kUnreachable = std::numeric_limits<std::int32_t>::max();
+/// A zero-filled array from calloc: large ones come as fresh zero pages the kernel maps only
+/// when first touched (the search touches little of some, e.g. the refiner's visited marks).
+template <class T>
+class ZeroArray {
+ public:
+  ZeroArray() = default;
+  explicit ZeroArray(std::size_t size) : data_(static_cast<T*>(std::calloc(size == 0 ? 1 : size, sizeof(T)))), size_(size) {
+    if (data_ == nullptr) throw std::bad_alloc();
+  }
+  T& operator[](std::size_t i) { return data_.get()[i]; }
+  const T& operator[](std::size_t i) const { return data_.get()[i]; }
+  std::size_t size() const { return size_; }
 
-/// Breadth-first distances from `goal` over the graph into `out` (graph.size() entries).
-void DistancesTo(const Graph& graph, int goal, std::int32_t* out, std::vector<int>* queue) {
-  std::fill(out, out + graph.size(), kUnreachable);
-  queue->assign(1, goal);
-  out[goal] = 0;
-  for (std::size_t head = 0; head < queue->size(); ++head) {
-    const int v = (*queue)[head];
-    for (int k = 0; k < graph.degree[v]; ++k) {
-      const int u = graph.neighbors[v][k];
-      if (out[u] == kUnreachable) {
-        out[u] = out[v] + 1;
-        queue->push_back(u);
+ private:
+  struct Free {
+    void operator()(T* p) const { std::free(p); }
+  };
+  std::unique_ptr<T, Free> data_;
+  std::size_t size_ = 0;
+};
+
+/// Per robot, the breadth-first distance of every vertex to its goal; -1 for a vertex in
+/// another component. Stored as distance + 1 (0 = unreachable), in 16 bits when every distance
+/// fits (fewer than 65535 vertices), else 32: the tables are the solver's largest memory.
+class DistanceTable {
+ public:
+  DistanceTable(const Graph& graph, int robots)
+      : v_(graph.size()), narrow_(graph.size() < 65535) {
+    const std::size_t entries = static_cast<std::size_t>(robots) * v_;
+    if (narrow_) {
+      narrow_data_ = ZeroArray<std::uint16_t>(entries);
+    } else {
+      wide_data_ = ZeroArray<std::uint32_t>(entries);
+    }
+  }
+
+  /// Fills robot's row by a breadth-first search from `goal`.
+  void Compute(const Graph& graph, int robot, int goal, std::vector<int>* queue) {
+    const std::size_t row = static_cast<std::size_t>(robot) * v_;
+    Set(row + goal, 1);
+    queue->assign(1, goal);
+    for (std::size_t head = 0; head < queue->size(); ++head) {
+      const int v = (*queue)[head];
+      const std::uint32_t next = Get(row + v) + 1;
+      for (int k = 0; k < graph.degree[v]; ++k) {
+        const int u = graph.neighbors[v][k];
+        if (Get(row + u) == 0) {
+          Set(row + u, next);
+          queue->push_back(u);
+        }
       }
     }
   }
-}
+
+  std::int32_t operator()(int robot, int v) const {
+    return static_cast<std::int32_t>(Get(static_cast<std::size_t>(robot) * v_ + v)) - 1;
+  }
+
+ private:
+  std::uint32_t Get(std::size_t i) const { return narrow_ ? narrow_data_[i] : wide_data_[i]; }
+  void Set(std::size_t i, std::uint32_t value) {
+    if (narrow_) {
+      narrow_data_[i] = static_cast<std::uint16_t>(value);
+    } else {
+      wide_data_[i] = value;
+    }
+  }
+
+  std::size_t v_;
+  bool narrow_;
+  ZeroArray<std::uint16_t> narrow_data_;
+  ZeroArray<std::uint32_t> wide_data_;
+};
 
 // ---------------------------------------------------------------------------------------------
 // LaCAM*.
@@ -226,114 +283,105 @@ struct ConfigEqual {
 
 class LacamSearch {
  public:
-  LacamSearch(const Graph& graph, int width, std::vector<int> starts, std::vector<int> goals, std::vector<std::int32_t> distances,
-              std::uint64_t seed)
+  LacamSearch(const Graph& graph, int width, const std::vector<int>& starts, const std::vector<int>& goals,
+              const DistanceTable& distances, std::uint64_t seed)
       : graph_(graph),
         width_(width),
         n_(static_cast<int>(starts.size())),
-        starts_(std::move(starts)),
-        goals_(std::move(goals)),
-        distances_(std::move(distances)),
+        starts_(starts),
+        goals_(goals),
+        distances_(distances),
         rng_(seed),
         explored_(1024, ConfigHash{n_}, ConfigEqual{n_}),
         occupied_now_(graph.size(), -1),
         occupied_next_(graph.size(), -1),
         next_(n_, -1) {
     low_nodes_.push_back(LowNode{});  // the root: no constraint
+    root_ = NewNode(starts_, nullptr);
+    open_.push_back(root_);
   }
 
-  /// Runs until the first plan is found (then, with `refine`, until `refine_budget` [s] more has
-  /// passed or the search is exhausted) or `termination` stops. Fills `result` but its paths.
-  void Run(const Termination& termination, bool refine, double refine_budget, Clock::time_point began,
-           MapfResult* result) {
-    HighNode* root = NewNode(starts_, nullptr);
-    std::vector<HighNode*> open = {root};
-    HighNode* goal = nullptr;
-    Clock::time_point refine_end = Clock::time_point::max();
-    bool stopped = false;
-    while (!open.empty()) {
-      if (termination.ShouldStop() || (goal != nullptr && Clock::now() >= refine_end)) {
-        stopped = true;
-        break;
-      }
-      HighNode* node = open.back();
-      if (goal == nullptr && node->h == 0) {
-        goal = node;
-        ShortestCostsFromStart(root);
-        result->first_solution_seconds = SecondsSince(began);
-        if (!refine) break;
-        refine_end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
-                                        std::min(refine_budget, 1e7)));
-        continue;
-      }
-      // LaCAM*: nothing below this node can beat the plan found.
-      if (goal != nullptr && goal->g <= node->g + node->h) {
-        open.pop_back();
-        continue;
-      }
-      if (node->pending_head == node->pending.size()) {
-        open.pop_back();
-        std::vector<int>().swap(node->pending);
-        node->pending_head = 0;
-        continue;
-      }
-      const int low = node->pending[node->pending_head++];
-      const LowNode constraint = low_nodes_[low];
-      if (constraint.depth < n_) Branch(node, low);
-      if (!NextConfiguration(*node, low)) continue;
-      ++result->nodes_expanded;
-      const auto known = explored_.find(next_config_.data());
-      if (known != explored_.end()) {
-        HighNode* other = known->second;
-        AddSuccessor(node, other);
-        open.push_back(other);  // LaCAM: revisit the known configuration (depth first)
-        if (goal != nullptr) Rewire(node, goal, &open);
-      } else {
-        HighNode* created = NewNode(next_config_, node);
-        AddSuccessor(node, created);
-        open.push_back(created);
-      }
+  enum class SearchEnd { kPlan, kExhausted, kStopped };
+
+  /// LaCAM: searches until the first plan (kPlan), until every reachable configuration was
+  /// explored without one (kExhausted: no plan exists), or until `termination` stops.
+  SearchEnd FindPlan(const Termination& termination) {
+    while (goal_ == nullptr) {
+      if (open_.empty()) return SearchEnd::kExhausted;
+      if (termination.ShouldStop()) return SearchEnd::kStopped;
+      Step();
     }
-    result->nodes_created = nodes_.size();
-    if (goal == nullptr) {
-      result->solved = false;
-      if (stopped) {
-        const StopReason reason = termination.Reason();
-        result->message = std::string("no plan within the budget: the search stopped (") +
-                          (reason == StopReason::kCancelled ? "cancelled"
-                           : reason == StopReason::kDeadline ? "deadline"
-                                                             : "time budget") +
-                          ") after " + std::to_string(nodes_.size()) + " configurations in " +
-                          FormatNumber(std::round(SecondsSince(began) * 1e3) / 1e3) + " s";
-      } else {
-        result->message = "no plan exists under the conflict rules (no swaps, no rotation cycles): all " +
-                          std::to_string(nodes_.size()) + " reachable configurations were explored";
-      }
-      return;
-    }
-    result->solved = true;
-    result->proven_optimal = open.empty();
-    plan_.clear();
-    for (const HighNode* at = goal; at != nullptr; at = at->parent) plan_.push_back(&at->config);
-    std::reverse(plan_.begin(), plan_.end());
-    result->sum_of_loss = goal->g;
-    if (!refine) {
-      result->message = "first plan (refinement off)";
-    } else if (open.empty()) {
-      result->message = "plan proven optimal in the sum of loss: the search was exhausted";
-    } else {
-      result->message = "best plan when the refinement budget ended (" + std::to_string(nodes_.size()) +
-                        " configurations)";
-    }
+    return SearchEnd::kPlan;
   }
 
-  /// The configurations of the plan found, from the start.
-  const std::vector<const std::vector<int>*>& plan() const { return plan_; }
+  /// LaCAM*: after the first plan, goes on searching for cheaper ones (in the sum of loss) until
+  /// `stop()`, or `max_configurations` more configurations were generated (0 = no limit), or the
+  /// search is exhausted: then true, and the plan is optimal in the sum of loss.
+  template <class Stop>
+  bool Improve(const Stop& stop, std::uint64_t max_configurations) {
+    const std::uint64_t limit = max_configurations == 0 ? std::numeric_limits<std::uint64_t>::max()
+                                                        : generated_ + max_configurations;
+    while (!open_.empty()) {
+      if (generated_ >= limit || stop()) return false;
+      Step();
+    }
+    return true;
+  }
+
+  /// The best plan found: per robot, its vertex at every step (all of one length).
+  std::vector<std::vector<int>> Plan() const {
+    std::vector<const HighNode*> chain;
+    for (const HighNode* at = goal_; at != nullptr; at = at->parent) chain.push_back(at);
+    std::reverse(chain.begin(), chain.end());
+    std::vector<std::vector<int>> paths(n_, std::vector<int>(chain.size()));
+    for (std::size_t t = 0; t < chain.size(); ++t) {
+      for (int i = 0; i < n_; ++i) paths[i][t] = chain[t]->config[i];
+    }
+    return paths;
+  }
+
+  std::int64_t plan_cost() const { return goal_->g; }
+  std::uint64_t generated() const { return generated_; }
+  std::uint64_t created() const { return nodes_.size(); }
 
  private:
-  std::int32_t Distance(int robot, int v) const {
-    return distances_[static_cast<std::size_t>(robot) * graph_.size() + v];
+  /// One turn of LaCAM*'s loop on the top of OPEN (Okumura 2023, Algorithm 1 of LaCAM*).
+  void Step() {
+    HighNode* node = open_.back();
+    if (goal_ == nullptr && node->h == 0) {
+      ShortestCostsFromStart();
+      goal_ = node;
+      return;
+    }
+    // LaCAM*: nothing below this node can beat the plan found.
+    if (goal_ != nullptr && goal_->g <= node->g + node->h) {
+      open_.pop_back();
+      return;
+    }
+    if (node->pending_head == node->pending.size()) {
+      open_.pop_back();
+      std::vector<int>().swap(node->pending);
+      node->pending_head = 0;
+      return;
+    }
+    const int low = node->pending[node->pending_head++];
+    if (low_nodes_[low].depth < n_) Branch(node, low);
+    if (!NextConfiguration(*node, low)) return;
+    ++generated_;
+    const auto known = explored_.find(next_config_.data());
+    if (known != explored_.end()) {
+      HighNode* other = known->second;
+      AddSuccessor(node, other);
+      open_.push_back(other);  // LaCAM: revisit the known configuration (depth first)
+      if (goal_ != nullptr) Rewire(node);
+    } else {
+      HighNode* created = NewNode(next_config_, node);
+      AddSuccessor(node, created);
+      open_.push_back(created);
+    }
   }
+
+  std::int32_t Distance(int robot, int v) const { return distances_(robot, v); }
 
   /// LaCAM*'s transition cost (sum of loss): robots not both at their goal before and after.
   std::int64_t Cost(const std::vector<int>& from, const std::vector<int>& to) const {
@@ -375,16 +423,16 @@ class LacamSearch {
   /// Costs-to-come and parents by Dijkstra from the start over every edge found so far. Run once,
   /// when the first plan is found: until then the costs are not needed (LaCAM* keeps them
   /// current from the beginning by Rewire; the result is the same).
-  void ShortestCostsFromStart(HighNode* root) {
+  void ShortestCostsFromStart() {
     for (const auto& node : nodes_) node->g = std::numeric_limits<std::int64_t>::max();
-    root->g = 0;
-    root->parent = nullptr;
-    Rewire(root, nullptr, nullptr);
+    root_->g = 0;
+    root_->parent = nullptr;
+    Rewire(root_);
   }
 
   /// LaCAM*: after a new edge out of `from`, lowers costs-to-come through it (Dijkstra), and
   /// sends back to the search every node that could now lead to a cheaper plan.
-  void Rewire(HighNode* from, const HighNode* goal, std::vector<HighNode*>* open) {
+  void Rewire(HighNode* from) {
     using Entry = std::pair<std::int64_t, HighNode*>;
     const auto later = [](const Entry& a, const Entry& b) { return a.first > b.first; };
     std::priority_queue<Entry, std::vector<Entry>, decltype(later)> queue(later);
@@ -399,7 +447,7 @@ class LacamSearch {
         to->g = node->g + e.cost;
         to->parent = node;
         queue.emplace(to->g, to);
-        if (goal != nullptr && to->g + to->h < goal->g) open->push_back(to);
+        if (goal_ != nullptr && to != goal_ && to->g + to->h < goal_->g) open_.push_back(to);
       }
     }
   }
@@ -591,15 +639,18 @@ class LacamSearch {
   const Graph& graph_;
   const int width_;  ///< of the map
   const int n_;
-  const std::vector<int> starts_;
-  const std::vector<int> goals_;
-  const std::vector<std::int32_t> distances_;  ///< robot-major: distances_[i * |V| + v]
+  const std::vector<int>& starts_;
+  const std::vector<int>& goals_;
+  const DistanceTable& distances_;
   std::mt19937_64 rng_;
   std::vector<std::unique_ptr<HighNode>> nodes_;
   std::deque<LowNode> low_nodes_;
   std::unordered_set<std::uint64_t> edges_;  ///< (from id, to id) of every successor edge
   std::unordered_map<const int*, HighNode*, ConfigHash, ConfigEqual> explored_;
-  std::vector<const std::vector<int>*> plan_;
+  HighNode* root_ = nullptr;
+  HighNode* goal_ = nullptr;     ///< the start of the best plan, backwards along parent links
+  std::vector<HighNode*> open_;  ///< LaCAM's OPEN: a stack
+  std::uint64_t generated_ = 0;  ///< configurations generated (new or known)
   // Scratch of NextConfiguration / Pibt.
   const int* current_ = nullptr;
   std::vector<int> occupied_now_;   ///< vertex -> robot in the current configuration
@@ -609,6 +660,307 @@ class LacamSearch {
   std::vector<int> next_config_;
   std::vector<int> scratch_moves_;
 };
+
+// ---------------------------------------------------------------------------------------------
+// Refinement by large neighbourhood search.
+
+/// Anytime improvement of the sum of costs of a valid plan by large neighbourhood search (after
+/// Li et al., "Anytime multi-agent path finding via large neighborhood search", IJCAI 2021):
+/// repeatedly takes a few robots out, replans them one after another (random order) by
+/// space-time A* among the others' fixed paths under the same conflict rules, and keeps the new
+/// paths when their sum of costs is lower. Neighbourhoods: the robot with the largest delay with
+/// the robots found on its shortest path at the times it would pass, or random robots, chosen
+/// adaptively by how much each kind has improved lately.
+class NeighbourhoodRefiner {
+ public:
+  NeighbourhoodRefiner(const Graph& graph, const std::vector<int>& starts, const std::vector<int>& goals,
+                       const DistanceTable& distances, const std::vector<std::vector<int>>& plan,
+                       std::uint64_t seed)
+      : graph_(graph),
+        n_(static_cast<int>(starts.size())),
+        v_(graph.size()),
+        starts_(starts),
+        goals_(goals),
+        distances_(distances),
+        rng_(seed ^ 0x5DEECE66Dull),
+        paths_(plan),
+        parked_(v_, -1) {
+    for (auto& path : paths_) Trim(&path);
+    Grow(static_cast<int>(plan.empty() ? 1 : plan[0].size()));
+    for (int i = 0; i < n_; ++i) Insert(i);
+    for (int i = 0; i < n_; ++i) cost_ += Cost(i);
+  }
+
+  /// Improves until `stop()` or after `max_iterations` neighbourhoods (0 = no limit).
+  template <class Stop>
+  void Run(const Stop& stop, std::uint64_t max_iterations) {
+    if (n_ == 0) return;
+    const int size = std::min(n_, 8);
+    std::vector<int> group, order;
+    std::vector<std::vector<int>> old_paths;
+    while ((max_iterations == 0 || iterations_ < max_iterations) && !stop()) {
+      ++iterations_;
+      const int kind = Below(rng_, 1000) * (weights_[0] + weights_[1]) < 1000 * weights_[0] ? 0 : 1;
+      if (kind == 0) {
+        DelayedNeighbourhood(size, &group);
+      } else {
+        RandomNeighbourhood(size, &group);
+      }
+      std::int64_t old_cost = 0;
+      old_paths.clear();
+      for (int i : group) {
+        old_cost += Cost(i);
+        old_paths.push_back(paths_[i]);
+        Remove(i);
+      }
+      order = group;
+      Shuffle(&order, rng_);
+      std::int64_t new_cost = 0;
+      std::size_t placed = 0;
+      for (; placed < order.size(); ++placed) {
+        const int i = order[placed];
+        if (!PlanAlone(i, stop, &paths_[i])) break;
+        Insert(i);
+        new_cost += Cost(i);
+        if (new_cost >= old_cost) {
+          ++placed;
+          break;
+        }
+      }
+      const bool better = placed == order.size() && new_cost < old_cost;
+      if (!better) {
+        for (std::size_t k = 0; k < placed; ++k) Remove(order[k]);
+        for (std::size_t k = 0; k < group.size(); ++k) {
+          paths_[group[k]] = old_paths[k];
+          Insert(group[k]);
+        }
+      } else {
+        cost_ += new_cost - old_cost;
+        ++improvements_;
+      }
+      const double gain = better ? static_cast<double>(old_cost - new_cost) : 0.0;
+      weights_[kind] = std::max(0.01, 0.9 * weights_[kind] + 0.1 * gain);
+    }
+  }
+
+  /// The plan: per robot its vertex at every step, all of one length.
+  std::vector<std::vector<int>> Plan() const {
+    std::size_t length = 1;
+    for (const auto& path : paths_) length = std::max(length, path.size());
+    std::vector<std::vector<int>> plan = paths_;
+    for (auto& path : plan) path.resize(length, path.back());
+    return plan;
+  }
+
+  std::int64_t cost() const { return cost_; }
+  std::uint64_t iterations() const { return iterations_; }
+  std::uint64_t improvements() const { return improvements_; }
+
+ private:
+  std::int32_t Distance(int robot, int v) const { return distances_(robot, v); }
+  /// Sum-of-costs term of robot i: the step from which it stays at its goal.
+  std::int64_t Cost(int i) const { return static_cast<std::int64_t>(paths_[i].size()) - 1; }
+
+  /// Cuts the path after the step from which it stays at its goal.
+  void Trim(std::vector<int>* path) const {
+    std::size_t end = path->size();
+    while (end > 1 && (*path)[end - 2] == path->back()) --end;
+    path->resize(end);
+  }
+
+  int Position(int robot, int t) const {
+    const std::vector<int>& path = paths_[robot];
+    return path[std::min<std::size_t>(t, path.size() - 1)];
+  }
+
+  /// The robot at vertex v at step t (among the placed ones), -1 for none. From step horizon_ on
+  /// every placed robot stands at its goal.
+  int At(int t, int v) const { return t < horizon_ ? occupancy_[static_cast<std::size_t>(t) * v_ + v] : parked_[v]; }
+
+  void Grow(int horizon) {
+    if (horizon <= horizon_) return;
+    occupancy_.resize(static_cast<std::size_t>(horizon) * v_, -1);
+    for (int t = horizon_; t < horizon; ++t) {
+      for (int v = 0; v < v_; ++v) occupancy_[static_cast<std::size_t>(t) * v_ + v] = parked_[v];
+    }
+    horizon_ = horizon;
+  }
+
+  void Insert(int robot) {
+    Grow(static_cast<int>(paths_[robot].size()));
+    for (int t = 0; t < horizon_; ++t) occupancy_[static_cast<std::size_t>(t) * v_ + Position(robot, t)] = robot;
+    parked_[goals_[robot]] = robot;
+  }
+
+  void Remove(int robot) {
+    for (int t = 0; t < horizon_; ++t) {
+      int& at = occupancy_[static_cast<std::size_t>(t) * v_ + Position(robot, t)];
+      if (at == robot) at = -1;
+    }
+    parked_[goals_[robot]] = -1;
+  }
+
+  /// Whether a robot leaving v at step t into the vertex of `ahead` (which leaves it) closes a
+  /// cycle of followers: walks the placed robots' moves at t from `ahead`. (The robot itself is
+  /// not placed: the chain closes when it reaches a robot entering v.)
+  bool ClosesCycle(int t, int ahead, int v) const {
+    int at = ahead;
+    for (int steps = 0; steps <= n_; ++steps) {
+      const int to = Position(at, t + 1);
+      if (to == v) return true;
+      const int next = At(t, to);
+      if (next < 0 || next == at) return false;
+      at = next;
+    }
+    return true;
+  }
+
+  /// The agent with the largest delay (cost over its distance) not tried lately, and the robots
+  /// on one of its shortest paths at the steps it would pass there (or one later).
+  void DelayedNeighbourhood(int size, std::vector<int>* group) {
+    int chosen = -1;
+    std::int64_t worst = 0;
+    for (int pass = 0; pass < 2 && chosen < 0; ++pass) {
+      for (int i = 0; i < n_; ++i) {
+        const std::int64_t delay = Cost(i) - Distance(i, starts_[i]);
+        if (delay > worst && tabu_.count(i) == 0) {
+          worst = delay;
+          chosen = i;
+        }
+      }
+      if (chosen < 0) tabu_.clear();
+    }
+    if (chosen < 0) {
+      RandomNeighbourhood(size, group);
+      return;
+    }
+    tabu_.insert(chosen);
+    group->assign(1, chosen);
+    std::vector<int> found;
+    int v = starts_[chosen];
+    for (int t = 0;; ++t) {
+      for (int dt = 0; dt <= 1; ++dt) {
+        const int robot = At(t + dt, v);
+        if (robot >= 0 && robot != chosen && std::find(found.begin(), found.end(), robot) == found.end()) {
+          found.push_back(robot);
+        }
+      }
+      if (v == goals_[chosen]) break;
+      int options[4], count = 0;
+      for (int k = 0; k < graph_.degree[v]; ++k) {
+        const int u = graph_.neighbors[v][k];
+        if (Distance(chosen, u) < Distance(chosen, v)) options[count++] = u;
+      }
+      v = options[Below(rng_, count)];
+    }
+    Shuffle(&found, rng_);
+    for (int robot : found) {
+      if (static_cast<int>(group->size()) >= size) break;
+      group->push_back(robot);
+    }
+    while (static_cast<int>(group->size()) < size) {
+      const int robot = static_cast<int>(Below(rng_, n_));
+      if (std::find(group->begin(), group->end(), robot) == group->end()) group->push_back(robot);
+    }
+  }
+
+  void RandomNeighbourhood(int size, std::vector<int>* group) {
+    group->clear();
+    while (static_cast<int>(group->size()) < size) {
+      const int robot = static_cast<int>(Below(rng_, n_));
+      if (std::find(group->begin(), group->end(), robot) == group->end()) group->push_back(robot);
+    }
+  }
+
+  /// Space-time A* for `robot` among the placed robots: the earliest arrival at its goal after
+  /// which no placed robot enters the goal. States past the horizon (a static world) are merged
+  /// per vertex. False when there is none within the expansion cap or when `stop()`.
+  template <class Stop>
+  bool PlanAlone(int robot, const Stop& stop, std::vector<int>* path) {
+    const int goal = goals_[robot];
+    int last_busy = -1;  // the last step a placed robot is at the goal
+    for (int t = 0; t < horizon_; ++t) {
+      if (occupancy_[static_cast<std::size_t>(t) * v_ + goal] >= 0) last_busy = t;
+    }
+    const std::size_t slots = static_cast<std::size_t>(horizon_ + 1) * v_;
+    if (seen_.size() < slots || ++stamp_ == 0) {
+      seen_ = ZeroArray<std::uint32_t>(std::max(slots, seen_.size()) + seen_.size() / 2);
+      stamp_ = 1;
+    }
+    states_.clear();
+    using Entry = std::pair<std::int64_t, int>;  // (f, then later steps first), state
+    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
+    const auto push = [&](int v, int t, int parent) {
+      std::uint32_t& mark = seen_[static_cast<std::size_t>(std::min(t, horizon_)) * v_ + v];
+      if (mark == stamp_) return;
+      mark = stamp_;
+      states_.push_back({v, t, parent});
+      // Admissible: the robot cannot finish before its goal is clear for good.
+      const std::int64_t f = std::max<std::int64_t>(t + static_cast<std::int64_t>(Distance(robot, v)), last_busy + 1);
+      open.emplace(f * (std::int64_t{1} << 32) - t, static_cast<int>(states_.size()) - 1);
+    };
+    push(starts_[robot], 0, -1);
+    const std::size_t cap = 64 * static_cast<std::size_t>(v_) + 100000;
+    while (!open.empty()) {
+      if (states_.size() > cap || ((states_.size() & 1023) == 0 && stop())) return false;
+      const int index = open.top().second;
+      open.pop();
+      const State state = states_[index];
+      if (state.v == goal && state.t > last_busy) {
+        path->clear();
+        for (int k = index; k >= 0; k = states_[k].parent) path->push_back(states_[k].v);
+        std::reverse(path->begin(), path->end());
+        Trim(path);
+        return true;
+      }
+      const int t = state.t;
+      for (int k = -1; k < graph_.degree[state.v]; ++k) {
+        const int u = k < 0 ? state.v : graph_.neighbors[state.v][k];
+        if (At(t + 1, u) >= 0) continue;
+        if (u != state.v) {
+          const int ahead = At(t, u);
+          if (ahead >= 0 && ClosesCycle(t, ahead, state.v)) continue;
+        }
+        push(u, t + 1, index);
+      }
+    }
+    return false;
+  }
+
+  struct State {
+    int v, t, parent;
+  };
+
+  const Graph& graph_;
+  const int n_;
+  const int v_;
+  const std::vector<int>& starts_;
+  const std::vector<int>& goals_;
+  const DistanceTable& distances_;
+  std::mt19937_64 rng_;
+  std::vector<std::vector<int>> paths_;  ///< trimmed: each ends where its robot stays for good
+  std::vector<int> parked_;              ///< vertex -> placed robot whose goal it is
+  std::vector<int> occupancy_;           ///< [t * |V| + v] -> placed robot, for t < horizon_
+  int horizon_ = 0;
+  std::int64_t cost_ = 0;
+  std::uint64_t iterations_ = 0, improvements_ = 0;
+  double weights_[2] = {1.0, 1.0};       ///< delayed, random
+  std::unordered_set<int> tabu_;
+  ZeroArray<std::uint32_t> seen_;          ///< A*'s visited marks, [min(t, horizon_) * |V| + v]
+  std::uint32_t stamp_ = 0;
+  std::vector<State> states_;               ///< of the running A*
+};
+
+/// The sum of costs of a plan of vertex paths of one length.
+std::int64_t SumOfCosts(const std::vector<std::vector<int>>& plan, const std::vector<int>& goals) {
+  std::int64_t sum = 0;
+  for (std::size_t i = 0; i < plan.size(); ++i) {
+    std::size_t end = plan[i].size();
+    while (end > 0 && plan[i][end - 1] == goals[i]) --end;
+    sum += static_cast<std::int64_t>(end);
+  }
+  return sum;
+}
 
 void ValidateRobots(const GridMap& map, const std::vector<GridCell>& cells, const char* field) {
   const GridCell count = static_cast<GridCell>(map.blocked.size());
@@ -671,7 +1023,7 @@ MapfResult SolveMapf(const GridMap& map, const std::vector<GridCell>& starts, co
     start_vertex[i] = graph.vertex[starts[i]];
     goal_vertex[i] = graph.vertex[goals[i]];
   }
-  std::vector<std::int32_t> distances(static_cast<std::size_t>(n) * graph.size());
+  DistanceTable distances(graph, n);
   std::vector<int> queue;
   std::vector<int> unreachable;
   for (int i = 0; i < n; ++i) {
@@ -680,12 +1032,12 @@ MapfResult SolveMapf(const GridMap& map, const std::vector<GridCell>& starts, co
       result.seconds = SecondsSince(began);
       return result;
     }
-    std::int32_t* row = distances.data() + static_cast<std::size_t>(i) * graph.size();
-    DistancesTo(graph, goal_vertex[i], row, &queue);
-    if (row[start_vertex[i]] == kUnreachable) {
+    distances.Compute(graph, i, goal_vertex[i], &queue);
+    const std::int32_t d = distances(i, start_vertex[i]);
+    if (d < 0) {
       unreachable.push_back(i);
     } else {
-      result.sum_of_lower_bounds += row[start_vertex[i]];
+      result.sum_of_lower_bounds += d;
     }
   }
   if (!unreachable.empty()) {
@@ -703,24 +1055,82 @@ MapfResult SolveMapf(const GridMap& map, const std::vector<GridCell>& starts, co
     return result;
   }
 
-  LacamSearch search(graph, map.width, start_vertex, goal_vertex, std::move(distances), options.seed);
-  search.Run(termination, options.refine, options.refine_budget, began, &result);
-  if (result.solved) {
-    const auto& plan = search.plan();
-    result.makespan = static_cast<int>(plan.size()) - 1;
-    result.paths.assign(n, std::vector<GridCell>(plan.size()));
-    for (std::size_t t = 0; t < plan.size(); ++t) {
-      for (int i = 0; i < n; ++i) result.paths[i][t] = graph.cell[(*plan[t])[i]];
+  LacamSearch search(graph, map.width, start_vertex, goal_vertex, distances, options.seed);
+  const LacamSearch::SearchEnd end = search.FindPlan(termination);
+  result.nodes_expanded = search.generated();
+  result.nodes_created = search.created();
+  if (end != LacamSearch::SearchEnd::kPlan) {
+    if (end == LacamSearch::SearchEnd::kStopped) {
+      const StopReason reason = termination.Reason();
+      result.message = std::string("no plan within the budget: the search stopped (") +
+                       (reason == StopReason::kCancelled  ? "cancelled"
+                        : reason == StopReason::kDeadline ? "deadline"
+                                                          : "time budget") +
+                       ") after " + std::to_string(search.created()) + " configurations in " +
+                       FormatNumber(std::round(SecondsSince(began) * 1e3) / 1e3) + " s";
+    } else {
+      result.message = "no plan exists under the conflict rules (no swaps, no rotation cycles): all " +
+                       std::to_string(search.created()) + " reachable configurations were explored";
     }
-    for (int i = 0; i < n; ++i) {
-      int last_away = -1;
-      for (int t = result.makespan; t >= 0; --t) {
-        if (result.paths[i][t] != goals[i]) {
-          last_away = t;
-          break;
-        }
+    result.seconds = SecondsSince(began);
+    return result;
+  }
+  result.solved = true;
+  result.first_solution_seconds = SecondsSince(began);
+  std::vector<std::vector<int>> plan = search.Plan();
+  if (!options.refine) {
+    result.message = "first plan (refinement off)";
+  } else {
+    // LaCAM* goes on for at most a quarter of the refinement budget (it is exhausted quickly
+    // on small instances, proving the plan optimal in the sum of loss, and makes little progress
+    // on large ones), then large neighbourhood search takes the rest.
+    const Clock::time_point refine_began = Clock::now();
+    const auto after = [&](double seconds) {
+      return refine_began + std::chrono::duration_cast<Clock::duration>(
+                                std::chrono::duration<double>(std::min(seconds, 1e7)));
+    };
+    const Clock::time_point lacam_end = after(0.25 * options.refine_budget);
+    const Clock::time_point refine_end = after(options.refine_budget);
+    const bool exhausted = search.Improve(
+        [&] { return termination.ShouldStop() || Clock::now() >= lacam_end; }, options.refine_iterations);
+    result.nodes_expanded = search.generated();
+    result.nodes_created = search.created();
+    // LaCAM* lowers the sum of loss; keep its plan unless the sum of costs went up.
+    std::vector<std::vector<int>> improved = search.Plan();
+    if (SumOfCosts(improved, goal_vertex) <= SumOfCosts(plan, goal_vertex)) {
+      plan = std::move(improved);
+      result.proven_optimal = exhausted;
+    }
+    if (result.proven_optimal) {
+      result.message = "plan optimal in the sum of loss: the LaCAM* search was exhausted (" +
+                       std::to_string(search.created()) + " configurations)";
+    } else {
+      NeighbourhoodRefiner refiner(graph, start_vertex, goal_vertex, distances, plan, options.seed);
+      refiner.Run([&] { return termination.ShouldStop() || Clock::now() >= refine_end; },
+                  options.refine_iterations);
+      plan = refiner.Plan();
+      result.refine_iterations = refiner.iterations();
+      result.message = "refined: LaCAM* generated " + std::to_string(search.generated()) +
+                       " configurations, then " + std::to_string(refiner.iterations()) +
+                       " neighbourhoods were replanned (" + std::to_string(refiner.improvements()) +
+                       " improved the plan)";
+    }
+  }
+  const int steps = static_cast<int>(plan[0].size());
+  result.makespan = steps - 1;
+  result.paths.assign(n, std::vector<GridCell>(steps));
+  for (int i = 0; i < n; ++i) {
+    for (int t = 0; t < steps; ++t) result.paths[i][t] = graph.cell[plan[i][t]];
+    int last_away = -1;
+    for (int t = steps - 1; t >= 0; --t) {
+      if (result.paths[i][t] != goals[i]) {
+        last_away = t;
+        break;
       }
-      result.sum_of_costs += last_away + 1;
+    }
+    result.sum_of_costs += last_away + 1;
+    for (int t = 0; t + 1 < steps; ++t) {
+      result.sum_of_loss += !(result.paths[i][t] == goals[i] && result.paths[i][t + 1] == goals[i]);
     }
   }
   result.seconds = SecondsSince(began);
