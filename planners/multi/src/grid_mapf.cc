@@ -113,9 +113,11 @@ struct Graph {
   std::vector<int> vertex;              ///< cell -> vertex, -1 for blocked
   std::vector<std::array<int, 4>> neighbors;
   std::vector<std::uint8_t> degree;
-  /// dead_end[4 * v + k]: moving from v to its k-th neighbour enters a dead-end corridor (cells
-  /// with a single way on, ending in a cell with none).
-  std::vector<std::uint8_t> dead_end;
+  /// pocket[4 * v + k]: moving from v to its k-th neighbour u crosses a bridge (an edge whose
+  /// removal splits the free cells) into the smaller side, the "pocket": c + 1 when the pocket is
+  /// the depth-first subtree of c, -(c + 1) when it is everything else; 0 otherwise.
+  std::vector<int> pocket;
+  std::vector<int> preorder, subtree_end;  ///< depth-first numbering: subtree of c = [preorder[c], subtree_end[c])
 
   explicit Graph(const GridMap& map) : vertex(map.blocked.size(), -1) {
     for (GridCell c = 0; c < static_cast<GridCell>(map.blocked.size()); ++c) {
@@ -134,24 +136,70 @@ struct Graph {
         if (n >= 0 && vertex[n] >= 0) neighbors[v][degree[v]++] = vertex[n];
       }
     }
-    dead_end.assign(4 * cell.size(), 0);
-    for (int v = 0; v < size(); ++v) {
-      for (int k = 0; k < degree[v]; ++k) {
-        int previous = v, at = neighbors[v][k];
-        for (int steps = 0; steps < size(); ++steps) {
-          if (degree[at] == 1) {
-            dead_end[4 * v + k] = 1;
-            break;
+    FindPockets();
+  }
+  int size() const { return static_cast<int>(cell.size()); }
+
+  /// Whether vertex g lies in the pocket entered from v by neighbour slot k (pocket != 0).
+  bool InPocket(int v, int k, int g) const {
+    const int code = pocket[4 * v + k];
+    const int c = std::abs(code) - 1;
+    const bool below = preorder[c] <= preorder[g] && preorder[g] < subtree_end[c];
+    return code > 0 ? below : !below;
+  }
+
+ private:
+  /// Bridges by Tarjan's low-link over an iterative depth-first search of each component.
+  void FindPockets() {
+    const int n = size();
+    pocket.assign(4 * n, 0);
+    preorder.assign(n, -1);
+    subtree_end.assign(n, 0);
+    std::vector<int> low(n, 0), parent(n, -1), component_of(n, 0), component_size;
+    std::vector<std::pair<int, int>> stack;  // (vertex, next neighbour slot)
+    int counter = 0;
+    for (int root = 0; root < n; ++root) {
+      if (preorder[root] >= 0) continue;
+      const int first = counter;
+      const int component = static_cast<int>(component_size.size());
+      component_of[root] = component;
+      preorder[root] = low[root] = counter++;
+      stack.assign(1, {root, 0});
+      while (!stack.empty()) {
+        auto& [v, k] = stack.back();
+        if (k < degree[v]) {
+          const int u = neighbors[v][k++];
+          if (preorder[u] < 0) {
+            parent[u] = v;
+            component_of[u] = component;
+            preorder[u] = low[u] = counter++;
+            stack.push_back({u, 0});
+          } else if (u != parent[v]) {
+            low[v] = std::min(low[v], preorder[u]);
           }
-          if (degree[at] != 2) break;
-          const int on = neighbors[at][0] == previous ? neighbors[at][1] : neighbors[at][0];
-          previous = at;
-          at = on;
+        } else {
+          subtree_end[v] = counter;
+          const int done = v;
+          stack.pop_back();
+          if (!stack.empty()) low[stack.back().first] = std::min(low[stack.back().first], low[done]);
         }
+      }
+      component_size.push_back(counter - first);
+    }
+    for (int v = 0; v < n; ++v) {
+      for (int k = 0; k < degree[v]; ++k) {
+        const int u = neighbors[v][k];
+        const int child = parent[u] == v ? u : parent[v] == u ? v : -1;
+        if (child < 0 || low[child] <= preorder[parent[child]]) continue;  // not a bridge
+        const int below = subtree_end[child] - preorder[child];
+        const int rest = component_size[component_of[child]] - below;
+        if (u == child && below <= rest) pocket[4 * v + k] = child + 1;
+        if (v == child && rest < below) pocket[4 * v + k] = -(child + 1);
       }
     }
   }
-  int size() const { return static_cast<int>(cell.size()); }
+
+ public:
 };
 
 /// A zero-filled array from calloc: large ones come as fresh zero pages the kernel maps only
@@ -518,17 +566,15 @@ class LacamSearch {
     reserved_.push_back(v);
   }
 
-  /// Whether robot `robot` standing in `v` would lead into a dead-end corridor by moving to its
-  /// neighbour slot `k` (u) in which `other` must get deeper than `robot`'s own goal: true unless
-  /// `robot`'s goal lies in that corridor beyond the goal of `other`. Distances decide "inside"
-  /// and "deeper": in a corridor entered from v, a goal lies inside iff it is nearer to u than to
-  /// v, and its depth is its distance from u.
-  bool ShouldLeaveCorridorTo(int robot, int v, int k, int other) const {
-    if (!graph_.dead_end[4 * v + k]) return false;
+  /// Whether robot `robot` standing in v should keep out of the pocket behind its neighbour slot
+  /// k (u) for robot `other`, whose goal is in that pocket: true unless `robot`'s goal lies in
+  /// the pocket too and deeper than the goal of `other`. Depth = distance from u, the only way
+  /// in; a robot that goes in first must be the one going deepest, or the other cannot pass it
+  /// (no swaps, no rotations).
+  bool ShouldKeepOut(int robot, int v, int k, int other) const {
+    if (graph_.pocket[4 * v + k] == 0 || !graph_.InPocket(v, k, goals_[other])) return false;
     const int u = graph_.neighbors[v][k];
-    if (Distance(other, u) >= Distance(other, v)) return false;  // `other` does not go in
-    const bool inside = Distance(robot, v) == Distance(robot, u) + 1;
-    return !(inside && Distance(robot, u) > Distance(other, u));
+    return !(graph_.InPocket(v, k, goals_[robot]) && Distance(robot, u) > Distance(other, u));
   }
 
   /// One move of PIBT: reserves u for `robot` unless another robot has, or it would close a cycle
@@ -548,11 +594,12 @@ class LacamSearch {
 
   /// PIBT (priority inheritance with backtracking) for `robot`, pushed by `pusher` (-1 when not):
   /// the robot takes its best move that TryMove grants. Moves are ranked by distance to the goal,
-  /// then vertices nobody stands on, then seeded random; a pushed robot ranks last the moves
-  /// into a dead-end corridor its pusher must enter deeper (it would only be pushed in again).
-  /// Pull (our corridor rule, after LaCAM*'s swap): when the best move enters a dead-end
-  /// corridor held by an undecided robot that cannot make room by going deeper, the robot backs
-  /// off instead and that robot follows it out, one step at a time, until they can pass.
+  /// then vertices nobody stands on, then seeded random; ranked last are moves into a pocket
+  /// (Graph::pocket) that does not hold the robot's goal, and for a pushed robot moves into a
+  /// pocket its pusher must enter deeper (ShouldKeepOut: it would only be pushed in again).
+  /// Pull (our pocket rule, after LaCAM*'s swap): when the best move enters a pocket whose
+  /// entrance holds an undecided robot that should keep out, the robot backs off instead and
+  /// that robot follows it out, one step at a time, until they can pass.
   /// A robot without any move stays: a pushed robot takes its vertex back from the pusher, which
   /// tries its next move; at the top level the vertex was reserved by a constrained robot, and
   /// the configuration fails.
@@ -577,7 +624,10 @@ class LacamSearch {
       const int u = candidates[k];
       const int occupant = occupied_now_[u];
       key[k] = 2 * static_cast<std::int64_t>(Distance(robot, u)) + (occupant >= 0 && occupant != robot ? 1 : 0);
-      if (pusher >= 0 && slot[k] >= 0 && ShouldLeaveCorridorTo(robot, v, slot[k], pusher)) key[k] += kLast;
+      if (pusher >= 0 && slot[k] >= 0 && ShouldKeepOut(robot, v, slot[k], pusher)) key[k] += kLast;
+      if (slot[k] >= 0 && graph_.pocket[4 * v + slot[k]] != 0 && !graph_.InPocket(v, slot[k], goals_[robot])) {
+        key[k] += kLast;  // a pocket its goal is not in: it would have to come out again
+      }
     }
     for (int a = 1; a < count; ++a) {  // stable insertion sort by key
       for (int b = a; b > 0 && key[b] < key[b - 1]; --b) {
@@ -589,7 +639,7 @@ class LacamSearch {
     const int best = candidates[0];
     const int blocker = occupied_now_[best];
     if (pusher < 0 && best != v && blocker >= 0 && next_[blocker] < 0 && occupied_next_[v] < 0 &&
-        ShouldLeaveCorridorTo(blocker, v, slot[0], robot)) {
+        ShouldKeepOut(blocker, v, slot[0], robot)) {
       for (int k = 1; k < count; ++k) {
         if (candidates[k] == v || !TryMove(robot, candidates[k])) continue;
         if (next_[blocker] < 0 && occupied_next_[v] < 0 && !ClosesCycle(blocker, robot)) Reserve(blocker, v);
