@@ -765,17 +765,18 @@ class NeighbourhoodRefiner {
       }
       order = group;
       Shuffle(&order, rng_);
+      // The robots still to place cost at least their distances: a robot's arrival must leave
+      // room for them under old_cost, else the neighbourhood cannot improve (A* stops there).
+      std::int64_t still = 0;
+      for (int i : order) still += Distance(i, starts_[i]);
       std::int64_t new_cost = 0;
       std::size_t placed = 0;
       for (; placed < order.size(); ++placed) {
         const int i = order[placed];
-        if (!PlanAlone(i, stop, &paths_[i])) break;
+        still -= Distance(i, starts_[i]);
+        if (!PlanAlone(i, old_cost - 1 - new_cost - still, stop, &paths_[i])) break;
         Insert(i);
         new_cost += Cost(i);
-        if (new_cost >= old_cost) {
-          ++placed;
-          break;
-        }
       }
       const bool better = placed == order.size() && new_cost < old_cost;
       if (!better) {
@@ -923,38 +924,52 @@ class NeighbourhoodRefiner {
   }
 
   /// Space-time A* for `robot` among the placed robots: the earliest arrival at its goal after
-  /// which no placed robot enters the goal. States past the horizon (a static world) are merged
-  /// per vertex. False when there is none within the expansion cap or when `stop()`.
+  /// which no placed robot enters the goal, if it is at most `bound`. States past the horizon (a
+  /// static world) are merged per vertex. The open list is a bucket queue on f, last in first
+  /// out within a bucket (deeper states first). False when there is no such arrival, past the
+  /// expansion cap, or when `stop()`.
   template <class Stop>
-  bool PlanAlone(int robot, const Stop& stop, std::vector<int>* path) {
+  bool PlanAlone(int robot, std::int64_t bound, const Stop& stop, std::vector<int>* path) {
     const int goal = goals_[robot];
     int last_busy = -1;  // the last step a placed robot is at the goal
     for (int t = 0; t < horizon_; ++t) {
       if (occupancy_[static_cast<std::size_t>(t) * v_ + goal] >= 0) last_busy = t;
     }
+    // Admissible and consistent: the robot cannot finish before its goal is clear for good.
+    const auto f_of = [&](int v, int t) {
+      return std::max<std::int64_t>(t + static_cast<std::int64_t>(Distance(robot, v)), last_busy + 1);
+    };
+    const std::int64_t f0 = f_of(starts_[robot], 0);
+    bound = std::min<std::int64_t>(bound, f0 + 4 * static_cast<std::int64_t>(v_));
+    if (f0 > bound) return false;
     const std::size_t slots = static_cast<std::size_t>(horizon_ + 1) * v_;
     if (seen_.size() < slots || ++stamp_ == 0) {
       seen_ = ZeroArray<std::uint32_t>(std::max(slots, seen_.size()) + seen_.size() / 2);
       stamp_ = 1;
     }
     states_.clear();
-    using Entry = std::pair<std::int64_t, int>;  // (f, then later steps first), state
-    std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
+    const std::size_t buckets = static_cast<std::size_t>(bound - f0 + 1);
+    if (buckets_.size() < buckets) buckets_.resize(buckets);
+    for (std::size_t b = 0; b < buckets; ++b) buckets_[b].clear();
+    std::size_t current = 0, queued = 0;
     const auto push = [&](int v, int t, int parent) {
+      const std::int64_t f = f_of(v, t);
+      if (f > bound) return;
       std::uint32_t& mark = seen_[static_cast<std::size_t>(std::min(t, horizon_)) * v_ + v];
       if (mark == stamp_) return;
       mark = stamp_;
       states_.push_back({v, t, parent});
-      // Admissible: the robot cannot finish before its goal is clear for good.
-      const std::int64_t f = std::max<std::int64_t>(t + static_cast<std::int64_t>(Distance(robot, v)), last_busy + 1);
-      open.emplace(f * (std::int64_t{1} << 32) - t, static_cast<int>(states_.size()) - 1);
+      buckets_[static_cast<std::size_t>(f - f0)].push_back(static_cast<int>(states_.size()) - 1);
+      ++queued;
     };
     push(starts_[robot], 0, -1);
     const std::size_t cap = 64 * static_cast<std::size_t>(v_) + 100000;
-    while (!open.empty()) {
+    while (queued > 0) {
       if (states_.size() > cap || ((states_.size() & 1023) == 0 && stop())) return false;
-      const int index = open.top().second;
-      open.pop();
+      while (buckets_[current].empty()) ++current;
+      const int index = buckets_[current].back();
+      buckets_[current].pop_back();
+      --queued;
       const State state = states_[index];
       if (state.v == goal && state.t > last_busy) {
         path->clear();
@@ -999,6 +1014,7 @@ class NeighbourhoodRefiner {
   ZeroArray<std::uint32_t> seen_;          ///< A*'s visited marks, [min(t, horizon_) * |V| + v]
   std::uint32_t stamp_ = 0;
   std::vector<State> states_;               ///< of the running A*
+  std::vector<std::vector<int>> buckets_;   ///< its open list, by f - f0
 };
 
 /// The sum of costs of a plan of vertex paths of one length.
@@ -1131,15 +1147,15 @@ MapfResult SolveMapf(const GridMap& map, const std::vector<GridCell>& starts, co
   if (!options.refine) {
     result.message = "first plan (refinement off)";
   } else {
-    // LaCAM* goes on for at most a quarter of the refinement budget (it is exhausted quickly
-    // on small instances, proving the plan optimal in the sum of loss, and makes little progress
-    // on large ones), then large neighbourhood search takes the rest.
+    // LaCAM* goes on for at most a tenth of the refinement budget (it is exhausted quickly on
+    // small instances, proving the plan optimal in the sum of loss, and makes little progress on
+    // large ones), then large neighbourhood search takes the rest.
     const Clock::time_point refine_began = Clock::now();
     const auto after = [&](double seconds) {
       return refine_began + std::chrono::duration_cast<Clock::duration>(
                                 std::chrono::duration<double>(std::min(seconds, 1e7)));
     };
-    const Clock::time_point lacam_end = after(0.25 * options.refine_budget);
+    const Clock::time_point lacam_end = after(0.1 * options.refine_budget);
     const Clock::time_point refine_end = after(options.refine_budget);
     const bool exhausted = search.Improve(
         [&] { return termination.ShouldStop() || Clock::now() >= lacam_end; }, options.refine_iterations);

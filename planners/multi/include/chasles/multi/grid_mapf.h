@@ -40,7 +40,7 @@ using GridCell = std::int32_t;
 struct MapfOptions {
   std::uint64_t seed = 1;     ///< PIBT's tie-breaking, the constraint order, the neighbourhoods
   /// After the first plan, improve its sum of costs while budget remains: LaCAM* goes on
-  /// searching for a quarter of refine_budget (it ends early when exhausted: the plan is then
+  /// searching for a tenth of refine_budget (it ends early when exhausted: the plan is then
   /// optimal in the sum of loss), then large neighbourhood search replans a few robots at a time.
   bool refine = true;
   double refine_budget = 0.3; ///< [s] >= 0, at most spent improving after the first plan (the
