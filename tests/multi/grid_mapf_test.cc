@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdint>
 #include <functional>
 #include <queue>
@@ -313,12 +314,15 @@ TEST(SolveMapfTest, PlansOnRandomSmallInstancesAreValidAndBoundedBelow) {
 
 TEST(SolveMapfTest, ReachesTheExactOptimumOnTinyInstances) {
   // 2 robots on 5 × 5 and 3 robots on 4 × 4 maps with ~15 % blocked: the joint-space optimum
-  // against LaCAM* run to exhaustion. LaCAM* minimises the sum of loss, which equals the sum of
-  // costs unless a robot leaves its goal after waiting on it, so it may miss the optimum in rare
-  // instances; no valid plan may ever beat the optimum, and a plan must exist exactly when the
-  // joint search finds one (LaCAM is complete).
-  int solvable = 0, optimal = 0, proven = 0;
-  for (std::uint64_t seed = 1; seed <= 24; ++seed) {
+  // against the solver with a long refinement. LaCAM* run to exhaustion minimises the sum of
+  // loss, which equals the sum of costs unless a robot leaves its goal after waiting on it; a plan
+  // that meets that minimum is proven optimal (then it must equal the optimum here), else
+  // neighbourhood search goes on. No valid plan may ever beat the optimum, and a plan must exist
+  // exactly when the joint search finds one (LaCAM is complete). Measured: 40 of 40 solvable,
+  // 10 with robots delaying each other, all 40 proven and at the optimum; asserted with slack
+  // for one miss.
+  int solvable = 0, optimal = 0, proven = 0, interacting = 0;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
     const bool three = seed % 2 == 0;
     const int side = three ? 4 : 5;
     const GridMap map = RandomGridMap(side, side, 0.15, seed);
@@ -336,14 +340,21 @@ TEST(SolveMapfTest, ReachesTheExactOptimumOnTinyInstances) {
       continue;
     }
     ++solvable;
+    interacting += best > result.sum_of_lower_bounds;
     EXPECT_EQ(CheckMapfPlan(map, starts, goals, result.paths), "");
     EXPECT_GE(result.sum_of_costs, best);
-    EXPECT_LE(result.sum_of_loss, best);  // the optimum's own sum of loss is at most its cost
+    if (result.proven_optimal) {
+      EXPECT_EQ(result.sum_of_costs, best);  // the proof holds
+    }
     proven += result.proven_optimal;
     optimal += result.sum_of_costs == best;
   }
-  EXPECT_GE(solvable, 20);
-  EXPECT_EQ(proven, solvable);
+  std::printf("tiny instances: %d solvable (%d where the robots delay each other), %d proven optimal, %d at the "
+              "optimum sum of costs\n",
+              solvable, interacting, proven, optimal);
+  EXPECT_GE(solvable, 30);
+  EXPECT_GE(interacting, 5);  // the cross-check is not only about robots that never meet
+  EXPECT_GE(proven, solvable - 2);
   EXPECT_GE(optimal, solvable - 1);
 }
 
@@ -381,6 +392,28 @@ TEST(SolveMapfTest, NoPlanWhenOnlyASwapOrARotationWouldDo) {
   EXPECT_EQ(chain.sum_of_costs, 3);
 }
 
+TEST(SolveMapfTest, DeadEndCorridorTakesTheDeeperGoalFirst) {
+  // A corridor (1,1)-(1,0) off an open area. Robot 1 starts at the corridor's mouth with its goal
+  // just inside; robot 0 comes from afar to the dead end behind it. Greedy moves park robot 1 at
+  // its goal first and shut robot 0 out; the plan must let robot 0 in first.
+  const GridMap map = FromRows({"......", "......", "#.####", "#.####"});
+  const std::vector<GridCell> starts = {At(map, 5, 3), At(map, 1, 2)};
+  const std::vector<GridCell> goals = {At(map, 1, 0), At(map, 1, 1)};
+  const MapfResult result = SolveMapf(map, starts, goals, MapfOptions(), Termination::After(std::chrono::seconds(10)));
+  ASSERT_TRUE(result.solved) << result.message;
+  EXPECT_EQ(CheckMapfPlan(map, starts, goals, result.paths), "");
+  EXPECT_EQ(result.sum_of_costs, OptimalSumOfCosts(map, starts, goals));
+  // A pocket with a ring: the 2 x 2 block at the bottom right is reached only through (5,2);
+  // three robots with goals in it arrive in the wrong order from the open area.
+  const GridMap ring = FromRows({"......", "......", "#####.", "####..", "####.."});
+  const std::vector<GridCell> ring_starts = {At(ring, 5, 3), At(ring, 0, 4), At(ring, 1, 3)};
+  const std::vector<GridCell> ring_goals = {At(ring, 5, 2), At(ring, 4, 0), At(ring, 5, 0)};
+  const MapfResult pocket = SolveMapf(ring, ring_starts, ring_goals, MapfOptions(), Termination::After(std::chrono::seconds(10)));
+  ASSERT_TRUE(pocket.solved) << pocket.message;
+  EXPECT_EQ(CheckMapfPlan(ring, ring_starts, ring_goals, pocket.paths), "");
+  EXPECT_EQ(pocket.sum_of_costs, OptimalSumOfCosts(ring, ring_starts, ring_goals));
+}
+
 TEST(SolveMapfTest, StoppedTerminationReportsTheBudget) {
   const GridMap map = RandomGridMap(16, 16, 0.2, 3);
   std::vector<GridCell> starts, goals;
@@ -402,17 +435,30 @@ TEST(SolveMapfTest, RefinementNeverWorsensAndIsDeterministic) {
   first_only.refine = false;
   const MapfResult first = SolveMapf(map, starts, goals, first_only, Termination::After(std::chrono::seconds(20)));
   ASSERT_TRUE(first.solved) << first.message;
+  // Refinement bounded by iterations, not time: reproducible too.
   MapfOptions refined_options;
-  refined_options.refine_budget = 0.2;
-  const MapfResult refined = SolveMapf(map, starts, goals, refined_options, Termination::After(std::chrono::seconds(20)));
+  refined_options.refine_budget = 60.0;
+  refined_options.refine_iterations = 300;
+  const MapfResult refined = SolveMapf(map, starts, goals, refined_options, Termination::After(std::chrono::seconds(120)));
   ASSERT_TRUE(refined.solved) << refined.message;
   EXPECT_EQ(CheckMapfPlan(map, starts, goals, refined.paths), "");
   // The same seed finds the same first plan, which refinement can only improve.
   EXPECT_LE(refined.sum_of_costs, first.sum_of_costs);
-  EXPECT_GE(refined.nodes_expanded, first.nodes_expanded);
+  EXPECT_LT(refined.sum_of_costs, first.sum_of_costs);  // 50 robots: there is always something to gain
+  EXPECT_EQ(refined.refine_iterations, 300u);
   const MapfResult again = SolveMapf(map, starts, goals, first_only, Termination::After(std::chrono::seconds(20)));
   EXPECT_EQ(again.paths, first.paths);
   EXPECT_EQ(again.nodes_expanded, first.nodes_expanded);
+  const MapfResult refined_again =
+      SolveMapf(map, starts, goals, refined_options, Termination::After(std::chrono::seconds(120)));
+  EXPECT_EQ(refined_again.paths, refined.paths);
+  // Another seed: another first plan (the seed is used), still valid.
+  MapfOptions other = first_only;
+  other.seed = 2;
+  const MapfResult second = SolveMapf(map, starts, goals, other, Termination::After(std::chrono::seconds(20)));
+  ASSERT_TRUE(second.solved) << second.message;
+  EXPECT_EQ(CheckMapfPlan(map, starts, goals, second.paths), "");
+  EXPECT_NE(second.paths, first.paths);
 }
 
 TEST(SolveMapfTest, TwoHundredRobotsOnARandomMap) {

@@ -1148,8 +1148,9 @@ MapfResult SolveMapf(const GridMap& map, const std::vector<GridCell>& starts, co
     result.message = "first plan (refinement off)";
   } else {
     // LaCAM* goes on for at most a tenth of the refinement budget (it is exhausted quickly on
-    // small instances, proving the plan optimal in the sum of loss, and makes little progress on
-    // large ones), then large neighbourhood search takes the rest.
+    // small instances, proving its plan optimal in the sum of loss, and makes little progress on
+    // large ones), then large neighbourhood search takes the rest. The minimum sum of loss is a
+    // lower bound on every plan's sum of costs: a plan that meets it is optimal.
     const Clock::time_point refine_began = Clock::now();
     const auto after = [&](double seconds) {
       return refine_began + std::chrono::duration_cast<Clock::duration>(
@@ -1163,24 +1164,26 @@ MapfResult SolveMapf(const GridMap& map, const std::vector<GridCell>& starts, co
     result.nodes_created = search.created();
     // LaCAM* lowers the sum of loss; keep its plan unless the sum of costs went up.
     std::vector<std::vector<int>> improved = search.Plan();
-    if (SumOfCosts(improved, goal_vertex) <= SumOfCosts(plan, goal_vertex)) {
-      plan = std::move(improved);
-      result.proven_optimal = exhausted;
-    }
-    if (result.proven_optimal) {
-      result.message = "plan optimal in the sum of loss: the LaCAM* search was exhausted (" +
-                       std::to_string(search.created()) + " configurations)";
+    if (SumOfCosts(improved, goal_vertex) <= SumOfCosts(plan, goal_vertex)) plan = std::move(improved);
+    const auto proven = [&] { return exhausted && SumOfCosts(plan, goal_vertex) == search.plan_cost(); };
+    std::string lacam = "LaCAM* generated " + std::to_string(search.generated()) + " configurations" +
+                        (exhausted ? " and was exhausted (minimum sum of loss " +
+                                         std::to_string(search.plan_cost()) + ")"
+                                   : "");
+    if (proven()) {
+      result.message = "plan proven optimal: " + lacam + ", which the sum of costs meets";
     } else {
       NeighbourhoodRefiner refiner(graph, start_vertex, goal_vertex, distances, plan, options.seed);
-      refiner.Run([&] { return termination.ShouldStop() || Clock::now() >= refine_end; },
+      const std::int64_t floor = exhausted ? search.plan_cost() : result.sum_of_lower_bounds;
+      refiner.Run([&] { return refiner.cost() <= floor || termination.ShouldStop() || Clock::now() >= refine_end; },
                   options.refine_iterations);
       plan = refiner.Plan();
       result.refine_iterations = refiner.iterations();
-      result.message = "refined: LaCAM* generated " + std::to_string(search.generated()) +
-                       " configurations, then " + std::to_string(refiner.iterations()) +
-                       " neighbourhoods were replanned (" + std::to_string(refiner.improvements()) +
-                       " improved the plan)";
+      result.message = std::string(proven() ? "plan proven optimal: " : "refined: ") + lacam + ", then " +
+                       std::to_string(refiner.iterations()) + " neighbourhoods were replanned (" +
+                       std::to_string(refiner.improvements()) + " improved the plan)";
     }
+    result.proven_optimal = proven();
   }
   const int steps = static_cast<int>(plan[0].size());
   result.makespan = steps - 1;
