@@ -745,7 +745,7 @@ class NeighbourhoodRefiner {
   template <class Stop>
   void Run(const Stop& stop, std::uint64_t max_iterations) {
     if (n_ == 0) return;
-    const int size = std::min(n_, 8);
+    const int size = std::min(8, std::max(2, n_ / 2));
     std::vector<int> group, order;
     std::vector<std::vector<int>> old_paths;
     while ((max_iterations == 0 || iterations_ < max_iterations) && !stop()) {
