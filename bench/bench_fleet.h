@@ -11,6 +11,7 @@
 
 namespace chasles {
 
+/// bench_main fills the first two (--runs, --seed) by position: keep them first.
 struct FleetBenchOptions {
   int runs = 5;               ///< seeded scenarios per map and robot count
   std::uint64_t seed = 1;     ///< the maps' seed; scenario r uses seed + r

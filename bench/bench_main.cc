@@ -1104,12 +1104,7 @@ int Main(int argc, char** argv) {
     robots.budget = options.budget;
     BenchRobots(robots);
   }
-  if (options.section == "fleet" || options.section == "all") {
-    FleetBenchOptions fleet;
-    fleet.runs = options.runs;
-    fleet.seed = options.seed;
-    BenchFleet(fleet);
-  }
+  if (options.section == "fleet" || options.section == "all") BenchFleet({options.runs, options.seed});
   if (options.section == "families" || options.section == "all") BenchFamilies(options);
   if (options.section == "grpc" || options.section == "all") BenchGrpc(options);
   if (options.section == "kinematics" || options.section == "all") BenchKinematics(options);

@@ -1,12 +1,14 @@
-// Grid MAPF: LaCAM* over joint configurations with PIBT as its successor generator, written from
-// the papers (Okumura et al., "Priority inheritance with backtracking for iterative multi-agent
-// path finding", AIJ 2022; Okumura, "LaCAM: search-based algorithm for quick multi-agent
-// pathfinding", AAAI 2023; Okumura, "Improving LaCAM for scalable eventually optimal multi-agent
-// pathfinding", IJCAI 2023), adapted to forbid rotation cycles (grid_mapf.h).
+// Grid MAPF: LaCAM* over joint configurations with PIBT as its successor generator, then large
+// neighbourhood search, written from the papers (Okumura et al., "Priority inheritance with
+// backtracking for iterative multi-agent path finding", AIJ 2022; Okumura, "LaCAM: search-based
+// algorithm for quick multi-agent pathfinding", AAAI 2023; Okumura, "Improving LaCAM for
+// scalable eventually optimal multi-agent pathfinding", IJCAI 2023; Li et al., "Anytime
+// multi-agent path finding via large neighborhood search", IJCAI 2021), adapted to forbid
+// rotation cycles (grid_mapf.h), with rules of our own for pockets (docs/architecture.md).
 //
 // Inside the solver a cell is a compact id over the free cells (a "vertex"); configurations are
-// vectors of vertices, one per robot. CheckMapfPlan at the end of this file shares nothing with
-// the solver but DescribeCell.
+// vectors of vertices, one per robot. CheckMapfPlan at the end of this file shares no code with
+// the solver.
 
 #include "chasles/multi/grid_mapf.h"
 
@@ -544,9 +546,10 @@ class LacamSearch {
     }
   }
 
-  /// Whether robot `robot`, moving into the vertex `target` that a robot `ahead` (decided to
-  /// move) vacates, would close a cycle of robots each following the next: walks the chain of
-  /// decided moves from `ahead`. A cycle of two is a swap.
+  /// Whether robot `robot`, moving into the vertex that robot `ahead` (decided to move) vacates,
+  /// would close a cycle of robots each following the next: walks the chain of decided moves
+  /// from `ahead`. A cycle of two is a swap. Every move into an occupied vertex is checked when
+  /// it is decided, so the decided moves never hold a cycle and the walk ends.
   bool ClosesCycle(int robot, int ahead) const {
     int at = ahead;
     for (int steps = 0; steps <= n_; ++steps) {
