@@ -722,8 +722,9 @@ class LacamSearch {
 /// repeatedly takes a few robots out, replans them one after another (random order) by
 /// space-time A* among the others' fixed paths under the same conflict rules, and keeps the new
 /// paths when their sum of costs is lower. Neighbourhoods: the robot with the largest delay with
-/// the robots found on its shortest path at the times it would pass, or random robots, chosen
-/// adaptively by how much each kind has improved lately.
+/// the robots found on its shortest path at the times it would pass, the robots that pass the
+/// cells around a crossing, or random robots, chosen adaptively by how much each kind has
+/// improved lately.
 class NeighbourhoodRefiner {
  public:
   NeighbourhoodRefiner(const Graph& graph, const std::vector<int>& starts, const std::vector<int>& goals,
@@ -753,9 +754,15 @@ class NeighbourhoodRefiner {
     std::vector<std::vector<int>> old_paths;
     while ((max_iterations == 0 || iterations_ < max_iterations) && !stop()) {
       ++iterations_;
-      const int kind = Below(rng_, 1000) * (weights_[0] + weights_[1]) < 1000 * weights_[0] ? 0 : 1;
+      double total = 0.0;
+      for (double w : weights_) total += w;
+      double draw = static_cast<double>(Below(rng_, 1u << 30)) / (1u << 30) * total;
+      int kind = 0;
+      while (kind < 2 && draw >= weights_[kind]) draw -= weights_[kind++];
       if (kind == 0) {
         DelayedNeighbourhood(size, &group);
+      } else if (kind == 1) {
+        AreaNeighbourhood(size, &group);
       } else {
         RandomNeighbourhood(size, &group);
       }
@@ -918,6 +925,36 @@ class NeighbourhoodRefiner {
     }
   }
 
+  /// The robots that pass the cells nearest (breadth first) a random crossing (a cell with 3 or
+  /// 4 neighbours), at any step: where robots wait for each other (after the map-based
+  /// neighbourhoods of Li et al.).
+  void AreaNeighbourhood(int size, std::vector<int>* group) {
+    if (crossings_.empty()) {
+      for (int v = 0; v < v_; ++v) {
+        if (graph_.degree[v] >= 3) crossings_.push_back(v);
+      }
+      if (crossings_.empty()) crossings_.push_back(0);
+    }
+    group->clear();
+    area_queue_.assign(1, crossings_[Below(rng_, crossings_.size())]);
+    area_seen_.insert(area_queue_[0]);
+    for (std::size_t head = 0; head < area_queue_.size() && static_cast<int>(group->size()) < size; ++head) {
+      const int v = area_queue_[head];
+      for (int t = 0; t < horizon_ && static_cast<int>(group->size()) < size; ++t) {
+        const int robot = occupancy_[static_cast<std::size_t>(t) * v_ + v];
+        if (robot >= 0 && std::find(group->begin(), group->end(), robot) == group->end()) group->push_back(robot);
+      }
+      for (int k = 0; k < graph_.degree[v]; ++k) {
+        if (area_seen_.insert(graph_.neighbors[v][k]).second) area_queue_.push_back(graph_.neighbors[v][k]);
+      }
+    }
+    area_seen_.clear();
+    while (static_cast<int>(group->size()) < size) {
+      const int robot = static_cast<int>(Below(rng_, n_));
+      if (std::find(group->begin(), group->end(), robot) == group->end()) group->push_back(robot);
+    }
+  }
+
   void RandomNeighbourhood(int size, std::vector<int>* group) {
     group->clear();
     while (static_cast<int>(group->size()) < size) {
@@ -1012,8 +1049,10 @@ class NeighbourhoodRefiner {
   int horizon_ = 0;
   std::int64_t cost_ = 0;
   std::uint64_t iterations_ = 0, improvements_ = 0;
-  double weights_[2] = {1.0, 1.0};       ///< delayed, random
+  double weights_[3] = {1.0, 1.0, 1.0};  ///< delayed, area, random
   std::unordered_set<int> tabu_;
+  std::vector<int> crossings_, area_queue_;
+  std::unordered_set<int> area_seen_;
   ZeroArray<std::uint32_t> seen_;          ///< A*'s visited marks, [min(t, horizon_) * |V| + v]
   std::uint32_t stamp_ = 0;
   std::vector<State> states_;               ///< of the running A*
