@@ -48,6 +48,7 @@
 #include "chasles/server/planning_server.h"
 #include "chasles/v1/chasles.grpc.pb.h"
 #include "bench_clutter.h"
+#include "bench_fleet.h"
 #include "bench_mesh_robot.h"
 #include "bench_robots.h"
 #include "bench_hardening.h"
@@ -1103,6 +1104,7 @@ int Main(int argc, char** argv) {
     robots.budget = options.budget;
     BenchRobots(robots);
   }
+  if (options.section == "fleet" || options.section == "all") BenchFleet({options.runs, options.seed});
   if (options.section == "families" || options.section == "all") BenchFamilies(options);
   if (options.section == "grpc" || options.section == "all") BenchGrpc(options);
   if (options.section == "kinematics" || options.section == "all") BenchKinematics(options);
