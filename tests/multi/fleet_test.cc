@@ -537,7 +537,7 @@ TEST(FleetLattice, ReportsEdgesBlockedBetweenFreeNodes) {
   EXPECT_NO_THROW(ScheduleFleet(plan));
 }
 
-TEST(FleetLattice, MeshesAndHeightsCount) {
+TEST(FleetLattice, MeshesOctoMapsAndHeightsCount) {
   // A mesh cube (through FCL's BVH) blocks a node; a box above the bodies' height blocks nothing.
   auto cube = std::make_shared<TriangleMesh>();
   for (int k = 0; k < 8; ++k) cube->vertices.emplace_back((k & 1) ? 0.1 : -0.1, (k & 2) ? 0.1 : -0.1, (k & 4) ? 0.1 : -0.1);
@@ -565,6 +565,19 @@ TEST(FleetLattice, MeshesAndHeightsCount) {
   const FleetLattice tall = BuildFleetLattice(scene, request);
   EXPECT_FALSE(tall.node_free(g.NodeAt(Eigen::Vector2d(0, 0), "under the shelf")));
   EXPECT_TRUE(tall.node_free(g.NodeAt(Eigen::Vector2d(3, 0), "beyond the shelf")));
+
+  // An OctoMap: a few points seen from above near node (3, 2) and between nodes (2, 0) and (3, 0).
+  PointCloudInsertion cloud;
+  cloud.points = {3.05, 2.0, 0.2, 3.0, 1.95, 0.25, 2.5, 0.0, 0.3};
+  cloud.sensor_origin = Eigen::Vector3d(2.5, 1.0, 2.0);
+  cloud.resolution = 0.05;
+  const FleetLattice mapped = BuildFleetLattice(scene.InsertPointCloud(cloud), request);
+  EXPECT_FALSE(mapped.node_free(g.NodeAt(Eigen::Vector2d(3, 2), "seen")));
+  EXPECT_TRUE(mapped.node_free(g.NodeAt(Eigen::Vector2d(3, 1), "unseen")));
+  const GridCell west = g.NodeAt(Eigen::Vector2d(2, 0), "west");
+  EXPECT_TRUE(mapped.node_free(west));
+  EXPECT_FALSE(mapped.edge_free(west, LatticeDirection::kEast));
+  EXPECT_TRUE(tall.edge_free(west, LatticeDirection::kEast));
 }
 
 TEST(FleetLattice, CacheKeysOnSceneIdAndEveryField) {

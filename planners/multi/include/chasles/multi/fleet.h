@@ -45,6 +45,12 @@
 /// each at the latest of: its robot's release time, its previous run's end, and the
 /// completion of the moves its first move waits for. After its last arrival a robot turns in
 /// place to its goal heading (its footprint disc contains it at every heading).
+///
+/// Makespan. Waits cost nothing and straight runs are faster than one move per step, but a
+/// follower starts only when the robot ahead has arrived, so a chain of k robots that the plan
+/// moves in one step takes k moves' time here: the makespan is not bounded by the discrete
+/// makespan times one move's duration in general (tests/multi/fleet_test.cc, 110 robots on a
+/// 32 x 32 lattice: 119 s against 60 steps x 2.55 s = 153 s).
 
 #include <vector>
 
