@@ -53,6 +53,7 @@ struct LatticeGeometry {
   int width = 0, height = 0;
 
   int num_cells() const { return width * height; }
+  /// The node of `cell` [m]. Precondition: 0 <= cell < num_cells().
   Eigen::Vector2d Position(GridCell cell) const;
   /// The neighbour of `cell` in `direction`, or -1 off the lattice.
   GridCell Neighbour(GridCell cell, LatticeDirection direction) const;
@@ -60,8 +61,8 @@ struct LatticeGeometry {
   /// largest absolute node coordinate or lattice extent).
   /// \throws Error(kInvalidArgument) naming `field`, the point, the nearest node (cell and
   ///         position, or that the point lies off the lattice) and the distance, e.g.
-  ///         `robots[3].start = (1.2, 0.4) is not on a lattice node: the nearest node is cell 42
-  ///         at (1, 0), 0.447 m away (tolerance 1e-06 m)`.
+  ///         `robots[3].start = (1.2, 0.4) is not on a lattice node: the nearest node is cell 1
+  ///         at (1, 0), 0.447… m away (tolerance 1e-06 m; lattice 4 x 3 nodes from (0, 0), …)`.
   GridCell NodeAt(const Eigen::Vector2d& xy, const std::string& field) const;
 };
 
@@ -99,6 +100,10 @@ struct BlockedEdge {
 /// ScheduleFleet (given this lattice) refuse a plan that moves along a blocked edge.
 class FleetLattice {
  public:
+  /// From per-cell flags (BuildFleetLattice's result, or a hand-made lattice): `free_edges[c]`
+  /// bit d set when the edge in LatticeDirection d is free; an edge counts as free only when
+  /// both ends say so and both nodes are free. \throws Error(kInvalidArgument) on sizes that
+  /// are not width·height.
   FleetLattice(LatticeGeometry geometry, Footprint footprint, std::vector<std::uint8_t> free_edges,
                std::vector<std::uint8_t> blocked_nodes);
 
