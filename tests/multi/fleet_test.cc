@@ -411,6 +411,23 @@ TEST(FleetFootprint, BoundsEveryShapeAtEveryHeading) {
   EXPECT_EQ(cover.z_max, 0.5);
 }
 
+TEST(FleetFootprint, BoundsAreTheCommonWorkspace) {
+  MobileDescription a;
+  a.workspace_min = Eigen::Vector3d(-5, -2, 0);
+  a.workspace_max = Eigen::Vector3d(5, 8, 0);
+  a.body.collision.push_back(Shape::Sphere(0.2));
+  MobileDescription b = a;
+  b.workspace_min = Eigen::Vector3d(-1, -4, 0);
+  b.workspace_max = Eigen::Vector3d(9, 6, 0);
+  const auto [lower, upper] = FleetBounds({RobotFromMobile(a), RobotFromMobile(b)});
+  EXPECT_EQ(lower, Eigen::Vector2d(-1, -2));
+  EXPECT_EQ(upper, Eigen::Vector2d(5, 6));
+  b.workspace_min.x() = 6;
+  EXPECT_NE(ErrorOf([&] { FleetBounds({RobotFromMobile(a), RobotFromMobile(b)}); }).find("do not overlap"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { FleetBounds({RobotFromMobile(a), nullptr}); }).find("robots[1] is null"), std::string::npos);
+}
+
 TEST(FleetFootprint, RefusesRobotsThatAreNotPlanar) {
   MobileDescription car;
   car.kind = RobotKind::kDubinsCar;

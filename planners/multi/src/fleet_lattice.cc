@@ -150,6 +150,25 @@ Footprint CoverFootprints(const std::vector<Footprint>& footprints) {
   return cover;
 }
 
+std::pair<Eigen::Vector2d, Eigen::Vector2d> FleetBounds(const std::vector<std::shared_ptr<const RobotModel>>& robots) {
+  if (robots.empty()) ThrowInvalid("robots is empty: fleet bounds need at least one robot");
+  Eigen::Vector2d lower = Eigen::Vector2d::Constant(-std::numeric_limits<double>::infinity());
+  Eigen::Vector2d upper = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < robots.size(); ++i) {
+    const RobotModel* robot = robots[i].get();
+    if (robot == nullptr || robot->kind() != RobotKind::kPlanar || robot->num_dofs() != 3) {
+      ThrowInvalid("robots[" + std::to_string(i) + "] is " + (robot == nullptr ? std::string("null") : "not a planar robot") +
+                   "; fleet bounds need planar robots (x, y, theta)");
+    }
+    lower = lower.cwiseMax(robot->lower_limits().head<2>());
+    upper = upper.cwiseMin(robot->upper_limits().head<2>());
+  }
+  if (!(lower.array() <= upper.array()).all()) {
+    ThrowInvalid("the robots' x/y joint limits do not overlap: lower " + Point(lower) + " > upper " + Point(upper));
+  }
+  return {lower, upper};
+}
+
 Eigen::Vector2d LatticeGeometry::Position(GridCell cell) const {
   return origin + spacing * Eigen::Vector2d(cell % width, cell / width);
 }

@@ -12,6 +12,7 @@
 #include <mutex>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -42,6 +43,12 @@ Footprint PlanarFootprint(const RobotModel& robot);
 /// The footprint that covers all of them: the largest radius, the union of the height spans.
 /// \throws Error(kInvalidArgument) for an empty list.
 Footprint CoverFootprints(const std::vector<Footprint>& footprints);
+
+/// Where every robot's origin may be: the intersection of the robots' x and y joint limits, as
+/// (lower, upper) for FleetLatticeRequest.
+/// \throws Error(kInvalidArgument) for an empty list, a null or non-planar robot (naming
+///         robots[i]), or an empty intersection.
+std::pair<Eigen::Vector2d, Eigen::Vector2d> FleetBounds(const std::vector<std::shared_ptr<const RobotModel>>& robots);
 
 /// The four lattice directions (east = +x, north = +y).
 enum class LatticeDirection : std::uint8_t { kEast = 0, kNorth = 1, kWest = 2, kSouth = 3 };
