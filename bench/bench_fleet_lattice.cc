@@ -1,9 +1,9 @@
-// `chasles-bench --section fleet`: how long a fleet lattice takes to build — 160 x 60 nodes,
+// `chasles-bench --section fleet_lattice`: how long a fleet lattice takes to build — 160 x 60 nodes,
 // spacing 0.65 m (two 0.3 m robots and 5 cm of padding), footprint 0.3 m over 0–0.5 m — over
 // a warehouse floor of N seeded boxes (0.1–0.5 m, any yaw, 0–1 m high) spread over the lattice's
 // 104 x 39 m, and how long a straight-line fleet plan on it takes to schedule.
 
-#include "bench_fleet.h"
+#include "bench_fleet_lattice.h"
 
 #include <algorithm>
 #include <chrono>
@@ -45,7 +45,7 @@ Scene Warehouse(int boxes, double width, double depth) {
 
 }  // namespace
 
-void BenchFleet(const FleetBenchOptions& options) {
+void BenchFleetLattice(const FleetLatticeBenchOptions& options) {
   const double s = FleetResolution({0.3, 0.3}, 0.05);
   FleetLatticeRequest request;
   request.spacing = s;
