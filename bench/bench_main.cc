@@ -2,7 +2,7 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|robots|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_lattice|benchmark|fairness|memory|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
@@ -49,6 +49,7 @@
 #include "chasles/v1/chasles.grpc.pb.h"
 #include "bench_clutter.h"
 #include "bench_fleet.h"
+#include "bench_fleet_lattice.h"
 #include "bench_mesh_robot.h"
 #include "bench_robots.h"
 #include "bench_hardening.h"
@@ -1055,7 +1056,7 @@ int Main(int argc, char** argv) {
     else if (arg == "--uploads") options.uploads = std::stoi(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|robots|families|grpc|kinematics|trajectory|coordination|benchmark|fairness|memory|all]\n"
+                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_lattice|benchmark|fairness|memory|all]\n"
                    "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
@@ -1110,6 +1111,11 @@ int Main(int argc, char** argv) {
   if (options.section == "kinematics" || options.section == "all") BenchKinematics(options);
   if (options.section == "trajectory" || options.section == "all") BenchTrajectory(options);
   if (options.section == "coordination" || options.section == "all") BenchCoordination(options);
+  if (options.section == "fleet_lattice" || options.section == "all") {
+    FleetLatticeBenchOptions fleet;
+    fleet.repeats = std::max(options.bench_repeats, 5);
+    BenchFleetLattice(fleet);
+  }
   if (options.section == "benchmark" || options.section == "all") BenchBenchmarkRpc(options);
   if (options.section == "fairness" || options.section == "all") BenchFairness(options.bench_repeats, options.long_budget);
   if (options.section == "memory" || options.section == "all") BenchMemory(options.uploads);
