@@ -25,19 +25,10 @@
 #include <string>
 #include <vector>
 
+#include "chasles/multi/grid_map.h"
 #include "chasles/planners/termination.h"
 
 namespace chasles {
-
-/// A grid of square cells, row-major: cell index = y * width + x, (0, 0) the lower-left cell.
-struct GridMap {
-  int width = 0;
-  int height = 0;
-  std::vector<std::uint8_t> blocked;  ///< width * height entries; 1 = blocked, 0 = free
-};
-
-/// A cell index of a GridMap (y * width + x).
-using GridCell = std::int32_t;
 
 struct MapfOptions {
   std::uint64_t seed = 1;     ///< PIBT's tie-breaking, the constraint order, the neighbourhoods
