@@ -86,9 +86,10 @@ CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& reques
     case v1::CoordinateRequest::COMPOSITE: query.method = CoordinationMethod::kComposite; break;
     case v1::CoordinateRequest::VELOCITY_TUNING: query.method = CoordinationMethod::kVelocityTuning; break;
     case v1::CoordinateRequest::SEQUENTIAL: query.method = CoordinationMethod::kSequential; break;
+    case v1::CoordinateRequest::FLEET: query.method = CoordinationMethod::kFleet; break;
     default:
       ThrowInvalid("method = " + std::to_string(static_cast<int>(request.method())) +
-                   " is not a method (AUTO, PRIORITIZED, COMPOSITE, VELOCITY_TUNING, SEQUENTIAL)");
+                   " is not a method (AUTO, PRIORITIZED, COMPOSITE, VELOCITY_TUNING, SEQUENTIAL, FLEET)");
   }
   query.planner_id = request.planner().planner_id().empty() ? "rrt_connect" : request.planner().planner_id();
   query.parameters = PlannerParametersFromProto(request.planner(), registry.Spec(query.planner_id), "planner");
@@ -101,6 +102,7 @@ CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& reques
   query.collision_resolution = Defaulted(request.collision_resolution(), 0.005, 1e-4, 0.1, "collision_resolution");
   query.time_step = Defaulted(request.time_step(), 1e-3, 1e-4, 0.01, "time_step");
   query.sample_period = Defaulted(request.sample_period(), 0.01, 1e-4, 1.0, "sample_period");
+  query.fleet_resolution = request.fleet_resolution();
   query.knots_replace_samples = KnotsFor(request) && request.sample_period() == 0.0;
   if (!std::isfinite(request.robot_padding()) || request.robot_padding() < 0.0 || request.robot_padding() > 0.5) {
     ThrowInvalid("robot_padding = " + FormatNumber(request.robot_padding()) + " must be within [0, 0.5] m");
@@ -204,6 +206,30 @@ void CoordinationOutcomeToProto(const CoordinationOutcome& outcome, const Coordi
   verification->set_min_robot_distance(outcome.verification.min_robot_distance);
   verification->set_collision_guarantee(outcome.verification.collision_guarantee);
   verification->set_collision_guarantee_reason(outcome.verification.collision_guarantee_reason);
+  if (outcome.fleet) {
+    const FleetSummary& fleet = *outcome.fleet;
+    v1::FleetStatistics* stats = response->mutable_fleet();
+    stats->set_resolution(fleet.resolution);
+    stats->set_width(static_cast<std::uint32_t>(fleet.width));
+    stats->set_height(static_cast<std::uint32_t>(fleet.height));
+    stats->set_free_nodes(static_cast<std::uint32_t>(fleet.free_nodes));
+    stats->set_makespan_steps(static_cast<std::uint32_t>(fleet.makespan_steps));
+    stats->set_sum_of_costs(static_cast<std::uint64_t>(fleet.sum_of_costs));
+    stats->set_sum_of_lower_bounds(static_cast<std::uint64_t>(fleet.sum_of_lower_bounds));
+    stats->set_lattice_seconds(fleet.lattice_seconds);
+    stats->set_search_seconds(fleet.search_seconds);
+    stats->set_schedule_seconds(fleet.schedule_seconds);
+    stats->set_lattice_cached(fleet.lattice_cached);
+    for (const FleetWait& wait : fleet.dependencies) {
+      v1::FleetDependency* d = response->add_dependencies();
+      d->set_robot(query.robots[static_cast<std::size_t>(wait.robot)].placement.name);
+      d->set_leave_index(static_cast<std::uint32_t>(wait.leave_index));
+      d->set_waits_for(query.robots[static_cast<std::size_t>(wait.waits_for)].placement.name);
+      d->set_arrival_index(static_cast<std::uint32_t>(wait.arrival_index));
+      d->set_x(wait.x);
+      d->set_y(wait.y);
+    }
+  }
   for (std::size_t k = 0; k < outcome.robots.size(); ++k) {
     const RobotPlan& plan = outcome.robots[k];
     v1::RobotTrajectory* robot = response->add_robots();

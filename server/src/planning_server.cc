@@ -480,6 +480,8 @@ class PlanningService final : public RawService {
           }
           for (const std::string& w : warnings) response.add_warnings(w);
           ApplyReplyCap(&query.sample_cap, query.robots.size());
+          query.scene_id = scene.id;
+          query.lattice_cache = &fleet_lattices_;
           if (request.has_workcell()) {
             const double origin =
                 request.workcell().start_time() == 0.0 ? workcells_->Now() : request.workcell().start_time();
@@ -1124,6 +1126,7 @@ class PlanningService final : public RawService {
   ModelStore* store_;
   ThreadPool* pool_;
   WorkcellStore* workcells_;
+  FleetLatticeCache fleet_lattices_{16};  ///< FLEET lattices by scene id and footprint (fleet_lattice.h)
   const AccessControl* access_;
   const ServerOptions& options_;
   const LogFormat log_format_;

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "chasles/multi/space_time.h"
+#include "fleet_method.h"
 #include "chasles/robot/error.h"
 #include "chasles/robot/inverse_kinematics.h"
 
@@ -23,6 +24,7 @@ const char* ToString(CoordinationMethod method) {
     case CoordinationMethod::kComposite: return "composite";
     case CoordinationMethod::kVelocityTuning: return "velocity_tuning";
     case CoordinationMethod::kSequential: return "sequential";
+    case CoordinationMethod::kFleet: return "fleet";
   }
   return "?";
 }
@@ -176,6 +178,37 @@ class Coordinator {
 
  private:
   // --- checkers -------------------------------------------------------------------------------
+  /// A sphere (world centre, radius) that holds every collision shape of the robot at q.
+  static std::pair<Eigen::Vector3d, double> BoundingSphere(const PlacedRobot& robot, const Eigen::VectorXd& q) {
+    std::vector<Eigen::Isometry3d> poses;
+    robot.model->ForwardKinematics(q, &poses);
+    std::vector<std::pair<Eigen::Vector3d, double>> balls;  // per shape, world
+    for (int l = 0; l < robot.model->num_links(); ++l) {
+      for (const Shape& shape : robot.model->links()[l].collision) {
+        double r = 0.0;
+        switch (shape.type) {
+          case ShapeType::kSphere: r = shape.radius; break;
+          case ShapeType::kBox: r = 0.5 * shape.size.norm(); break;
+          case ShapeType::kCylinder: r = std::hypot(shape.radius, 0.5 * shape.length); break;
+          case ShapeType::kCapsule: r = shape.radius + 0.5 * shape.length; break;
+          case ShapeType::kMesh:
+            if (shape.mesh) {
+              for (const Eigen::Vector3d& v : shape.mesh->vertices) r = std::max(r, v.norm());
+            }
+            break;
+        }
+        balls.emplace_back(robot.base_pose * (poses[l] * shape.pose).translation(), r);
+      }
+    }
+    if (balls.empty()) return {robot.base_pose.translation(), 0.0};
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (const auto& [c, r] : balls) centre += c;
+    centre /= static_cast<double>(balls.size());
+    double radius = 0.0;
+    for (const auto& [c, r] : balls) radius = std::max(radius, (c - centre).norm() + r);
+    return {centre, radius};
+  }
+
   /// Robot a (first) against b, nothing else: the pair composite without self checks over an
   /// empty scene; `padding` around both robots.
   const CollisionChecker& Pair(const PlacedRobot& a, const PlacedRobot& b, double padding) {
@@ -296,12 +329,32 @@ class Coordinator {
   Attempt RunPriorityLoop(bool prm, const Termination& termination);
   Attempt RunComposite(const Termination& termination);
   Attempt RunSequential(const Termination& termination);
+  /// FLEET (fleet_method.h); its summary and verification are kept in fleet_.
+  Attempt RunFleetMethod(const Termination& termination) {
+    std::vector<detail::FleetMember> fleet_members;
+    for (const Member& m : members_) fleet_members.push_back({&m.placement, m.start, m.goal, m.limits});
+    fleet_ = detail::RunFleet(query_, fleet_members, termination);
+    if (!fleet_->applicable && query_.method == CoordinationMethod::kFleet) {
+      ThrowInvalid("method = FLEET cannot plan this team: " + fleet_->why_not);
+    }
+    Attempt attempt;
+    attempt.ok = fleet_->ok;
+    attempt.out_of_time = fleet_->out_of_time;
+    attempt.message = fleet_->applicable ? fleet_->message : "not applicable: " + fleet_->why_not;
+    if (!attempt.ok) return attempt;
+    attempt.trajectories = fleet_->trajectories;
+    attempt.paths = fleet_->paths;
+    attempt.start_delay = fleet_->start_delay;
+    attempt.wait_time = fleet_->wait_time;
+    return attempt;
+  }
   Attempt RunMethod(CoordinationMethod method, const Termination& termination) {
     switch (method) {
       case CoordinationMethod::kPrioritized: return RunPriorityLoop(true, termination);
       case CoordinationMethod::kVelocityTuning: return RunPriorityLoop(false, termination);
       case CoordinationMethod::kComposite: return RunComposite(termination);
       case CoordinationMethod::kSequential: return RunSequential(termination);
+      case CoordinationMethod::kFleet: return RunFleetMethod(termination);
       case CoordinationMethod::kAuto: break;
     }
     Attempt none;
@@ -320,6 +373,7 @@ class Coordinator {
   std::shared_ptr<const CollisionChecker> team_;  ///< all members, self + scene
   std::map<std::tuple<std::string, std::string, double>, std::shared_ptr<const CollisionChecker>> pairs_;
   std::map<int, SinglePlan> alone_;
+  std::optional<detail::FleetAttempt> fleet_;
 };
 
 Attempt Coordinator::RunPriorityLoop(bool prm, const Termination& termination) {
@@ -706,9 +760,19 @@ CoordinationOutcome Coordinator::Run() {
     }
     members_.push_back(std::move(m));
   }
-  // 2. Starts and goals pairwise, and starts against committed motions at t = 0.
+  // 2. Starts and goals pairwise, and starts against committed motions at t = 0. Pairs whose
+  //    bounding spheres (padding included) are apart at both ends need no pair checker.
+  std::vector<std::pair<Eigen::Vector3d, double>> start_bounds, goal_bounds;
+  for (const Member& m : members_) {
+    start_bounds.push_back(BoundingSphere(m.placement, m.start));
+    goal_bounds.push_back(BoundingSphere(m.placement, m.goal));
+  }
+  const auto apart = [&](const std::vector<std::pair<Eigen::Vector3d, double>>& bounds, int a, int b) {
+    return (bounds[a].first - bounds[b].first).norm() > bounds[a].second + bounds[b].second + 2.0 * ExactPadding();
+  };
   for (int a = 0; a < n; ++a) {
     for (int b = a + 1; b < n; ++b) {
+      if (apart(start_bounds, a, b) && apart(goal_bounds, a, b)) continue;
       const CollisionChecker& pair = Pair(members_[a].placement, members_[b].placement, ExactPadding());
       const CollisionResult starts = pair.Check(Concat(members_[a].start, members_[b].start));
       if (starts.in_collision) {
@@ -745,8 +809,12 @@ CoordinationOutcome Coordinator::Run() {
   // 3. The methods.
   std::vector<CoordinationMethod> methods;
   if (query_.method == CoordinationMethod::kAuto) {
-    methods = {CoordinationMethod::kPrioritized, CoordinationMethod::kVelocityTuning, CoordinationMethod::kComposite,
-               CoordinationMethod::kSequential};
+    // Planar bases that FLEET can plan go to it first (it scales to hundreds of robots).
+    if (detail::FleetInapplicable(query_).empty()) methods.push_back(CoordinationMethod::kFleet);
+    for (CoordinationMethod method : {CoordinationMethod::kPrioritized, CoordinationMethod::kVelocityTuning,
+                                      CoordinationMethod::kComposite, CoordinationMethod::kSequential}) {
+      methods.push_back(method);
+    }
   } else {
     methods = {query_.method};
   }
@@ -768,7 +836,9 @@ CoordinationOutcome Coordinator::Run() {
     report.method = method;
     Attempt attempt = RunMethod(method, stage);
     TeamVerificationReport verification;
-    if (attempt.ok) {
+    if (method == CoordinationMethod::kFleet && fleet_) {
+      verification = fleet_->verification;  // its own: the lattice and dependencies prove it (fleet.h)
+    } else if (attempt.ok) {
       const std::string failure = Verify(attempt, &verification);
       if (!failure.empty()) {
         attempt.ok = false;
@@ -809,6 +879,7 @@ CoordinationOutcome Coordinator::Run() {
     Attempt& attempt = best->attempt;
     out.verification = best->verification;
     const CoordinationMethod method = best->method;
+    if (method == CoordinationMethod::kFleet && fleet_) out.fleet = fleet_->summary;
     // 4. The result.
     out.method = method;
     for (int k : attempt.order) out.order.push_back(members_[k].placement.name);
@@ -892,6 +963,11 @@ void CoordinationQuery::Validate(const PlannerRegistry& registry) const {
   CheckRange(time_step, 1e-4, 0.01, "time_step");
   CheckRange(sample_period, 1e-4, 1.0, "sample_period");
   CheckRange(robot_padding, 0.0, 0.5, "robot_padding");
+  CheckRange(fleet_resolution, 0.0, 10.0, "fleet_resolution");
+  if (method == CoordinationMethod::kFleet) {
+    const std::string why = detail::FleetInapplicable(*this);
+    if (!why.empty()) ThrowInvalid("method = FLEET cannot plan this team: " + why);
+  }
   if (max_reorderings < 0) ThrowInvalid("max_reorderings = " + std::to_string(max_reorderings) + " must be >= 0");
   const PlannerSpec& spec = registry.Spec(planner_id);  // throws NotFound
   ResolveParameters(spec, parameters);

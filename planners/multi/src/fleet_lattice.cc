@@ -380,8 +380,9 @@ std::string FleetLatticeKey(const std::string& scene_id, const FleetLatticeReque
 }
 
 std::shared_ptr<const FleetLattice> FleetLatticeCache::GetOrBuild(const std::string& scene_id, const Scene& scene,
-                                                                  const FleetLatticeRequest& request) {
+                                                                  const FleetLatticeRequest& request, bool* was_cached) {
   const std::string key = FleetLatticeKey(scene_id, request);
+  if (was_cached != nullptr) *was_cached = true;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     const auto it = index_.find(key);
@@ -390,6 +391,7 @@ std::shared_ptr<const FleetLattice> FleetLatticeCache::GetOrBuild(const std::str
       return it->second->second;
     }
   }
+  if (was_cached != nullptr) *was_cached = false;
   auto built = std::make_shared<const FleetLattice>(BuildFleetLattice(scene, request));
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = index_.find(key);

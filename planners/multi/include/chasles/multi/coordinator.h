@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include "chasles/collision/scene.h"
+#include "chasles/multi/fleet_lattice.h"
 #include "chasles/multi/team.h"
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/planners/registry.h"
@@ -21,8 +22,8 @@
 
 namespace chasles {
 
-enum class CoordinationMethod { kAuto, kPrioritized, kComposite, kVelocityTuning, kSequential };
-/// "auto", "prioritized", "composite", "velocity_tuning", "sequential".
+enum class CoordinationMethod { kAuto, kPrioritized, kComposite, kVelocityTuning, kSequential, kFleet };
+/// "auto", "prioritized", "composite", "velocity_tuning", "sequential", "fleet".
 const char* ToString(CoordinationMethod method);
 
 /// One robot of a team.
@@ -65,6 +66,12 @@ struct CoordinationQuery {
   double robot_padding = 0.0;          ///< [m] kept between robots
   int max_reorderings = 0;             ///< 0 = 2 × robots
   std::vector<CommittedMotion> committed;  ///< workcell reservations to avoid
+  /// FLEET: lattice spacing [m]; 0 = FleetResolution of the footprints and robot_padding.
+  double fleet_resolution = 0.0;
+  /// FLEET: the scene's content id and a cache of lattices under it (both optional: without
+  /// them every request builds its lattice).
+  std::string scene_id;
+  FleetLatticeCache* lattice_cache = nullptr;
 
   /// \throws Error(kInvalidArgument) naming the field (proto names: `robots[1].name`,
   ///         `robots[0].start.positions has 6 values, robot 'left' has 7 joints`, …), duplicate
@@ -94,6 +101,27 @@ struct MethodAttemptReport {
   double makespan = 0.0;
 };
 
+/// FLEET: robot `robot` leaves path[leave_index] only once robot `waits_for` has reached its
+/// path[arrival_index] (RobotPlan::path: the lattice nodes it moves through).
+struct FleetWait {
+  int robot = 0;
+  int leave_index = 0;
+  int waits_for = 0;
+  int arrival_index = 0;
+  double x = 0.0, y = 0.0;  ///< [m] the node `robot` enters
+};
+
+/// FLEET: the lattice and the discrete plan behind the trajectories.
+struct FleetSummary {
+  double resolution = 0.0;  ///< [m]
+  int width = 0, height = 0, free_nodes = 0;
+  int makespan_steps = 0;
+  std::int64_t sum_of_costs = 0, sum_of_lower_bounds = 0;
+  double lattice_seconds = 0.0, search_seconds = 0.0, schedule_seconds = 0.0;
+  bool lattice_cached = false;
+  std::vector<FleetWait> dependencies;
+};
+
 struct RobotPlan {
   std::string name;
   TimedTrajectory trajectory;  ///< from t = 0 to `duration` (waits included)
@@ -118,6 +146,7 @@ struct CoordinationOutcome {
   int reorderings = 0;
   TeamVerificationReport verification;
   double seconds = 0.0;
+  std::optional<FleetSummary> fleet;  ///< set when FLEET's result is returned
 };
 
 /// The first time two motions collide (robot against robot, `padding` [m] around both robots),

@@ -157,9 +157,10 @@ std::string FleetLatticeKey(const std::string& scene_id, const FleetLatticeReque
 class FleetLatticeCache {
  public:
   explicit FleetLatticeCache(std::size_t capacity = 16) : capacity_(capacity) {}
-  /// The cached lattice, or a new one built (outside the lock) and kept.
+  /// The cached lattice, or a new one built (outside the lock) and kept; *was_cached (optional)
+  /// says which.
   std::shared_ptr<const FleetLattice> GetOrBuild(const std::string& scene_id, const Scene& scene,
-                                                 const FleetLatticeRequest& request);
+                                                 const FleetLatticeRequest& request, bool* was_cached = nullptr);
   std::size_t size() const;
 
  private:
