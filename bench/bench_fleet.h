@@ -7,6 +7,7 @@
 /// Every plan is re-checked by CheckMapfPlan.
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace chasles {
@@ -22,5 +23,12 @@ struct FleetBenchOptions {
 
 /// Prints one markdown table per map to stdout.
 void BenchFleet(const FleetBenchOptions& options);
+
+/// `chasles-bench --section fleet_coordinate`: Coordinate() end to end (validation, pair checks,
+/// lattice from the scene's boxes, search, schedule, verification; no gRPC) for disc bases
+/// (0.4 m radius, 1 m/s, 1 m lattice) on the same maps, AUTO (which picks FLEET) beside
+/// PRIORITIZED on small teams in the same run. Medians over `runs` scenarios; writes an SVG plot
+/// of time against robots to `svg` when not empty.
+void BenchFleetCoordinate(const FleetBenchOptions& options, const std::string& svg);
 
 }  // namespace chasles

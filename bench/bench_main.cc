@@ -2,7 +2,7 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_lattice|benchmark|fairness|memory|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_coordinate|fleet_lattice|benchmark|fairness|memory|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
@@ -1056,7 +1056,7 @@ int Main(int argc, char** argv) {
     else if (arg == "--uploads") options.uploads = std::stoi(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_lattice|benchmark|fairness|memory|all]\n"
+                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_coordinate|fleet_lattice|benchmark|fairness|memory|all]\n"
                    "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
@@ -1106,6 +1106,9 @@ int Main(int argc, char** argv) {
     BenchRobots(robots);
   }
   if (options.section == "fleet" || options.section == "all") BenchFleet({options.runs, options.seed});
+  if (options.section == "fleet_coordinate" || options.section == "all") {
+    BenchFleetCoordinate({options.runs, options.seed}, "docs/fleet_scaling.svg");
+  }
   if (options.section == "families" || options.section == "all") BenchFamilies(options);
   if (options.section == "grpc" || options.section == "all") BenchGrpc(options);
   if (options.section == "kinematics" || options.section == "all") BenchKinematics(options);

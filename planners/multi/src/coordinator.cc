@@ -140,7 +140,9 @@ struct Member {
   PlacedRobot placement;
   Eigen::VectorXd start, goal;
   KinematicLimits limits;
-  std::shared_ptr<const CollisionChecker> own;  ///< alone in the scene (self + scene)
+  /// Alone in the scene (self + scene), built when first needed (Coordinator::Own): a fleet of
+  /// hundreds checks its ends on one checker per model (EndsChecker) and needs no other.
+  std::shared_ptr<const CollisionChecker> own;
 };
 
 /// What one method produced: per member, a trajectory from t = 0.
@@ -178,6 +180,24 @@ class Coordinator {
 
  private:
   // --- checkers -------------------------------------------------------------------------------
+  /// Robot k alone in the scene (self + scene), built on first use.
+  std::shared_ptr<const CollisionChecker> Own(int k) { return Own(&members_[static_cast<std::size_t>(k)]); }
+  std::shared_ptr<const CollisionChecker> Own(Member* m) {
+    if (!m->own) m->own = std::make_shared<CollisionChecker>(ComposeRobots({m->placement}), SceneFor({m->placement}));
+    return m->own;
+  }
+  /// A checker for a member's start and goal: one per model for robots whose base frame is the
+  /// scene frame when the scene allows no pairs (the same checks as Own's, link names without
+  /// the robot's prefix: messages name the robot themselves); else Own.
+  const CollisionChecker& EndsChecker(Member* m) {
+    if (!m->placement.base_pose.matrix().isIdentity(0.0) || !query_.scene->allowed_collisions().empty()) {
+      return *Own(m);
+    }
+    std::shared_ptr<const CollisionChecker>& shared = ends_[m->placement.model.get()];
+    if (!shared) shared = std::make_shared<CollisionChecker>(m->placement.model, query_.scene);
+    return *shared;
+  }
+
   /// A sphere (world centre, radius) that holds every collision shape of the robot at q.
   static std::pair<Eigen::Vector3d, double> BoundingSphere(const PlacedRobot& robot, const Eigen::VectorXd& q) {
     std::vector<Eigen::Isometry3d> poses;
@@ -309,7 +329,7 @@ class Coordinator {
     auto it = alone_.find(k);
     if (it == alone_.end() || (it->second.out_of_time && !termination_.ShouldStop())) {
       const double share = std::min(10.0, std::max(0.05, termination_.SecondsLeft() / (2.0 * members_.size())));
-      SinglePlan plan = PlanSingle(k, members_[k].own, termination_.WithBudget(std::chrono::duration<double>(share)), 0);
+      SinglePlan plan = PlanSingle(k, Own(k), termination_.WithBudget(std::chrono::duration<double>(share)), 0);
       if (plan.out_of_time) {
         plan.message = "found no path alone within " + FormatNumber(share) + " s (" + plan.message + ")";
       }
@@ -374,6 +394,7 @@ class Coordinator {
   std::map<std::tuple<std::string, std::string, double>, std::shared_ptr<const CollisionChecker>> pairs_;
   std::map<int, SinglePlan> alone_;
   std::optional<detail::FleetAttempt> fleet_;
+  std::map<const RobotModel*, std::shared_ptr<const CollisionChecker>> ends_;  ///< EndsChecker's, per model
 };
 
 Attempt Coordinator::RunPriorityLoop(bool prm, const Termination& termination) {
@@ -460,7 +481,7 @@ Attempt Coordinator::RunPriorityLoop(bool prm, const Termination& termination) {
           }
         }
       }
-      const Roadmap roadmap = BuildRoadmap(*m.own, seeds, roadmap_options, termination);
+      const Roadmap roadmap = BuildRoadmap(*Own(k), seeds, roadmap_options, termination);
       int goal_vertex = -1;
       for (int v = 0; v < static_cast<int>(roadmap.vertices.size()); ++v) {
         if ((roadmap.vertices[v] - m.goal).cwiseAbs().maxCoeff() <= 1e-12) {
@@ -724,9 +745,9 @@ CoordinationOutcome Coordinator::Run() {
     m.placement.frozen_at.resize(0);
     m.start = spec.start;
     m.limits = ResolveRobotLimits(spec, k);
-    m.own = std::make_shared<CollisionChecker>(ComposeRobots({m.placement}), SceneFor({m.placement}));
     const std::string who = "robot '" + spec.placement.name + "'";
-    const CollisionResult start_contact = m.own->Check(m.start);
+    const CollisionChecker& ends = EndsChecker(&m);
+    const CollisionResult start_contact = ends.Check(m.start);
     if (start_contact.in_collision) {
       return finish(CoordinationCode::kStartInCollision, who + ": start is in collision: " + Describe(start_contact));
     }
@@ -741,7 +762,7 @@ CoordinationOutcome Coordinator::Run() {
       ik.time_budget = std::max(1e-3, std::min(pose.ik_time_budget, termination_.SecondsLeft()));
       ik.seed = query_.seed + k;
       ik.initial_guess = m.start;
-      const CollisionChecker& own = *m.own;
+      const CollisionChecker& own = ends;
       ik.accept = [&own](const Eigen::VectorXd& q) { return own.IsValid(q); };
       ik.stop = [this] { return termination_.ShouldStop(); };
       const IkResult solved = SolveIk(*spec.placement.model, ik);
@@ -753,7 +774,7 @@ CoordinationOutcome Coordinator::Run() {
       m.goal = solved.solutions.front();
     } else {
       m.goal = spec.goal;
-      const CollisionResult goal_contact = m.own->Check(m.goal);
+      const CollisionResult goal_contact = ends.Check(m.goal);
       if (goal_contact.in_collision) {
         return finish(CoordinationCode::kGoalInCollision, who + ": goal is in collision: " + Describe(goal_contact));
       }
