@@ -73,7 +73,7 @@ const char kUsage[] =
     "                                  several robots); print the outcome, the method that succeeded,\n"
     "                                  makespan, sum of durations, each robot's duration, start delay\n"
     "                                  and waiting, every method attempted and the joint verification;\n"
-    "                                  --method auto|prioritized|composite|velocity_tuning|sequential\n"
+    "                                  --method auto|prioritized|composite|velocity_tuning|sequential|fleet\n"
     "                                  overrides the request's; --out F.json writes the response;\n"
     "                                  exit 0 only when a coordinated set came back\n"
     "  workcell NAME                   create a workcell for reservations (an existing one is kept);\n"
@@ -679,7 +679,8 @@ v1::CoordinateRequest::Method CoordinationMethodOrExit(const std::string& method
   if (method == "composite") return v1::CoordinateRequest::COMPOSITE;
   if (method == "velocity_tuning") return v1::CoordinateRequest::VELOCITY_TUNING;
   if (method == "sequential") return v1::CoordinateRequest::SEQUENTIAL;
-  UsageError("--method '" + method + "' must be auto, prioritized, composite, velocity_tuning or sequential");
+  if (method == "fleet") return v1::CoordinateRequest::FLEET;
+  UsageError("--method '" + method + "' must be auto, prioritized, composite, velocity_tuning, sequential or fleet");
 }
 
 int Coordinate(const Options& options) {
@@ -707,11 +708,26 @@ int Coordinate(const Options& options) {
               order.empty() ? "" : ", order ", order.c_str(), response.reorderings());
   std::printf("makespan    %.4f s   sum of durations %.4f s   server %.1f ms\n", response.makespan(),
               response.sum_of_durations(), 1e3 * response.seconds());
+  if (response.has_fleet()) {
+    const v1::FleetStatistics& f = response.fleet();
+    std::printf("fleet       lattice %u x %u at %.4g m (%u free nodes%s, %.1f ms), search %.1f ms, schedule %.1f ms; "
+                "%u steps, sum of costs %llu (%llu alone); %d dependencies\n",
+                f.width(), f.height(), f.resolution(), f.free_nodes(), f.lattice_cached() ? ", cached" : "",
+                1e3 * f.lattice_seconds(), 1e3 * f.search_seconds(), 1e3 * f.schedule_seconds(), f.makespan_steps(),
+                static_cast<unsigned long long>(f.sum_of_costs()), static_cast<unsigned long long>(f.sum_of_lower_bounds()),
+                response.dependencies_size());
+  }
   if (response.robots_size() > 0) {
-    std::printf("%-16s %12s %14s %12s %8s\n", "robot", "duration [s]", "start delay [s]", "wait [s]", "samples");
+    std::printf("%-16s %12s %14s %12s %8s %6s\n", "robot", "duration [s]", "start delay [s]", "wait [s]", "samples",
+                "knots");
+    int shown = 0;
     for (const v1::RobotTrajectory& robot : response.robots()) {
-      std::printf("%-16s %12.4f %14.4f %12.4f %8d\n", robot.name().c_str(), robot.duration(), robot.start_delay(),
-                  robot.wait_time(), robot.trajectory().points_size());
+      if (++shown > 20 && response.robots_size() > 24) {
+        std::printf("… and %d more robots (--out writes them all)\n", response.robots_size() - 20);
+        break;
+      }
+      std::printf("%-16s %12.4f %14.4f %12.4f %8d %6d\n", robot.name().c_str(), robot.duration(), robot.start_delay(),
+                  robot.wait_time(), robot.trajectory().points_size(), robot.knots().times_size());
     }
   }
   for (const v1::MethodAttempt& attempt : response.attempts()) {

@@ -24,7 +24,8 @@ from typing import Optional
 import grpc
 import numpy as np
 
-from chasles_client import BenchmarkRun, ChaslesError, Client
+from chasles_client import BenchmarkRun, ChaslesError, Client, Trajectory
+from chasles_client._stubs import pb
 from chasles_client.plots import plot_benchmark, plot_trajectory
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -244,6 +245,19 @@ class ServerTest(unittest.TestCase):
         again = self.client.optimize(result.trajectory, robot_id=self.robot_id, post_processing="none")
         self.assertTrue(again.success, f"{again.outcome}: {again.message}")
         self.assertGreater(again.input_duration, 0.0)
+
+    def test_coordinate_a_fleet_and_sample_its_knots(self) -> None:
+        request = ROOT / "examples/requests/coordinate_fleet.json"
+        response = self.client.coordinate(str(request))
+        self.assertEqual(response.outcome, pb.SUCCESS, response.message)
+        self.assertEqual(response.method, "fleet")
+        goals = json.loads(request.read_text())["robots"]
+        self.assertEqual(len(response.robots), len(goals))
+        for robot, asked in zip(response.robots, goals):
+            traj = Trajectory.from_knots(robot.knots, period=0.05)
+            # Limits: 1 m/s per coordinate (the disc base's), acceleration 2 m/s² by default.
+            self.check_trajectory(traj, np.array(asked["start"]["positions"]), np.array(asked["goal"]["positions"]),
+                                  np.array([1.0, 1.0, 1.0]), np.array([2.0, 2.0, 2.0]))
 
     def test_cli_plan_writes_a_plot(self) -> None:
         png = self.out / "cli.png"

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <limits>
 #include <thread>
 
@@ -340,6 +341,63 @@ TEST_F(CoordinateTest, BadInputGetsNamedErrors) {
   v1::PlanResponse fine;
   ASSERT_TRUE(server_->Plan(BasePlan(1, 1, 5, 5), &fine).ok());
   EXPECT_EQ(fine.outcome(), v1::SUCCESS);
+}
+
+// The fleet example: 60 disc bases on a random 32 x 32 floor. AUTO picks FLEET; the answer is
+// knots (no samples asked for), the dependencies, the lattice's figures, and well under 1 MB.
+// Every robot's knots are evaluated here by the documented rule at 10 ms and the discs re-checked
+// pairwise (the 1 ms, between-knots check of many more robots is tests/multi/fleet_coordinate_test.cc).
+TEST_F(CoordinateTest, TheFleetExampleIsPlannedByFleetAndAnsweredWithKnots) {
+  v1::CoordinateRequest request;
+  const auto parsed = google::protobuf::util::JsonStringToMessage(
+      ReadText(ExamplePath("requests/coordinate_fleet.json")), &request);
+  ASSERT_TRUE(parsed.ok()) << parsed.ToString();
+  v1::CoordinateResponse response;
+  const grpc::Status status = Coordinate(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  EXPECT_EQ(response.method(), "fleet");
+  ASSERT_EQ(response.robots_size(), request.robots_size());
+  EXPECT_LT(response.ByteSizeLong(), 1u << 20);
+  EXPECT_EQ(response.fleet().width(), 32u);
+  EXPECT_DOUBLE_EQ(response.fleet().resolution(), 1.0);
+  EXPECT_GE(response.fleet().sum_of_costs(), response.fleet().sum_of_lower_bounds());
+  EXPECT_GT(response.dependencies_size(), 0);
+  EXPECT_EQ(response.verification().collision_guarantee(), "certified");
+  std::vector<std::vector<Eigen::Vector2d>> at(static_cast<std::size_t>(response.robots_size()));
+  const double period = 0.01;
+  const int steps = static_cast<int>(std::ceil(response.makespan() / period));
+  for (int k = 0; k < response.robots_size(); ++k) {
+    const v1::RobotTrajectory& robot = response.robots(k);
+    EXPECT_EQ(robot.trajectory().points_size(), 0);
+    const v1::TrajectoryKnots& knots = robot.knots();
+    ASSERT_EQ(knots.joint_names_size(), 3);
+    ASSERT_GE(knots.times_size(), 1);
+    const int last = knots.times_size() - 1;
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(knots.positions(3 * last + j), request.robots(k).goal().positions(j), 1e-9);
+    int i = 0;
+    for (int s = 0; s <= steps; ++s) {
+      const double t = s * period;
+      while (i + 1 < knots.times_size() && knots.times(i + 1) <= t) ++i;
+      Eigen::Vector2d p(knots.positions(3 * i), knots.positions(3 * i + 1));
+      if (i + 1 < knots.times_size()) {
+        const double T = knots.times(i + 1) - knots.times(i), tau = t - knots.times(i);
+        for (int j = 0; j < 2; ++j) {
+          const double v0 = knots.velocities(3 * i + j), v1 = knots.velocities(3 * (i + 1) + j);
+          p[j] += v0 * tau + (v1 - v0) * tau * tau / (2.0 * T);
+        }
+      }
+      at[static_cast<std::size_t>(k)].push_back(p);
+    }
+  }
+  double nearest = std::numeric_limits<double>::infinity();
+  for (int s = 0; s <= steps; ++s) {
+    for (std::size_t a = 0; a < at.size(); ++a) {
+      for (std::size_t b = a + 1; b < at.size(); ++b) nearest = std::min(nearest, (at[a][s] - at[b][s]).norm() - 0.8);
+    }
+  }
+  EXPECT_GE(nearest, -1e-9);
+  EXPECT_GE(response.verification().min_robot_distance(), -1e-9);
 }
 
 }  // namespace

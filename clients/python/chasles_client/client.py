@@ -348,6 +348,22 @@ class Client:
                                              self._model_velocity(response.robot_id))
         return OptimizeResult.from_response(response, velocity, acceleration)
 
+    # -- several robots -----------------------------------------------------------------------
+
+    def coordinate(self, request: Union[Message, Mapping[str, Any], str, os.PathLike],
+                   timeout: Optional[float] = None) -> Any:
+        """Sends a CoordinateRequest (message, dict, JSON text or a .json file such as
+        ``examples/requests/coordinate_fleet.json``) and returns the CoordinateResponse. A fleet's
+        robots come back as knots: ``Trajectory.from_knots(response.robots[k].knots)`` samples one.
+        The deadline defaults to the request's budget + 30 s."""
+        if isinstance(request, os.PathLike) or (isinstance(request, str) and request.endswith(".json")
+                                                 and Path(request).is_file()):
+            request = Path(request).read_text(encoding="utf-8")
+        message = to_message(request, pb.CoordinateRequest, "CoordinateRequest")
+        if timeout is None:
+            timeout = (message.time_budget or 30.0) + 30.0
+        return self._call("Coordinate", message, timeout)
+
     def _model_velocity(self, robot_id: str) -> Optional[np.ndarray]:
         info = self._robots.get(robot_id)
         return None if info is None else info.velocity_limits

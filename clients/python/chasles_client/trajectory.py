@@ -80,6 +80,36 @@ class Trajectory:
                    duration=float(duration))
 
     @classmethod
+    def from_knots(cls, knots: Union[Message, Mapping[str, Any]], period: float = 0.01) -> "Trajectory":
+        """Samples every ``period`` [s] (and at the end) of a chasles.v1.TrajectoryKnots — the
+        compact answer of ``knots_only`` requests and of fleets — by its exact rule: between knots
+        i and i + 1 the acceleration is constant, q(t) = q_i + v_i·τ + (v_{i+1} − v_i)·τ²/(2T)."""
+        if isinstance(knots, Mapping):
+            parsed = pb.TrajectoryKnots()
+            json_format.ParseDict(knots, parsed, ignore_unknown_fields=True)
+            knots = parsed
+        if not period > 0:
+            raise ValueError(f"period = {period} must be > 0")
+        names = list(knots.joint_names)
+        n = len(names)
+        times = np.asarray(knots.times, dtype=float)
+        if n == 0 or len(times) == 0:
+            raise ValueError("the knots are empty")
+        q_knots = np.asarray(knots.positions, dtype=float).reshape(len(times), n)
+        v_knots = np.asarray(knots.velocities, dtype=float).reshape(len(times), n)
+        duration = float(times[-1])
+        t = np.append(np.arange(0.0, duration, period), duration)
+        i = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(times) - 1)
+        nxt = np.minimum(i + 1, len(times) - 1)
+        span = times[nxt] - times[i]
+        tau = (t - times[i])[:, None]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a = np.where(span[:, None] > 0, (v_knots[nxt] - v_knots[i]) / span[:, None], 0.0)
+        q = q_knots[i] + v_knots[i] * tau + 0.5 * a * tau * tau
+        qd = v_knots[i] + a * tau
+        return cls(t=t, q=q, qd=qd, qdd=a, joint_names=names, duration=duration)
+
+    @classmethod
     def from_response(cls, response: Union[Message, Mapping[str, Any]]) -> "Trajectory":
         """The trajectory of a PlanResponse or OptimizeResponse (or a RobotTrajectory of a
         CoordinateResponse, or a bare JointTrajectory), as a message or as its JSON dict (the
