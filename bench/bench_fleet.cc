@@ -139,6 +139,7 @@ struct Row {
   std::string method;
   int runs = 0, solved = 0;
   double seconds = 0.0, max_seconds = 0.0, soc_ratio = 0.0, makespan = 0.0;
+  double lattice = 0.0, search = 0.0, schedule = 0.0;  ///< FLEET's stages, medians [s]
 };
 
 }  // namespace
@@ -163,7 +164,8 @@ void BenchFleetCoordinate(const FleetBenchOptions& options, const std::string& s
               "verification. Time: median (max). SOC / LB: the discrete plan's sum of costs over the sum of "
               "shortest distances. PRIORITIZED: 10 s budget, teams of up to 8.\n\n",
               options.runs);
-  std::printf("| map | robots | method | solved | time [s] | SOC / LB | makespan [s] |\n|---|---|---|---|---|---|---|\n");
+  std::printf("| map | robots | method | solved | time [s] | lattice / search / schedule [s] | SOC / LB | makespan [s] |\n"
+              "|---|---|---|---|---|---|---|---|\n");
   std::vector<Row> rows;
   for (const Case& c : cases) {
     const auto model = DiscBase(c.map.width, c.map.height);
@@ -175,7 +177,7 @@ void BenchFleetCoordinate(const FleetBenchOptions& options, const std::string& s
         row.map = c.name;
         row.robots = robots;
         row.method = method == CoordinationMethod::kAuto ? "AUTO (fleet)" : "PRIORITIZED";
-        std::vector<double> seconds, ratios, makespans;
+        std::vector<double> seconds, ratios, makespans, lattice, search, schedule;
         for (int r = 0; r < options.runs; ++r) {
           std::vector<GridCell> starts, goals;
           RandomScenario(c.map, robots, options.seed + static_cast<std::uint64_t>(r), &starts, &goals);
@@ -203,6 +205,11 @@ void BenchFleetCoordinate(const FleetBenchOptions& options, const std::string& s
           ++row.solved;
           seconds.push_back(took);
           makespans.push_back(outcome.makespan);
+          if (outcome.fleet) {
+            lattice.push_back(outcome.fleet->lattice_seconds);
+            search.push_back(outcome.fleet->search_seconds);
+            schedule.push_back(outcome.fleet->schedule_seconds);
+          }
           if (outcome.fleet && outcome.fleet->sum_of_lower_bounds > 0) {
             ratios.push_back(static_cast<double>(outcome.fleet->sum_of_costs) / outcome.fleet->sum_of_lower_bounds);
           }
@@ -211,8 +218,12 @@ void BenchFleetCoordinate(const FleetBenchOptions& options, const std::string& s
         row.max_seconds = QuantileOrNan(seconds, 1.0);
         row.soc_ratio = QuantileOrNan(ratios, 0.5);
         row.makespan = QuantileOrNan(makespans, 0.5);
-        std::printf("| %s | %d | %s | %d/%d | %.3f (%.3f) | %.3f | %.1f |\n", row.map.c_str(), robots, row.method.c_str(),
-                    row.solved, row.runs, row.seconds, row.max_seconds, row.soc_ratio, row.makespan);
+        row.lattice = QuantileOrNan(lattice, 0.5);
+        row.search = QuantileOrNan(search, 0.5);
+        row.schedule = QuantileOrNan(schedule, 0.5);
+        std::printf("| %s | %d | %s | %d/%d | %.3f (%.3f) | %.3f / %.3f / %.4f | %.3f | %.1f |\n", row.map.c_str(), robots,
+                    row.method.c_str(), row.solved, row.runs, row.seconds, row.max_seconds, row.lattice, row.search,
+                    row.schedule, row.soc_ratio, row.makespan);
         std::fflush(stdout);
         rows.push_back(row);
       }

@@ -180,6 +180,15 @@ class Coordinator {
 
  private:
   // --- checkers -------------------------------------------------------------------------------
+  /// All members, self + scene, built when first needed (FLEET never needs it).
+  const std::shared_ptr<const CollisionChecker>& Team() {
+    if (!team_) {
+      std::vector<PlacedRobot> placements;
+      for (const Member& m : members_) placements.push_back(m.placement);
+      team_ = std::make_shared<CollisionChecker>(ComposeRobots(placements), SceneFor(placements));
+    }
+    return team_;
+  }
   /// Robot k alone in the scene (self + scene), built on first use.
   std::shared_ptr<const CollisionChecker> Own(int k) { return Own(&members_[static_cast<std::size_t>(k)]); }
   std::shared_ptr<const CollisionChecker> Own(Member* m) {
@@ -390,7 +399,7 @@ class Coordinator {
   const PlanningPipeline pipeline_;
   const Termination termination_;
   std::vector<Member> members_;
-  std::shared_ptr<const CollisionChecker> team_;  ///< all members, self + scene
+  std::shared_ptr<const CollisionChecker> team_;  ///< all members, self + scene (Team())
   std::map<std::tuple<std::string, std::string, double>, std::shared_ptr<const CollisionChecker>> pairs_;
   std::map<int, SinglePlan> alone_;
   std::optional<detail::FleetAttempt> fleet_;
@@ -556,9 +565,9 @@ Attempt Coordinator::RunPriorityLoop(bool prm, const Termination& termination) {
 Attempt Coordinator::RunComposite(const Termination& termination) {
   Attempt attempt;
   const int n = static_cast<int>(members_.size());
-  if (n > kCompositeMaxRobots || team_->robot().num_dofs() > kCompositeMaxDofs) {
+  if (n > kCompositeMaxRobots || Team()->robot().num_dofs() > kCompositeMaxDofs) {
     attempt.message = "the composite space of " + std::to_string(n) + " robots has " +
-                      std::to_string(team_->robot().num_dofs()) + " joints; composite planning is offered up to " +
+                      std::to_string(Team()->robot().num_dofs()) + " joints; composite planning is offered up to " +
                       std::to_string(kCompositeMaxRobots) + " robots and " + std::to_string(kCompositeMaxDofs) + " joints";
     return attempt;
   }
@@ -569,13 +578,13 @@ Attempt Coordinator::RunComposite(const Termination& termination) {
     }
   }
   PlanQuery plan;
-  plan.checker = team_;
+  plan.checker = Team();
   const std::vector<int> offsets = CompositeOffsets([this] {
     std::vector<PlacedRobot> p;
     for (const Member& m : members_) p.push_back(m.placement);
     return p;
   }());
-  const int dofs = team_->robot().num_dofs();
+  const int dofs = Team()->robot().num_dofs();
   plan.start.resize(dofs);
   plan.goal.resize(dofs);
   plan.trajectory.max_velocity.resize(dofs);
@@ -669,7 +678,7 @@ std::string Coordinator::Verify(const Attempt& attempt, TeamVerificationReport* 
   TeamVerificationOptions options;
   options.time_step = query_.time_step;
   options.max_joint_step = query_.collision_resolution;
-  *report = VerifyTeam(*team_, attempt.trajectories, starts, goals, limits, options);
+  *report = VerifyTeam(*Team(), attempt.trajectories, starts, goals, limits, options);
   if (!report->ok) return report->reason;
   if (query_.robot_padding > 0.0 && members_.size() > 1) {
     std::vector<PlacedRobot> placements;
@@ -820,11 +829,6 @@ CoordinationOutcome Coordinator::Run() {
                                                                " at t = 0: " + Describe(contact));
       }
     }
-  }
-  {
-    std::vector<PlacedRobot> placements;
-    for (const Member& m : members_) placements.push_back(m.placement);
-    team_ = std::make_shared<CollisionChecker>(ComposeRobots(placements), SceneFor(placements));
   }
 
   // 3. The methods.

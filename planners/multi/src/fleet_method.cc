@@ -5,7 +5,6 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <unordered_map>
 
 #include "chasles/multi/fleet.h"
 #include "chasles/multi/fleet_lattice.h"
@@ -56,33 +55,40 @@ std::string CheckLimitsAndEnds(const std::vector<TimedTrajectory>& trajectories,
 }
 
 /// The smallest distance between two robots' footprint discs at `instants` + 1 evenly spaced
-/// instants over [0, makespan] (a spatial hash of cell `reach` finds the pairs that can be
-/// nearer than `reach`), capped at kMaxReportedRobotDistance; *worst names the nearest pair.
+/// instants over [0, makespan], capped at kMaxReportedRobotDistance; *worst names the nearest
+/// pair. Robots are bucketed per instant into cells of `reach` over the lattice's extent (no
+/// allocation per instant), so only pairs in neighbouring cells — nearer than `reach` — are
+/// measured; the cap is below `reach`.
 double MinDiscDistance(const std::vector<TimedTrajectory>& trajectories, const std::vector<double>& radii, double makespan,
-                       int instants, double reach, std::string* worst) {
+                       int instants, const LatticeGeometry& lattice, double reach, std::string* worst) {
   const int n = static_cast<int>(trajectories.size());
-  double best = kMaxReportedRobotDistance;
+  const int gw = static_cast<int>(std::ceil((lattice.width - 1) * lattice.spacing / reach)) + 1;
+  const int gh = static_cast<int>(std::ceil((lattice.height - 1) * lattice.spacing / reach)) + 1;
+  std::vector<int> head(static_cast<std::size_t>(gw) * static_cast<std::size_t>(gh)), next(static_cast<std::size_t>(n));
   std::vector<Eigen::Vector2d> at(static_cast<std::size_t>(n));
-  std::unordered_map<std::int64_t, std::vector<int>> grid;
-  const auto key = [](std::int64_t x, std::int64_t y) { return (x << 32) ^ (y & 0xffffffff); };
+  std::vector<int> gx(static_cast<std::size_t>(n)), gy(static_cast<std::size_t>(n));
+  double best = std::min(kMaxReportedRobotDistance, reach);
   for (int s = 0; s <= instants; ++s) {
     const double t = instants == 0 ? 0.0 : makespan * s / instants;
-    grid.clear();
+    std::fill(head.begin(), head.end(), -1);
     for (int k = 0; k < n; ++k) {
-      at[static_cast<std::size_t>(k)] = trajectories[static_cast<std::size_t>(k)].Evaluate(t).q.head<2>();
-      const Eigen::Vector2d& p = at[static_cast<std::size_t>(k)];
-      grid[key(static_cast<std::int64_t>(std::floor(p.x() / reach)), static_cast<std::int64_t>(std::floor(p.y() / reach)))]
-          .push_back(k);
+      const Eigen::Vector2d p = trajectories[static_cast<std::size_t>(k)].Evaluate(t).q.head<2>();
+      at[static_cast<std::size_t>(k)] = p;
+      const Eigen::Vector2d local = (p - lattice.origin) / reach;
+      const int x = std::clamp(static_cast<int>(std::floor(local.x())), 0, gw - 1);
+      const int y = std::clamp(static_cast<int>(std::floor(local.y())), 0, gh - 1);
+      gx[static_cast<std::size_t>(k)] = x;
+      gy[static_cast<std::size_t>(k)] = y;
+      int& first = head[static_cast<std::size_t>(y) * static_cast<std::size_t>(gw) + static_cast<std::size_t>(x)];
+      next[static_cast<std::size_t>(k)] = first;
+      first = k;
     }
     for (int k = 0; k < n; ++k) {
       const Eigen::Vector2d& p = at[static_cast<std::size_t>(k)];
-      const std::int64_t cx = static_cast<std::int64_t>(std::floor(p.x() / reach));
-      const std::int64_t cy = static_cast<std::int64_t>(std::floor(p.y() / reach));
-      for (std::int64_t dx = -1; dx <= 1; ++dx) {
-        for (std::int64_t dy = -1; dy <= 1; ++dy) {
-          const auto it = grid.find(key(cx + dx, cy + dy));
-          if (it == grid.end()) continue;
-          for (int j : it->second) {
+      for (int y = std::max(0, gy[static_cast<std::size_t>(k)] - 1); y <= std::min(gh - 1, gy[static_cast<std::size_t>(k)] + 1); ++y) {
+        for (int x = std::max(0, gx[static_cast<std::size_t>(k)] - 1); x <= std::min(gw - 1, gx[static_cast<std::size_t>(k)] + 1); ++x) {
+          for (int j = head[static_cast<std::size_t>(y) * static_cast<std::size_t>(gw) + static_cast<std::size_t>(x)]; j >= 0;
+               j = next[static_cast<std::size_t>(j)]) {
             if (j <= k) continue;
             const double d = (at[static_cast<std::size_t>(j)] - p).norm() - radii[static_cast<std::size_t>(k)] -
                              radii[static_cast<std::size_t>(j)];
@@ -257,7 +263,8 @@ FleetAttempt RunFleet(const CoordinationQuery& query, const std::vector<FleetMem
   const int instants = std::max(1, std::min(2000, static_cast<int>(std::ceil(makespan / 0.01))));
   std::string nearest;
   verification.min_robot_distance =
-      n < 2 ? kMaxReportedRobotDistance : MinDiscDistance(out.trajectories, radii, makespan, instants, 2.0 * spacing, &nearest);
+      n < 2 ? kMaxReportedRobotDistance
+            : MinDiscDistance(out.trajectories, radii, makespan, instants, geometry, 2.0 * spacing, &nearest);
   verification.states_checked = static_cast<std::uint64_t>(instants + 1) * n;
   if (failure.empty() && n >= 2 && verification.min_robot_distance < query.robot_padding - 1e-9) {
     failure = "footprint discs " + FormatNumber(verification.min_robot_distance) + " m apart (" + nearest +
