@@ -846,7 +846,7 @@ CoordinationOutcome Coordinator::Run() {
   // AUTO: each method gets a share of what is left; a method stopped by its share (not by the
   // request's budget) is tried again, with all that is left, once the others have had their
   // turn or one of them has succeeded; the verified result with the smallest makespan is kept.
-  const std::vector<double> shares = {0.4, 0.5, 0.6, 0.7};  // of what is left, per first try
+  const std::vector<double> shares = {0.4, 0.5, 0.6};  // of what is left of the first round, per first try
   struct Verified {
     Attempt attempt;
     TeamVerificationReport verification;
@@ -883,12 +883,16 @@ CoordinationOutcome Coordinator::Run() {
     }
     out.attempts.push_back(report);
   };
+  // With several methods the first tries share 60 % of the budget (the last of them what is left
+  // of that), so the methods they stopped come back with at least 40 % of it.
+  const Termination first_round =
+      methods.size() == 1 ? termination_
+                          : termination_.WithBudget(std::chrono::duration<double>(0.6 * termination_.SecondsLeft()));
   for (std::size_t i = 0; i < methods.size() && !best; ++i) {
     if (termination_.ShouldStop()) break;
-    // The last method takes all that is left when no earlier one is waiting to come back.
     const bool last = i + 1 == methods.size();
-    const double share = methods.size() == 1 || (last && stopped.empty()) ? 1.0 : shares[std::min(i, shares.size() - 1)];
-    run(methods[i], termination_.WithBudget(std::chrono::duration<double>(share * termination_.SecondsLeft())));
+    const double share = methods.size() == 1 || last ? 1.0 : shares[std::min(i, shares.size() - 1)];
+    run(methods[i], first_round.WithBudget(std::chrono::duration<double>(share * first_round.SecondsLeft())));
   }
   if (methods.size() > 1) {
     // After a success, only the methods tried before it come back (they may find a shorter
