@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "chasles/collision/shape_spheres.h"
 #include "chasles/collision/sphere_fit.h"
 #include "chasles/robot/robot_model.h"
 
@@ -37,10 +38,9 @@ struct RobotSphereFit {
 };
 
 /// When the robot has at least one mesh: every mesh, box, cylinder and capsule of it is covered
-/// by spheres (cylinders through a circumscribed 24-sided prism, capsules as that prism and a
-/// sphere at each end; boxes and meshes exactly as given), spheres are kept. Self-collision
-/// pairs stay as allowed; a fitted link can reach into a neighbour by up to `reach` more than its
-/// shapes did, so a pair that touched within that margin now collides.
+/// by spheres (FitShapeSpheres, each shape with its share of its link's budget), spheres are kept.
+/// Self-collision pairs stay as allowed; a fitted link can reach into a neighbour by up to `reach`
+/// more than its shapes did, so a pair that touched within that margin now collides.
 /// \throws Error(kInvalidArgument) for invalid options or a mesh FitSpheres rejects (naming the
 ///         link and shape).
 RobotSphereFit FitRobotSpheres(const RobotModel& robot, const RobotSphereOptions& options = {});
