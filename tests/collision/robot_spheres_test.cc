@@ -5,7 +5,7 @@
 // cautious only within the reach the fit reports. A robot of cylinders, a thin disc, a capsule, a
 // box and a mesh at turned poses: dense points of every shape inside its link's spheres, the
 // spheres within the reach of their link's shapes (exact distances written in the test), the
-// same shape fitted alike on two links; the Baxter's arm within 1 cm.
+// same shape fitted once, and the same fit whatever the thread count; the Baxter's arm within 1 cm.
 
 #include <algorithm>
 #include <cmath>
@@ -284,7 +284,7 @@ TEST(RobotSpheres, PrimitivesAndMeshesAreCoveredInTheirLinksFrames) {
   // The kept sphere is as it was; the hand's capsule and box shared its budget (20 each).
   const Link& hand = fit.model->links()[robot->FindLink("hand")];
   EXPECT_LE(hand.collision.size(), 41u);
-  // The same cylinder on two links gets the same spheres in each shape's frame.
+  // The same cylinder on two links is one fit: the same spheres in each shape's frame.
   const Link& upper = fit.model->links()[robot->FindLink("upper_arm")];
   const Link& fore = fit.model->links()[robot->FindLink("forearm")];
   ASSERT_EQ(upper.collision.size(), fore.collision.size());
@@ -297,6 +297,29 @@ TEST(RobotSpheres, PrimitivesAndMeshesAreCoveredInTheirLinksFrames) {
                   .norm(),
               1e-12);
   }
+}
+
+TEST(RobotSpheres, TheFitDoesNotDependOnTheThreads) {
+  const auto robot = PrimitivesRobot();
+  RobotSphereOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const RobotSphereFit a = FitRobotSpheres(*robot, one), b = FitRobotSpheres(*robot, two);
+  EXPECT_EQ(a.reach, b.reach);
+  EXPECT_EQ(a.reach_link, b.reach_link);
+  ASSERT_EQ(a.spheres, b.spheres);
+  for (int l = 0; l < robot->num_links(); ++l) {
+    const auto& x = a.model->links()[l].collision;
+    const auto& y = b.model->links()[l].collision;
+    ASSERT_EQ(x.size(), y.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      EXPECT_EQ(x[i].radius, y[i].radius);
+      EXPECT_EQ(x[i].pose.translation(), y[i].pose.translation());
+    }
+  }
+  RobotSphereOptions bad;
+  bad.threads = -1;
+  EXPECT_THROW(FitRobotSpheres(*robot, bad), Error);
 }
 
 TEST(RobotSpheres, TheBaxterArmWithinOneCentimetre) {
