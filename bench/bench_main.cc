@@ -2,12 +2,13 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_coordinate|fleet_lattice|benchmark|fairness|memory|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_coordinate|fleet_lattice|benchmark|fairness|memory|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
 //                 [--segments N] [--paths N] [--knots K] [--methods topp,collocation,spline]
 //                 [--runs N] [--scenarios crossing_arms,swap_bases,corridor] [--team-budget S] [--bench-repeats N]
+//                 [--urdf a.urdf,b.urdf]
 
 #include <algorithm>
 #include <chrono>
@@ -52,6 +53,7 @@
 #include "bench_fleet_lattice.h"
 #include "bench_mesh_robot.h"
 #include "bench_robots.h"
+#include "bench_sphere_fit.h"
 #include "bench_hardening.h"
 #include "bench_pipeline.h"
 
@@ -84,6 +86,7 @@ struct Options {
   int bench_repeats = 5;      // benchmark, fairness: alternating repeats of each measurement
   double long_budget = 20.0;  // fairness: budget of the long rrt_star plans [s]
   int uploads = 8;            // memory: distinct 50 MB STL uploads
+  std::vector<std::string> urdfs;  // sphere_fit: more robots, their collision meshes as boxes
 };
 
 std::vector<std::string> Split(const std::string& s) {
@@ -1054,9 +1057,10 @@ int Main(int argc, char** argv) {
     else if (arg == "--bench-repeats") options.bench_repeats = std::stoi(value());
     else if (arg == "--long-budget") options.long_budget = std::stod(value());
     else if (arg == "--uploads") options.uploads = std::stoi(value());
+    else if (arg == "--urdf") options.urdfs = Split(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_coordinate|fleet_lattice|benchmark|fairness|memory|all]\n"
+                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_coordinate|fleet_lattice|benchmark|fairness|memory|all]\n"
                    "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
@@ -1064,7 +1068,7 @@ int Main(int argc, char** argv) {
                    "                     [--problems maze,office,drone_course,panda_shelf]\n"
                    "                     [--segments N] [--paths N] [--knots K] [--methods topp,collocation,spline]\n"
                    "                     [--runs N] [--scenarios crossing_arms,swap_bases,corridor] [--team-budget S]\n"
-                   "                     [--bench-repeats N]\n"
+                   "                     [--bench-repeats N] [--urdf a.urdf,b.urdf]\n"
                    "  pipeline: --scenes (default table,shelf,cage,bin), --planners (default rrt_connect), --queries,\n"
                    "            --seed, --budget, --anytime-budget, --bench-repeats (alternations of ours, FCL, RPC)\n");
       return arg == "--help" ? 0 : 2;
@@ -1096,6 +1100,13 @@ int Main(int argc, char** argv) {
     mesh.queries = options.queries;
     mesh.seed = options.seed;
     BenchMeshRobot(mesh);
+  }
+  if (options.section == "sphere_fit" || options.section == "all") {
+    SphereFitBenchOptions fit;
+    fit.examples_dir = CHASLES_EXAMPLES_DIR;
+    fit.urdfs = options.urdfs;
+    fit.repeats = options.bench_repeats;
+    BenchSphereFit(fit);
   }
   if (options.section == "robots" || options.section == "all") {
     RobotsBenchOptions robots;

@@ -2,8 +2,12 @@
 // the same robot with spheres covering them. Checked against the meshes themselves: every mesh
 // vertex inside a sphere of its link, every configuration where the mesh robot collides (on the
 // FCL path, an implementation of its own) colliding for the spheres too, and the spheres too
-// cautious only within the reach the fit reports.
+// cautious only within the reach the fit reports. A robot of cylinders, a thin disc, a capsule, a
+// box and a mesh at turned poses: dense points of every shape inside its link's spheres, the
+// spheres within the reach of their link's shapes (exact distances written in the test), the
+// same shape fitted once, and the same fit whatever the thread count; the Baxter's arm within 1 cm.
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -17,6 +21,7 @@
 #include "chasles/collision/mesh.h"
 #include "chasles/collision/robot_spheres.h"
 #include "chasles/robot/error.h"
+#include "solid_points.h"
 #include "test_util.h"
 
 namespace chasles {
@@ -143,6 +148,196 @@ TEST(RobotSpheres, TheSrdfsNeverPairsDoNotTouchOnTheExactMeshes) {
       ASSERT_FALSE(checker.Check(q).in_collision) << a << " / " << b << " touch at q = " << q.transpose();
     }
   }
+}
+
+/// A root link with `links` hung from it by fixed joints.
+std::shared_ptr<const RobotModel> StarRobot(const std::vector<Link>& links) {
+  std::vector<Link> all(1);
+  all[0].name = "root";
+  std::vector<Joint> joints;
+  for (const Link& link : links) {
+    all.push_back(link);
+    all.back().parent_joint = static_cast<int>(joints.size());
+    Joint joint;
+    joint.name = link.name + "_joint";
+    joint.parent_link = 0;
+    joint.child_link = static_cast<int>(all.size()) - 1;
+    joints.push_back(joint);
+  }
+  return RobotModel::FromTree("star", all, joints);
+}
+
+Eigen::Isometry3d Pose(double x, double y, double z, double roll, double pitch, double yaw) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() << x, y, z;
+  pose.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                   Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+                      .toRotationMatrix();
+  return pose;
+}
+
+Link MakeLink(const std::string& name, std::vector<Shape> shapes) {
+  Link link;
+  link.name = name;
+  link.collision = std::move(shapes);
+  return link;
+}
+
+/// Exact distance from a point of the link frame to the shape's solid (a mesh here is a cube of
+/// CubeMeshShape).
+double ShapeDistance(const Shape& shape, const Eigen::Vector3d& in_link) {
+  const Eigen::Vector3d p = shape.pose.inverse() * in_link;
+  switch (shape.type) {
+    case ShapeType::kSphere:
+      return std::max(p.norm() - shape.radius, 0.0);
+    case ShapeType::kCylinder:
+      return test::CylinderDistance(p, shape.radius, shape.length);
+    case ShapeType::kCapsule:
+      return test::CapsuleDistance(p, shape.radius, shape.length);
+    case ShapeType::kBox:
+      return test::BoxDistance(p, shape.size);
+    case ShapeType::kMesh:
+      return test::BoxDistance(p, Eigen::Vector3d::Constant(2.0 * shape.mesh->vertices[7].x()));
+  }
+  return 0.0;
+}
+
+/// Points of the shape's solid in the link frame.
+std::vector<Eigen::Vector3d> ShapePoints(const Shape& shape, std::mt19937_64& rng) {
+  std::vector<Eigen::Vector3d> points;
+  switch (shape.type) {
+    case ShapeType::kSphere:
+      break;
+    case ShapeType::kCylinder:
+      points = test::CylinderPoints(shape.radius, shape.length, 20000, rng);
+      break;
+    case ShapeType::kCapsule:
+      points = test::CapsulePoints(shape.radius, shape.length, 20000, rng);
+      break;
+    case ShapeType::kBox:
+      points = test::BoxPoints(shape.size, 20000, rng);
+      break;
+    case ShapeType::kMesh:
+      points = test::BoxPoints(Eigen::Vector3d::Constant(2.0 * shape.mesh->vertices[7].x()), 20000, rng);
+      break;
+  }
+  for (Eigen::Vector3d& p : points) p = shape.pose * p;
+  return points;
+}
+
+/// Every shape of every link of `exact` covered by the spheres of its link in `fit`, and every
+/// sphere within `fit.reach` of its link's shapes (2,000 points on each sphere's surface).
+void CheckRobotFit(const RobotModel& exact, const RobotSphereFit& fit, int budget) {
+  ASSERT_NE(fit.model, nullptr);
+  std::mt19937_64 rng(7);
+  for (int l = 0; l < exact.num_links(); ++l) {
+    const Link& shapes = exact.links()[l];
+    const Link& spheres = fit.model->links()[l];
+    SCOPED_TRACE(shapes.name);
+    int kept = 0;
+    for (const Shape& s : shapes.collision) kept += s.type == ShapeType::kSphere;
+    EXPECT_LE(static_cast<int>(spheres.collision.size()), budget + kept);
+    for (const Shape& s : spheres.collision) ASSERT_EQ(s.type, ShapeType::kSphere);
+    for (const Shape& shape : shapes.collision) {
+      for (const Eigen::Vector3d& p : ShapePoints(shape, rng)) {
+        const bool inside = std::any_of(spheres.collision.begin(), spheres.collision.end(), [&](const Shape& s) {
+          return (p - s.pose.translation()).norm() <= s.radius;
+        });
+        ASSERT_TRUE(inside) << "point " << p.transpose() << " of a shape of type " << static_cast<int>(shape.type);
+      }
+    }
+    const double golden = M_PI * (3.0 - std::sqrt(5.0));
+    for (const Shape& s : spheres.collision) {
+      for (int i = 0; i < 2000; ++i) {
+        const double z = 1.0 - 2.0 * (i + 0.5) / 2000, ring = std::sqrt(1.0 - z * z);
+        const Eigen::Vector3d p =
+            s.pose.translation() + s.radius * Eigen::Vector3d(ring * std::cos(golden * i), ring * std::sin(golden * i), z);
+        double nearest = std::numeric_limits<double>::infinity();
+        for (const Shape& shape : shapes.collision) nearest = std::min(nearest, ShapeDistance(shape, p));
+        ASSERT_LE(nearest, fit.reach + 1e-12) << "point " << p.transpose() << " of a sphere";
+      }
+    }
+  }
+}
+
+std::shared_ptr<const RobotModel> PrimitivesRobot() {
+  return StarRobot({
+      MakeLink("torso", {test::CubeMeshShape(0.03, Pose(0.0, 0.0, 0.5, 0.0, 0.0, 0.3))}),
+      MakeLink("upper_arm", {Shape::Cylinder(0.06, 0.2722, Pose(0.1, 0.0, 0.1361, 0.4, 0.0, 0.0))}),
+      MakeLink("forearm", {Shape::Cylinder(0.06, 0.2722, Pose(-0.2, 0.3, 0.0, 0.0, 1.2, 0.5))}),
+      MakeLink("sonar_ring", {Shape::Cylinder(0.085, 0.01, Pose(0.0, 0.0, 0.8, 0.0, 0.0, 0.0))}),
+      MakeLink("hand", {Shape::Capsule(0.04, 0.1, Pose(0.0, 0.05, 0.0, 1.57, 0.0, 0.0)),
+                        Shape::Box({0.1, 0.05, 0.02}, Pose(0.0, 0.0, 0.1, 0.0, 0.2, 0.0)),
+                        Shape::Sphere(0.03, Pose(0.05, 0.0, 0.0, 0.0, 0.0, 0.0))}),
+  });
+}
+
+TEST(RobotSpheres, PrimitivesAndMeshesAreCoveredInTheirLinksFrames) {
+  const auto robot = PrimitivesRobot();
+  RobotSphereOptions options;
+  const RobotSphereFit fit = FitRobotSpheres(*robot, options);
+  ASSERT_NE(fit.model, nullptr);
+  EXPECT_EQ(fit.shapes_fitted, 6);  // the mesh, three cylinders, the capsule and the box; the sphere is kept
+  std::printf("[ fit ] %d shapes → %d spheres, reach %.4f m (link '%s'), %.3f s\n", fit.shapes_fitted, fit.spheres,
+              fit.reach, fit.reach_link.c_str(), fit.seconds);
+  CheckRobotFit(*robot, fit, options.max_spheres_per_link);
+  // The kept sphere is as it was; the hand's capsule and box shared its budget (20 each).
+  const Link& hand = fit.model->links()[robot->FindLink("hand")];
+  EXPECT_LE(hand.collision.size(), 41u);
+  // The same cylinder on two links is one fit: the same spheres in each shape's frame.
+  const Link& upper = fit.model->links()[robot->FindLink("upper_arm")];
+  const Link& fore = fit.model->links()[robot->FindLink("forearm")];
+  ASSERT_EQ(upper.collision.size(), fore.collision.size());
+  const Eigen::Isometry3d upper_pose = robot->links()[robot->FindLink("upper_arm")].collision[0].pose;
+  const Eigen::Isometry3d fore_pose = robot->links()[robot->FindLink("forearm")].collision[0].pose;
+  for (std::size_t i = 0; i < upper.collision.size(); ++i) {
+    EXPECT_EQ(upper.collision[i].radius, fore.collision[i].radius);
+    EXPECT_LT((upper_pose.inverse() * upper.collision[i].pose.translation() -
+               fore_pose.inverse() * fore.collision[i].pose.translation())
+                  .norm(),
+              1e-12);
+  }
+}
+
+TEST(RobotSpheres, TheFitDoesNotDependOnTheThreads) {
+  const auto robot = PrimitivesRobot();
+  RobotSphereOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const RobotSphereFit a = FitRobotSpheres(*robot, one), b = FitRobotSpheres(*robot, two);
+  EXPECT_EQ(a.reach, b.reach);
+  EXPECT_EQ(a.reach_link, b.reach_link);
+  ASSERT_EQ(a.spheres, b.spheres);
+  for (int l = 0; l < robot->num_links(); ++l) {
+    const auto& x = a.model->links()[l].collision;
+    const auto& y = b.model->links()[l].collision;
+    ASSERT_EQ(x.size(), y.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      EXPECT_EQ(x[i].radius, y[i].radius);
+      EXPECT_EQ(x[i].pose.translation(), y[i].pose.translation());
+    }
+  }
+  RobotSphereOptions bad;
+  bad.threads = -1;
+  EXPECT_THROW(FitRobotSpheres(*robot, bad), Error);
+}
+
+TEST(RobotSpheres, TheBaxterArmWithinOneCentimetre) {
+  // The published Baxter URDF's arm: ten cylinders (its collision geometry as written), and a
+  // small mesh on the torso so that the robot is fitted.
+  const double lengths[] = {0.2722, 0.12, 0.107, 0.273, 0.10, 0.088, 0.272, 0.10, 0.165};
+  std::vector<Link> links = {MakeLink("torso", {test::CubeMeshShape(0.005, Eigen::Isometry3d::Identity())})};
+  for (std::size_t i = 0; i < std::size(lengths); ++i) {
+    links.push_back(MakeLink("arm_" + std::to_string(i), {Shape::Cylinder(0.06, lengths[i], Pose(0, 0, 0.5 * lengths[i], 0, 0, 0))}));
+  }
+  links.push_back(MakeLink("hand", {Shape::Cylinder(0.04, 0.0464, Pose(0, 0, -0.0232, 0, 0, 0))}));
+  const auto robot = StarRobot(links);
+  const RobotSphereFit fit = FitRobotSpheres(*robot);
+  std::printf("[ fit ] %d shapes → %d spheres, reach %.4f m (link '%s'), %.3f s\n", fit.shapes_fitted, fit.spheres,
+              fit.reach, fit.reach_link.c_str(), fit.seconds);
+  EXPECT_EQ(fit.shapes_fitted, 11);
+  EXPECT_LE(fit.reach, 0.01);
+  CheckRobotFit(*robot, fit, RobotSphereOptions().max_spheres_per_link);
 }
 
 TEST(RobotSpheres, ARobotWithoutMeshesIsLeftAsItIs) {

@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "chasles/collision/shape_spheres.h"
 #include "chasles/collision/sphere_fit.h"
 #include "chasles/robot/robot_model.h"
 
@@ -18,6 +19,8 @@ struct RobotSphereOptions {
   SphereFitOptions fit;
   /// Spheres per link, shared among the link's shapes that are fitted (each gets at least one), >= 1.
   int max_spheres_per_link = 40;
+  /// Shapes fitted at once, on threads of the call's own; 0: one per hardware thread. >= 0.
+  int threads = 0;
   /// \throws Error(kInvalidArgument) naming the field.
   void Validate() const;
 };
@@ -37,10 +40,11 @@ struct RobotSphereFit {
 };
 
 /// When the robot has at least one mesh: every mesh, box, cylinder and capsule of it is covered
-/// by spheres (cylinders through a circumscribed 24-sided prism, capsules as that prism and a
-/// sphere at each end; boxes and meshes exactly as given), spheres are kept. Self-collision
+/// by spheres (FitShapeSpheres, each shape with its share of its link's budget, the shapes fitted
+/// in parallel and the same shape with the same budget fitted once), spheres are kept. Self-collision
 /// pairs stay as allowed; a fitted link can reach into a neighbour by up to `reach` more than its
-/// shapes did, so a pair that touched within that margin now collides.
+/// shapes did, so a pair that touched within that margin now collides. The result does not depend
+/// on `threads`.
 /// \throws Error(kInvalidArgument) for invalid options or a mesh FitSpheres rejects (naming the
 ///         link and shape).
 RobotSphereFit FitRobotSpheres(const RobotModel& robot, const RobotSphereOptions& options = {});
