@@ -110,7 +110,10 @@ void ExpectNoContactAnywhere(const CoordinationQuery& query, const CoordinationO
   std::vector<Eigen::Vector2d> at(n);
   std::unordered_map<std::int64_t, std::vector<std::size_t>> grid;
   double nearest_pair = std::numeric_limits<double>::infinity(), nearest_box = nearest_pair;
-  const auto key = [](int x, int y) { return (static_cast<std::int64_t>(x) << 32) ^ static_cast<std::uint32_t>(y); };
+  const auto key = [](int x, int y) {
+    return static_cast<std::int64_t>((static_cast<std::uint64_t>(static_cast<std::uint32_t>(x)) << 32) |
+                                     static_cast<std::uint32_t>(y));
+  };
   const int samples = static_cast<int>(std::ceil(makespan / dt));
   for (int s = 0; s <= samples; ++s) {
     const double t = std::min(makespan, s * dt);
