@@ -53,6 +53,16 @@ class RobotsAsShipped : public SharedServerTest<> {
     context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
     return server_->stub().UploadRobot(&context, request, response);
   }
+  /// examples/robots/mobile_manipulator.urdf/.srdf uploaded; its upload response.
+  static v1::UploadRobotResponse UploadMobileManipulator() {
+    v1::UploadRobotRequest upload;
+    upload.mutable_robot()->mutable_urdf()->set_urdf(ReadText(ExamplePath("robots/mobile_manipulator.urdf")));
+    upload.mutable_robot()->mutable_urdf()->set_srdf(ReadText(ExamplePath("robots/mobile_manipulator.srdf")));
+    v1::UploadRobotResponse uploaded;
+    const grpc::Status status = Upload(upload, &uploaded);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return uploaded;
+  }
 };
 
 TEST_F(RobotsAsShipped, AnSrdfNamingUnknownLinksLoadsWithAWarningPerSkippedPair) {
@@ -258,11 +268,8 @@ TEST_F(RobotsAsShipped, AVerificationFailureIsRepairedAndTheResponseSaysWhat) {
 // seven joints, the torso held where the start puts it, and every state of it is free for the
 // whole robot (re-checked here on a checker of the full robot).
 TEST_F(RobotsAsShipped, APlanningGroupMovesOnlyItsJoints) {
-  v1::UploadRobotRequest upload;
-  upload.mutable_robot()->mutable_urdf()->set_urdf(ReadText(ExamplePath("robots/mobile_manipulator.urdf")));
-  upload.mutable_robot()->mutable_urdf()->set_srdf(ReadText(ExamplePath("robots/mobile_manipulator.srdf")));
-  v1::UploadRobotResponse uploaded;
-  ASSERT_TRUE(Upload(upload, &uploaded).ok());
+  const v1::UploadRobotResponse uploaded = UploadMobileManipulator();
+  ASSERT_FALSE(uploaded.robot_id().empty());
   ASSERT_EQ(uploaded.groups_size(), 2);
   EXPECT_EQ(uploaded.groups(0).name(), "arm");
   ASSERT_EQ(uploaded.groups(0).joint_names_size(), 7);
@@ -337,11 +344,8 @@ TEST_F(RobotsAsShipped, APlanningGroupMovesOnlyItsJoints) {
 // A continuous joint has no limit: values beyond the range it is planned in ([-π, π]) are the
 // same angles as their equivalents inside it, used with a warning (not refused).
 TEST_F(RobotsAsShipped, ContinuousJointValuesOutsideTheirPlanningRangeAreWrapped) {
-  v1::UploadRobotRequest upload;
-  upload.mutable_robot()->mutable_urdf()->set_urdf(ReadText(ExamplePath("robots/mobile_manipulator.urdf")));
-  upload.mutable_robot()->mutable_urdf()->set_srdf(ReadText(ExamplePath("robots/mobile_manipulator.srdf")));
-  v1::UploadRobotResponse uploaded;
-  ASSERT_TRUE(Upload(upload, &uploaded).ok());
+  const v1::UploadRobotResponse uploaded = UploadMobileManipulator();
+  ASSERT_FALSE(uploaded.robot_id().empty());
   v1::PlanRequest request;
   request.set_robot_id(uploaded.robot_id());
   request.mutable_scene();
@@ -373,11 +377,8 @@ TEST_F(RobotsAsShipped, ContinuousJointValuesOutsideTheirPlanningRangeAreWrapped
 // OptimizeRequest.group: the first waypoint gives every joint; the others the group's joints or
 // every joint with the held ones unchanged. The trajectory names and moves only the group's joints.
 TEST_F(RobotsAsShipped, OptimizeTimesAPlanningGroupsPath) {
-  v1::UploadRobotRequest upload;
-  upload.mutable_robot()->mutable_urdf()->set_urdf(ReadText(ExamplePath("robots/mobile_manipulator.urdf")));
-  upload.mutable_robot()->mutable_urdf()->set_srdf(ReadText(ExamplePath("robots/mobile_manipulator.srdf")));
-  v1::UploadRobotResponse uploaded;
-  ASSERT_TRUE(Upload(upload, &uploaded).ok());
+  const v1::UploadRobotResponse uploaded = UploadMobileManipulator();
+  ASSERT_FALSE(uploaded.robot_id().empty());
   v1::OptimizeRequest request;
   request.set_robot_id(uploaded.robot_id());
   request.mutable_scene();
@@ -419,11 +420,8 @@ TEST_F(RobotsAsShipped, OptimizeTimesAPlanningGroupsPath) {
 // TeamRobot.group: two mobile manipulators side by side move their arms only; the team is
 // verified with every robot's other joints standing where their starts put them.
 TEST_F(RobotsAsShipped, CoordinateMovesEachRobotsPlanningGroup) {
-  v1::UploadRobotRequest upload;
-  upload.mutable_robot()->mutable_urdf()->set_urdf(ReadText(ExamplePath("robots/mobile_manipulator.urdf")));
-  upload.mutable_robot()->mutable_urdf()->set_srdf(ReadText(ExamplePath("robots/mobile_manipulator.srdf")));
-  v1::UploadRobotResponse uploaded;
-  ASSERT_TRUE(Upload(upload, &uploaded).ok());
+  const v1::UploadRobotResponse uploaded = UploadMobileManipulator();
+  ASSERT_FALSE(uploaded.robot_id().empty());
   v1::CoordinateRequest request;
   request.mutable_scene();
   const double start[8] = {0.1, 0.0, 0.3, 0.0, 1.0, 0.0, 0.6, 0.0};
