@@ -602,28 +602,25 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
         case ShapeType::kSphere:
           p.kind = kPrimSphere;
           p.a = s.radius;
-          p.bound = s.radius;
           break;
         case ShapeType::kBox:
           p.kind = kPrimBox;
           p.a = 0.5 * s.size.x();
           p.b = 0.5 * s.size.y();
           p.c = 0.5 * s.size.z();
-          p.bound = 0.5 * s.size.norm();
           break;
         case ShapeType::kCylinder:
           p.kind = kPrimCylinder;
           p.a = s.radius;
           p.b = 0.5 * s.length;
-          p.bound = std::hypot(p.a, p.b);
           break;
         default:
           p.kind = kPrimCapsule;
           p.a = s.radius;
           p.b = 0.5 * s.length;
-          p.bound = p.a + p.b;
           break;
       }
+      p.bound = BoundingRadius(s);
       m.prims.push_back(p);
       m.prim_x.push_back(p.p[0]);
       m.prim_y.push_back(p.p[1]);

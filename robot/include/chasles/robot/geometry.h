@@ -34,4 +34,9 @@ struct Shape {
   static Shape Capsule(double radius, double length, const Eigen::Isometry3d& pose = Eigen::Isometry3d::Identity());
 };
 
+/// The radius of the smallest ball about the shape's own origin (`pose` not applied) that holds
+/// it [m]: a sphere's radius, half a box's diagonal, √(r² + (l/2)²) for a cylinder, r + l/2 for a
+/// capsule, the farthest vertex of a mesh (0 for a null or empty mesh).
+double BoundingRadius(const Shape& shape);
+
 }  // namespace chasles
