@@ -11,9 +11,9 @@
 #include <utility>
 
 #include "chasles/multi/space_time.h"
-#include "fleet_method.h"
 #include "chasles/robot/error.h"
 #include "chasles/robot/inverse_kinematics.h"
+#include "fleet_method.h"
 
 namespace chasles {
 
@@ -157,6 +157,14 @@ struct Attempt {
   int reorderings = 0;
 };
 
+/// A method's result that passed verification.
+struct Verified {
+  Attempt attempt;
+  TeamVerificationReport verification;
+  CoordinationMethod method = CoordinationMethod::kAuto;
+  double makespan = 0.0;  ///< [s]
+};
+
 /// Something that moves in the robots' world: a team member (once planned) or a committed motion.
 struct Actor {
   const PlacedRobot* placement = nullptr;
@@ -214,19 +222,7 @@ class Coordinator {
     std::vector<std::pair<Eigen::Vector3d, double>> balls;  // per shape, world
     for (int l = 0; l < robot.model->num_links(); ++l) {
       for (const Shape& shape : robot.model->links()[l].collision) {
-        double r = 0.0;
-        switch (shape.type) {
-          case ShapeType::kSphere: r = shape.radius; break;
-          case ShapeType::kBox: r = 0.5 * shape.size.norm(); break;
-          case ShapeType::kCylinder: r = std::hypot(shape.radius, 0.5 * shape.length); break;
-          case ShapeType::kCapsule: r = shape.radius + 0.5 * shape.length; break;
-          case ShapeType::kMesh:
-            if (shape.mesh) {
-              for (const Eigen::Vector3d& v : shape.mesh->vertices) r = std::max(r, v.norm());
-            }
-            break;
-        }
-        balls.emplace_back(robot.base_pose * (poses[l] * shape.pose).translation(), r);
+        balls.emplace_back(robot.base_pose * (poses[l] * shape.pose).translation(), BoundingRadius(shape));
       }
     }
     if (balls.empty()) return {robot.base_pose.translation(), 0.0};
@@ -393,6 +389,25 @@ class Coordinator {
 
   /// The joint verification of an attempt; "" when it passes.
   std::string Verify(const Attempt& attempt, TeamVerificationReport* report);
+
+  // --- the methods in turn (Run's phases 3 and 4) -------------------------------------------------
+  /// The query's method, or AUTO's order: FLEET first for planar bases, then PRIORITIZED,
+  /// VELOCITY_TUNING, COMPOSITE, SEQUENTIAL.
+  std::vector<CoordinationMethod> Methods() const;
+  /// One try of `method` within `stage`, verified; its report goes to *attempts, a verified
+  /// result with a smaller makespan than *best replaces it, and a try its stage stopped (not the
+  /// request's budget) is listed in *stopped.
+  void TryMethod(CoordinationMethod method, const Termination& stage, std::optional<Verified>* best,
+                 std::vector<CoordinationMethod>* stopped, std::vector<MethodAttemptReport>* attempts);
+  /// The budget policy: with several methods the first tries share 60 % of the budget (each a
+  /// share of what is left of it, the last all of it) and stop at the first success; then the
+  /// methods their shares stopped come back, each with an equal part of what is left. The
+  /// verified result with the smallest makespan, if any.
+  std::optional<Verified> RunMethods(const std::vector<CoordinationMethod>& methods,
+                                     std::vector<MethodAttemptReport>* attempts);
+  /// The robots' plans (samples unless knots replace them), makespan, order and verification of
+  /// the chosen result into *out.
+  void TakeResult(const Verified& best, CoordinationOutcome* out);
 
   const CoordinationQuery& query_;
   const PlannerRegistry& registry_;
@@ -722,6 +737,107 @@ std::string Coordinator::Verify(const Attempt& attempt, TeamVerificationReport* 
   return "";
 }
 
+std::vector<CoordinationMethod> Coordinator::Methods() const {
+  if (query_.method != CoordinationMethod::kAuto) return {query_.method};
+  std::vector<CoordinationMethod> methods;
+  // Planar bases that FLEET can plan go to it first (it scales to hundreds of robots).
+  if (detail::FleetInapplicable(query_).empty()) methods.push_back(CoordinationMethod::kFleet);
+  for (CoordinationMethod method : {CoordinationMethod::kPrioritized, CoordinationMethod::kVelocityTuning,
+                                    CoordinationMethod::kComposite, CoordinationMethod::kSequential}) {
+    methods.push_back(method);
+  }
+  return methods;
+}
+
+void Coordinator::TryMethod(CoordinationMethod method, const Termination& stage, std::optional<Verified>* best,
+                            std::vector<CoordinationMethod>* stopped, std::vector<MethodAttemptReport>* attempts) {
+  const Clock::time_point t_method = Clock::now();
+  MethodAttemptReport report;
+  report.method = method;
+  Attempt attempt = RunMethod(method, stage);
+  TeamVerificationReport verification;
+  if (method == CoordinationMethod::kFleet && fleet_) {
+    verification = fleet_->verification;  // its own: the lattice and dependencies prove it (fleet.h)
+  } else if (attempt.ok) {
+    const std::string failure = Verify(attempt, &verification);
+    if (!failure.empty()) {
+      attempt.ok = false;
+      attempt.message = "its result failed the joint verification: " + failure;
+    }
+  }
+  report.seconds = SecondsSince(t_method);
+  report.succeeded = attempt.ok;
+  report.message = attempt.message;
+  if (attempt.ok) {
+    for (const TimedTrajectory& t : attempt.trajectories) report.makespan = std::max(report.makespan, t.duration());
+    if (!*best || report.makespan < (*best)->makespan) {
+      *best = Verified{std::move(attempt), verification, method, report.makespan};
+    }
+  } else if ((attempt.out_of_time || stage.ShouldStop()) && !termination_.ShouldStop()) {
+    stopped->push_back(method);
+  }
+  attempts->push_back(report);
+}
+
+std::optional<Verified> Coordinator::RunMethods(const std::vector<CoordinationMethod>& methods,
+                                                std::vector<MethodAttemptReport>* attempts) {
+  const std::vector<double> shares = {0.4, 0.5, 0.6};  // of what is left of the first round, per first try
+  std::optional<Verified> best;
+  std::vector<CoordinationMethod> stopped;  // methods whose share ran out, in order
+  const Termination first_round =
+      methods.size() == 1 ? termination_
+                          : termination_.WithBudget(std::chrono::duration<double>(0.6 * termination_.SecondsLeft()));
+  for (std::size_t i = 0; i < methods.size() && !best; ++i) {
+    if (termination_.ShouldStop()) break;
+    const bool last = i + 1 == methods.size();
+    const double share = methods.size() == 1 || last ? 1.0 : shares[std::min(i, shares.size() - 1)];
+    TryMethod(methods[i], first_round.WithBudget(std::chrono::duration<double>(share * first_round.SecondsLeft())),
+              &best, &stopped, attempts);
+  }
+  if (methods.size() > 1) {
+    // After a success, only the methods tried before it come back (they may find a shorter
+    // makespan).
+    const std::vector<CoordinationMethod> again = stopped;
+    for (std::size_t j = 0; j < again.size(); ++j) {
+      if (termination_.ShouldStop()) break;
+      const double share = 1.0 / static_cast<double>(again.size() - j);
+      TryMethod(again[j], termination_.WithBudget(std::chrono::duration<double>(share * termination_.SecondsLeft())),
+                &best, &stopped, attempts);
+    }
+  }
+  return best;
+}
+
+void Coordinator::TakeResult(const Verified& best, CoordinationOutcome* out) {
+  const Attempt& attempt = best.attempt;
+  out->verification = best.verification;
+  out->method = best.method;
+  if (best.method == CoordinationMethod::kFleet && fleet_) out->fleet = fleet_->summary;
+  for (int k : attempt.order) out->order.push_back(members_[k].placement.name);
+  out->reorderings = attempt.reorderings;
+  for (std::size_t k = 0; k < members_.size(); ++k) {
+    const Member& m = members_[k];
+    RobotPlan plan;
+    plan.name = m.placement.name;
+    plan.trajectory = attempt.trajectories[k];
+    plan.duration = plan.trajectory.duration();
+    plan.start_delay = attempt.start_delay[k];
+    plan.wait_time = attempt.wait_time[k];
+    plan.path = attempt.paths[k];
+    plan.goal = m.goal;
+    plan.limits = m.limits;
+    // Gravity in the robot's base frame, for its torques.
+    const Eigen::Vector3d gravity = m.placement.base_pose.linear().transpose() * Eigen::Vector3d(0.0, 0.0, -9.81);
+    if (!query_.knots_replace_samples || plan.trajectory.degree() > 2) {
+      plan.samples = SampleTrajectory(plan.trajectory, *m.placement.model, query_.sample_period, gravity,
+                                      query_.sample_cap);
+    }
+    out->makespan = std::max(out->makespan, plan.duration);
+    out->sum_of_durations += plan.duration;
+    out->robots.push_back(std::move(plan));
+  }
+}
+
 CoordinationOutcome Coordinator::Run() {
   const Clock::time_point t_start = Clock::now();
   CoordinationOutcome out;
@@ -831,110 +947,11 @@ CoordinationOutcome Coordinator::Run() {
     }
   }
 
-  // 3. The methods.
-  std::vector<CoordinationMethod> methods;
-  if (query_.method == CoordinationMethod::kAuto) {
-    // Planar bases that FLEET can plan go to it first (it scales to hundreds of robots).
-    if (detail::FleetInapplicable(query_).empty()) methods.push_back(CoordinationMethod::kFleet);
-    for (CoordinationMethod method : {CoordinationMethod::kPrioritized, CoordinationMethod::kVelocityTuning,
-                                      CoordinationMethod::kComposite, CoordinationMethod::kSequential}) {
-      methods.push_back(method);
-    }
-  } else {
-    methods = {query_.method};
-  }
-  // AUTO: each method gets a share of what is left; a method stopped by its share (not by the
-  // request's budget) is tried again, with all that is left, once the others have had their
-  // turn or one of them has succeeded; the verified result with the smallest makespan is kept.
-  const std::vector<double> shares = {0.4, 0.5, 0.6};  // of what is left of the first round, per first try
-  struct Verified {
-    Attempt attempt;
-    TeamVerificationReport verification;
-    CoordinationMethod method = CoordinationMethod::kAuto;
-    double makespan = 0.0;
-  };
-  std::optional<Verified> best;
-  std::vector<CoordinationMethod> stopped;  // methods whose share ran out, in order
-  const auto run = [&](CoordinationMethod method, const Termination& stage) {
-    const Clock::time_point t_method = Clock::now();
-    MethodAttemptReport report;
-    report.method = method;
-    Attempt attempt = RunMethod(method, stage);
-    TeamVerificationReport verification;
-    if (method == CoordinationMethod::kFleet && fleet_) {
-      verification = fleet_->verification;  // its own: the lattice and dependencies prove it (fleet.h)
-    } else if (attempt.ok) {
-      const std::string failure = Verify(attempt, &verification);
-      if (!failure.empty()) {
-        attempt.ok = false;
-        attempt.message = "its result failed the joint verification: " + failure;
-      }
-    }
-    report.seconds = SecondsSince(t_method);
-    report.succeeded = attempt.ok;
-    report.message = attempt.message;
-    if (attempt.ok) {
-      for (const TimedTrajectory& t : attempt.trajectories) report.makespan = std::max(report.makespan, t.duration());
-      if (!best || report.makespan < best->makespan) {
-        best = Verified{std::move(attempt), verification, method, report.makespan};
-      }
-    } else if ((attempt.out_of_time || stage.ShouldStop()) && !termination_.ShouldStop()) {
-      stopped.push_back(method);
-    }
-    out.attempts.push_back(report);
-  };
-  // With several methods the first tries share 60 % of the budget (the last of them what is left
-  // of that), so the methods they stopped come back with at least 40 % of it.
-  const Termination first_round =
-      methods.size() == 1 ? termination_
-                          : termination_.WithBudget(std::chrono::duration<double>(0.6 * termination_.SecondsLeft()));
-  for (std::size_t i = 0; i < methods.size() && !best; ++i) {
-    if (termination_.ShouldStop()) break;
-    const bool last = i + 1 == methods.size();
-    const double share = methods.size() == 1 || last ? 1.0 : shares[std::min(i, shares.size() - 1)];
-    run(methods[i], first_round.WithBudget(std::chrono::duration<double>(share * first_round.SecondsLeft())));
-  }
-  if (methods.size() > 1) {
-    // After a success, only the methods tried before it come back (they may find a shorter
-    // makespan); each gets an equal part of what is left.
-    const std::vector<CoordinationMethod> again = stopped;
-    for (std::size_t j = 0; j < again.size(); ++j) {
-      if (termination_.ShouldStop()) break;
-      const double share = 1.0 / static_cast<double>(again.size() - j);
-      run(again[j], termination_.WithBudget(std::chrono::duration<double>(share * termination_.SecondsLeft())));
-    }
-  }
+  // 3. The methods, then 4. the result.
+  const std::optional<Verified> best = RunMethods(Methods(), &out.attempts);
   if (best) {
-    Attempt& attempt = best->attempt;
-    out.verification = best->verification;
-    const CoordinationMethod method = best->method;
-    if (method == CoordinationMethod::kFleet && fleet_) out.fleet = fleet_->summary;
-    // 4. The result.
-    out.method = method;
-    for (int k : attempt.order) out.order.push_back(members_[k].placement.name);
-    out.reorderings = attempt.reorderings;
-    for (int k = 0; k < n; ++k) {
-      const Member& m = members_[k];
-      RobotPlan plan;
-      plan.name = m.placement.name;
-      plan.trajectory = attempt.trajectories[k];
-      plan.duration = plan.trajectory.duration();
-      plan.start_delay = attempt.start_delay[k];
-      plan.wait_time = attempt.wait_time[k];
-      plan.path = attempt.paths[k];
-      plan.goal = m.goal;
-      plan.limits = m.limits;
-      // Gravity in the robot's base frame, for its torques.
-      const Eigen::Vector3d gravity = m.placement.base_pose.linear().transpose() * Eigen::Vector3d(0.0, 0.0, -9.81);
-      if (!query_.knots_replace_samples || plan.trajectory.degree() > 2) {
-        plan.samples = SampleTrajectory(plan.trajectory, *m.placement.model, query_.sample_period, gravity,
-                                        query_.sample_cap);
-      }
-      out.makespan = std::max(out.makespan, plan.duration);
-      out.sum_of_durations += plan.duration;
-      out.robots.push_back(std::move(plan));
-    }
-    return finish(CoordinationCode::kSuccess, std::string(ToString(method)) + ": " + attempt.message);
+    TakeResult(*best, &out);
+    return finish(CoordinationCode::kSuccess, std::string(ToString(best->method)) + ": " + best->attempt.message);
   }
   const StopReason reason = termination_.Reason();
   if (reason == StopReason::kCancelled) return finish(CoordinationCode::kCancelled, "cancelled");

@@ -178,7 +178,7 @@ FleetAttempt RunFleet(const CoordinationQuery& query, const std::vector<FleetMem
   // A lattice whose free nodes are joined by a blocked edge is planned with one end of each
   // such edge blocked, so every move between free neighbours is along a free edge.
   const GridMap map = lattice->blocked_edges().empty() ? lattice->map() : lattice->NodeBlockingMap();
-  for (std::uint8_t blocked : map.blocked) summary.free_nodes += blocked == 0 ? 1 : 0;
+  summary.free_nodes = static_cast<int>(std::count(map.blocked.begin(), map.blocked.end(), 0));
   for (std::size_t k = 0; k < n; ++k) {
     for (const auto& [cell, what] : {std::pair<GridCell, const char*>{starts[k], "start"}, {goals[k], "goal"}}) {
       if (map.blocked[static_cast<std::size_t>(cell)] == 0) continue;
