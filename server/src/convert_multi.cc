@@ -33,6 +33,13 @@ void ToProto(const Eigen::VectorXd& v, google::protobuf::RepeatedField<double>* 
 
 }  // namespace
 
+void CheckTeamSize(const v1::CoordinateRequest& request, int max_robots) {
+  if (request.robots_size() == 0 || request.robots_size() > max_robots) {
+    ThrowInvalid("robots has " + std::to_string(request.robots_size()) + " entries; a team has 1 to " +
+                 std::to_string(max_robots) + " robots on this server (chasles-server --max-team-robots)");
+  }
+}
+
 bool KnotsFor(const v1::CoordinateRequest& request) {
   return request.knots_only() || request.robots_size() > kMaxTeamForSamplesByDefault;
 }
@@ -44,10 +51,7 @@ CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& reques
   const double bounds_tolerance = BoundsToleranceFromProto(request.bounds_tolerance());
   query.scene = std::move(scene);
   query.max_robots = max_robots;
-  if (request.robots_size() == 0 || request.robots_size() > max_robots) {
-    ThrowInvalid("robots has " + std::to_string(request.robots_size()) + " entries; a team has 1 to " +
-                 std::to_string(max_robots) + " robots on this server (chasles-server --max-team-robots)");
-  }
+  CheckTeamSize(request, max_robots);
   for (int k = 0; k < request.robots_size(); ++k) {
     const v1::TeamRobot& r = request.robots(k);
     const std::string field = Indexed("robots", k);

@@ -432,35 +432,10 @@ class PlanningService final : public RawService {
           const StoredScene scene = SceneOfRequest(*store_, request);
           response.set_scene_id(scene.id);
           std::vector<std::string> warnings;
-          // Robots with a planning group: held outside it where their start puts them, their
-          // start and goal narrowed to the group ("robots[k]" → the held model).
+          // Robots with a planning group: held outside it where their start puts them.
           v1::CoordinateRequest grouped;
           std::map<std::string, std::shared_ptr<const RobotModel>> held;
-          if (std::any_of(request.robots().begin(), request.robots().end(),
-                          [](const v1::TeamRobot& r) { return !r.group().empty(); })) {
-            if (request.robots_size() > options_.max_team_robots) {
-              ThrowInvalid("robots has " + std::to_string(request.robots_size()) + " entries; a team has 1 to " +
-                           std::to_string(options_.max_team_robots) + " robots on this server");
-            }
-            grouped = request;
-            const double tolerance = BoundsToleranceFromProto(request.bounds_tolerance());
-            for (int k = 0; k < grouped.robots_size(); ++k) {
-              v1::TeamRobot& robot = *grouped.mutable_robots(k);
-              if (robot.group().empty()) continue;
-              const std::string field = "robots[" + std::to_string(k) + "]";
-              if (robot.target_case() == v1::TeamRobot::kPoseGoal) {
-                ThrowInvalid(field + ".group = '" + robot.group() + "' cannot be combined with " + field +
-                             ".pose_goal: give a joint goal");
-              }
-              const StoredRobot stored = TeamRobotOf(robot, field);
-              const PlanningGroup& group = FindGroup(stored, robot.group(), field + ".group");
-              const Eigen::VectorXd start = TakeHeldState(robot.mutable_start()->mutable_positions(), *stored.model, group,
-                                                          field + ".start.positions", tolerance, &warnings);
-              NarrowPositions(robot.mutable_goal()->mutable_positions(), *stored.model, group, start,
-                              field + ".goal.positions", field + ".start.positions", "the start", tolerance, &warnings);
-              held[field] = HoldOutside(stored, group, start).model;
-            }
-          }
+          NarrowTeamToGroups(request, &grouped, &held, &warnings);
           const v1::CoordinateRequest& team = grouped.robots_size() > 0 ? grouped : request;
           CoordinationQuery query = CoordinationQueryFromProto(
               team, scene.scene,
@@ -924,8 +899,7 @@ class PlanningService final : public RawService {
   /// names the group and the held values exactly (hex floats), so two states never share a
   /// cached checker.
   static StoredRobot HoldOutside(const StoredRobot& robot, const PlanningGroup& group, const Eigen::VectorXd& state) {
-    std::vector<char> in_group(static_cast<std::size_t>(robot.model->num_dofs()), 0);
-    for (int dof : group.dofs) in_group[static_cast<std::size_t>(dof)] = 1;
+    const std::vector<char> in_group = InGroup(*robot.model, group);
     std::string id = robot.id + "/group=" + group.name + "/held=";
     for (int i = 0; i < robot.model->num_dofs(); ++i) {
       if (in_group[static_cast<std::size_t>(i)]) continue;
@@ -959,8 +933,7 @@ class PlanningService final : public RawService {
     const int given = values->size();
     if (given == model.num_dofs() && static_cast<int>(dofs.size()) != model.num_dofs()) {
       const Eigen::VectorXd full = ConfigurationFromProto(*values, model, field, tolerance, warnings);
-      std::vector<char> in_group(static_cast<std::size_t>(model.num_dofs()), 0);
-      for (int dof : dofs) in_group[static_cast<std::size_t>(dof)] = 1;
+      const std::vector<char> in_group = InGroup(model, group);
       for (int i = 0; i < model.num_dofs(); ++i) {
         if (in_group[static_cast<std::size_t>(i)] || full[i] == held[i]) continue;
         ThrowInvalid(field + "[" + std::to_string(i) + "] = " + FormatNumber(full[i]) + " differs from " +
@@ -977,6 +950,30 @@ class PlanningService final : public RawService {
                    GroupJointNames(model, group) + "): give those, or all " + std::to_string(model.num_dofs()) +
                    " of the robot's joints");
     }
+  }
+
+  /// Per joint of `model`: 1 when `group` moves it.
+  static std::vector<char> InGroup(const RobotModel& model, const PlanningGroup& group) {
+    std::vector<char> in_group(static_cast<std::size_t>(model.num_dofs()), 0);
+    for (int dof : group.dofs) in_group[static_cast<std::size_t>(dof)] = 1;
+    return in_group;
+  }
+
+  /// Velocities or accelerations given for every joint narrowed to the group's (those outside it
+  /// must be 0: they stand still); given for the group's joints, or none, they are kept.
+  /// \throws Error(kInvalidArgument) naming `field` and the index.
+  static void NarrowDerivatives(google::protobuf::RepeatedField<double>* values, const RobotModel& model,
+                                const PlanningGroup& group, const std::string& field) {
+    if (values->size() != model.num_dofs() || static_cast<int>(group.dofs.size()) == model.num_dofs()) return;
+    const std::vector<char> in_group = InGroup(model, group);
+    for (int i = 0; i < model.num_dofs(); ++i) {
+      if (in_group[static_cast<std::size_t>(i)] || values->Get(i) == 0.0) continue;
+      ThrowInvalid(field + "[" + std::to_string(i) + "] = " + FormatNumber(values->Get(i)) + " but joint '" +
+                   model.dof_names()[i] + "' is not in group '" + group.name + "' and stands still");
+    }
+    google::protobuf::RepeatedField<double> narrowed;
+    for (int dof : group.dofs) narrowed.Add(values->Get(dof));
+    values->Swap(&narrowed);
   }
 
   /// The full state a grouped request holds the other joints at (every joint, validated and
@@ -1037,24 +1034,8 @@ class PlanningService final : public RawService {
           NarrowPositions(point->mutable_positions(), model, group, held, field + ".positions",
                           "trajectory.points[0].positions", "the first waypoint", tolerance, warnings);
         }
-        // Derivatives of every joint: those outside the group must be 0 (they stand still).
-        for (auto* values : {point->mutable_velocities(), point->mutable_accelerations()}) {
-          if (values->size() != model.num_dofs() || static_cast<int>(group.dofs.size()) == model.num_dofs()) continue;
-          const Eigen::VectorXd zero = Eigen::VectorXd::Zero(model.num_dofs());
-          Eigen::VectorXd full(model.num_dofs());
-          for (int i = 0; i < model.num_dofs(); ++i) full[i] = values->Get(i);
-          std::vector<char> in_group(static_cast<std::size_t>(model.num_dofs()), 0);
-          for (int dof : group.dofs) in_group[static_cast<std::size_t>(dof)] = 1;
-          for (int i = 0; i < model.num_dofs(); ++i) {
-            if (!in_group[static_cast<std::size_t>(i)] && full[i] != 0.0) {
-              ThrowInvalid(field + (values == point->mutable_velocities() ? ".velocities[" : ".accelerations[") +
-                           std::to_string(i) + "] = " + FormatNumber(full[i]) + " but joint '" + model.dof_names()[i] +
-                           "' is not in group '" + group.name + "' and stands still");
-            }
-          }
-          values->Clear();
-          for (int dof : group.dofs) values->Add(full[dof]);
-        }
+        NarrowDerivatives(point->mutable_velocities(), model, group, field + ".velocities");
+        NarrowDerivatives(point->mutable_accelerations(), model, group, field + ".accelerations");
       }
       trajectory->clear_joint_names();
       for (int dof : group.dofs) trajectory->add_joint_names(model.dof_names()[dof]);
@@ -1062,6 +1043,38 @@ class PlanningService final : public RawService {
       ThrowInvalid("path and trajectory are both empty: give the waypoints to optimize");
     }
     return HoldOutside(robot, group, held);
+  }
+
+  /// TeamRobot.group: when some robot of `request` names a group, *grouped is the request with
+  /// those robots' start and goal narrowed to their group, and held["robots[k]"] robot k held
+  /// outside its group where its start puts it; else both are left empty. Values clamped within
+  /// bounds_tolerance are reported in *warnings. \throws Error(kInvalidArgument) naming the field.
+  void NarrowTeamToGroups(const v1::CoordinateRequest& request, v1::CoordinateRequest* grouped,
+                          std::map<std::string, std::shared_ptr<const RobotModel>>* held,
+                          std::vector<std::string>* warnings) {
+    if (std::none_of(request.robots().begin(), request.robots().end(),
+                     [](const v1::TeamRobot& r) { return !r.group().empty(); })) {
+      return;
+    }
+    CheckTeamSize(request, options_.max_team_robots);  // before any robot is resolved
+    *grouped = request;
+    const double tolerance = BoundsToleranceFromProto(request.bounds_tolerance());
+    for (int k = 0; k < grouped->robots_size(); ++k) {
+      v1::TeamRobot& robot = *grouped->mutable_robots(k);
+      if (robot.group().empty()) continue;
+      const std::string field = "robots[" + std::to_string(k) + "]";
+      if (robot.target_case() == v1::TeamRobot::kPoseGoal) {
+        ThrowInvalid(field + ".group = '" + robot.group() + "' cannot be combined with " + field +
+                     ".pose_goal: give a joint goal");
+      }
+      const StoredRobot stored = TeamRobotOf(robot, field);
+      const PlanningGroup& group = FindGroup(stored, robot.group(), field + ".group");
+      const Eigen::VectorXd start = TakeHeldState(robot.mutable_start()->mutable_positions(), *stored.model, group,
+                                                  field + ".start.positions", tolerance, warnings);
+      NarrowPositions(robot.mutable_goal()->mutable_positions(), *stored.model, group, start, field + ".goal.positions",
+                      field + ".start.positions", "the start", tolerance, warnings);
+      (*held)[field] = HoldOutside(stored, group, start).model;
+    }
   }
 
   /// InverseKinematicsRequest.group: the robot with every joint outside the group held where

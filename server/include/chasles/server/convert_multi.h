@@ -42,6 +42,10 @@ v1::PlanOutcome CoordinationCodeToProto(CoordinationCode code);
 void CoordinationOutcomeToProto(const CoordinationOutcome& outcome, const CoordinationQuery& query,
                                 v1::CoordinateResponse* response, bool knots = false);
 
+/// \throws Error(kInvalidArgument) for no robots or more than `max_robots` (--max-team-robots),
+///         before any robot is resolved.
+void CheckTeamSize(const v1::CoordinateRequest& request, int max_robots);
+
 /// Teams larger than this get knots and no samples unless sample_period is set.
 inline constexpr int kMaxTeamForSamplesByDefault = 16;
 /// Whether a Coordinate response carries knots: knots_only, or a team of more than
