@@ -24,6 +24,7 @@
 #include "chasles/robot/error.h"
 #include "chasles/server/benchmark_report.h"
 #include "chasles/server/convert.h"
+#include "chasles/server/groups.h"
 #include "chasles/server/heap_tracking.h"
 #include "chasles/server/status.h"
 
@@ -250,18 +251,18 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
     const std::size_t P = problem_names_.size(), C = config_names_.size();
     queries_.resize(P * C);
     for (std::size_t p = 0; p < P; ++p) {
-      const v1::PlanRequest& problem = r.problems(static_cast<int>(p)).request();
       const std::string prefix = "problems[" + std::to_string(p) + "].request.";
+      v1::PlanRequest problem = r.problems(static_cast<int>(p)).request();
       if (problem.has_workcell()) ThrowInvalid(prefix + "workcell is set; benchmarks plan without workcells");
-      if (!problem.group().empty()) {
-        ThrowInvalid(prefix + "group = '" + problem.group() +
-                     "' is set; benchmark problems plan every joint of their robot (plan a group with Plan)");
-      }
       StoredRobot robot;
       StoredScene scene;
       double padding = 0.0;
+      std::vector<std::string> group_warnings;
       try {
         robot = RobotOfRequest(*services_.store, problem, prefix + "robot");
+        // A planning group: the robot held outside it where the start puts it, start and goal
+        // narrowed to its joints (as Plan does); clamped values are reported in the setup.
+        if (!problem.group().empty()) robot = NarrowToGroup(robot, &problem, &group_warnings, prefix);
         scene = SceneOfRequest(*services_.store, problem, prefix + "scene");
         padding = PaddingFromProto(problem.padding(), prefix + "padding");
       } catch (const Error& e) {
@@ -289,7 +290,10 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
       }
       std::ostringstream setup;
       setup << "problem " << problem_names_[p] << ": robot " << robot.model->name() << " (" << robot.id.substr(0, 12)
-            << "), scene " << scene.id.substr(0, 12) << ", " << robot.model->num_dofs() << " joints\nstart";
+            << "), scene " << scene.id.substr(0, 12) << ", " << robot.model->num_dofs() << " joints";
+      if (!problem.group().empty()) setup << " of group " << problem.group() << " (the others held at the start)";
+      for (const std::string& warning : group_warnings) setup << "\nwarning: " << warning;
+      setup << "\nstart";
       const PlanQuery& q = queries_[p * C];
       for (int i = 0; i < q.start.size(); ++i) setup << " " << FormatNumber(q.start[i]);
       if (q.pose_goal) {

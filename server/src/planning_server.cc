@@ -28,6 +28,7 @@
 #include "chasles/server/convert.h"
 #include "chasles/server/convert_multi.h"
 #include "chasles/server/default_assets.h"
+#include "chasles/server/groups.h"
 #include "chasles/server/heap_tracking.h"
 #include "chasles/server/metrics.h"
 #include "chasles/server/model_store.h"
@@ -510,7 +511,13 @@ class PlanningService final : public RawService {
                                    " (--max-samples); commit a coarser trajectory (the server interpolates between "
                                    "points with cubic Hermite pieces)");
           }
-          const StoredRobot robot = RobotOfRequest(*store_, request);
+          StoredRobot robot = RobotOfRequest(*store_, request);
+          if (!request.group().empty()) {
+            robot = NarrowToGroup(robot, request);
+          } else if (request.held_positions_size() > 0) {
+            ThrowInvalid("held_positions is set without group: name the planning group the trajectory moves, "
+                         "or send no held_positions");
+          }
           Reservation reservation;
           reservation.robot_name = request.robot_name();
           reservation.placement.name = request.robot_name();
@@ -778,18 +785,14 @@ class PlanningService final : public RawService {
     call.record.fields = {{"planner", planner}};
 
     // 1. Robot, scene and checker (parsed or cached). With a planning group, the robot with
-    //    every other joint held at the start, and the request narrowed to the group's joints.
+    //    every other joint held at the start, and the request narrowed to the group's joints
+    //    (in a workcell too: the held robot is what the other reservations see).
     const StoredRobot described = RobotOfRequest(*store_, call.request);
     StoredRobot robot = described;
     response.set_robot_id(robot.id);
     v1::PlanRequest grouped;
     std::vector<std::string> group_warnings;
     if (!call.request.group().empty()) {
-      if (call.request.has_workcell()) {
-        ThrowInvalid("group = '" + call.request.group() +
-                     "' is not supported with workcell (a workcell plans every joint of its robots); send no group, "
-                     "or plan without workcell");
-      }
       grouped = call.request;
       robot = NarrowToGroup(robot, &grouped, &group_warnings);
       call.record.fields.push_back({"group", call.request.group()});
@@ -808,7 +811,7 @@ class PlanningService final : public RawService {
       }
       // A team of one among the workcell's committed trajectories.
       call.record.fields.front().second = "workcell:" + planner;
-      std::vector<std::string> warnings;
+      std::vector<std::string> warnings = group_warnings;
       CoordinationQuery query = WorkcellPlanQuery(request, robot.model, scene.scene, registry_, &warnings);
       ApplyReplyCap(&query.sample_cap);
       query.sample_cap.field = "trajectory.sample_period";
@@ -880,171 +883,6 @@ class PlanningService final : public RawService {
     if (!status.ok()) throw StatusError{status};
   }
 
-  /// The planning group `name` of `robot`. \throws Error(kInvalidArgument) naming `field` and
-  /// listing its groups.
-  static const PlanningGroup& FindGroup(const StoredRobot& robot, const std::string& name,
-                                        const std::string& field = "group") {
-    const auto group = std::find_if(robot.groups.begin(), robot.groups.end(),
-                                    [&](const PlanningGroup& g) { return g.name == name; });
-    if (group == robot.groups.end()) {
-      std::string known;
-      for (const PlanningGroup& g : robot.groups) known += (known.empty() ? "'" : ", '") + g.name + "'";
-      ThrowInvalid(field + " = '" + name + "' is not a planning group of robot '" + robot.model->name() + "' (" +
-                   (known.empty() ? std::string("its SRDF defines none") : "its groups: " + known) + ")");
-    }
-    return *group;
-  }
-
-  /// `robot` with every joint outside `group` held where `state` (every joint) puts it; its id
-  /// names the group and the held values exactly (hex floats), so two states never share a
-  /// cached checker.
-  static StoredRobot HoldOutside(const StoredRobot& robot, const PlanningGroup& group, const Eigen::VectorXd& state) {
-    const std::vector<char> in_group = InGroup(*robot.model, group);
-    std::string id = robot.id + "/group=" + group.name + "/held=";
-    for (int i = 0; i < robot.model->num_dofs(); ++i) {
-      if (in_group[static_cast<std::size_t>(i)]) continue;
-      char text[40];
-      std::snprintf(text, sizeof(text), "%a,", state[i]);
-      id += text;
-    }
-    StoredRobot held;
-    held.id = std::move(id);
-    held.model = HoldJointsOutside(*robot.model, group.dofs, state);
-    return held;
-  }
-
-  /// The group's joints as 'a', 'b', … for messages.
-  static std::string GroupJointNames(const RobotModel& model, const PlanningGroup& group) {
-    std::string names;
-    for (int dof : group.dofs) names += (names.empty() ? "'" : ", '") + model.dof_names()[dof] + "'";
-    return names;
-  }
-
-  /// Positions of a robot narrowed to `group`: given for the group's joints (kept as they are),
-  /// or for every joint (validated and clamped as ConfigurationFromProto does, those outside the
-  /// group equal to `held`, which `held_field` gives — `held_name` in messages: "the start",
-  /// "the first waypoint"), rewritten to the group's values. \throws Error(kInvalidArgument)
-  /// naming `field`.
-  static void NarrowPositions(google::protobuf::RepeatedField<double>* values, const RobotModel& model,
-                              const PlanningGroup& group, const Eigen::VectorXd& held, const std::string& field,
-                              const std::string& held_field, const std::string& held_name, double tolerance,
-                              std::vector<std::string>* warnings) {
-    const std::vector<int>& dofs = group.dofs;
-    const int given = values->size();
-    if (given == model.num_dofs() && static_cast<int>(dofs.size()) != model.num_dofs()) {
-      const Eigen::VectorXd full = ConfigurationFromProto(*values, model, field, tolerance, warnings);
-      const std::vector<char> in_group = InGroup(model, group);
-      for (int i = 0; i < model.num_dofs(); ++i) {
-        if (in_group[static_cast<std::size_t>(i)] || full[i] == held[i]) continue;
-        ThrowInvalid(field + "[" + std::to_string(i) + "] = " + FormatNumber(full[i]) + " differs from " +
-                     held_field + "[" + std::to_string(i) + "] = " + FormatNumber(held[i]) + ", but joint '" +
-                     model.dof_names()[i] + "' is not in group '" + group.name + "' and stays where " + held_name +
-                     " puts it: give the group's joints (" + GroupJointNames(model, group) +
-                     "), or every joint with those outside the group equal to " + held_name + "'s");
-      }
-      values->Clear();
-      for (int dof : dofs) values->Add(full[dof]);
-    } else if (given != static_cast<int>(dofs.size())) {
-      ThrowInvalid(field + " has " + std::to_string(given) + " values; group '" + group.name + "' of robot '" +
-                   model.name() + "' has " + std::to_string(dofs.size()) + " joints (" +
-                   GroupJointNames(model, group) + "): give those, or all " + std::to_string(model.num_dofs()) +
-                   " of the robot's joints");
-    }
-  }
-
-  /// Per joint of `model`: 1 when `group` moves it.
-  static std::vector<char> InGroup(const RobotModel& model, const PlanningGroup& group) {
-    std::vector<char> in_group(static_cast<std::size_t>(model.num_dofs()), 0);
-    for (int dof : group.dofs) in_group[static_cast<std::size_t>(dof)] = 1;
-    return in_group;
-  }
-
-  /// Velocities or accelerations given for every joint narrowed to the group's (those outside it
-  /// must be 0: they stand still); given for the group's joints, or none, they are kept.
-  /// \throws Error(kInvalidArgument) naming `field` and the index.
-  static void NarrowDerivatives(google::protobuf::RepeatedField<double>* values, const RobotModel& model,
-                                const PlanningGroup& group, const std::string& field) {
-    if (values->size() != model.num_dofs() || static_cast<int>(group.dofs.size()) == model.num_dofs()) return;
-    const std::vector<char> in_group = InGroup(model, group);
-    for (int i = 0; i < model.num_dofs(); ++i) {
-      if (in_group[static_cast<std::size_t>(i)] || values->Get(i) == 0.0) continue;
-      ThrowInvalid(field + "[" + std::to_string(i) + "] = " + FormatNumber(values->Get(i)) + " but joint '" +
-                   model.dof_names()[i] + "' is not in group '" + group.name + "' and stands still");
-    }
-    google::protobuf::RepeatedField<double> narrowed;
-    for (int dof : group.dofs) narrowed.Add(values->Get(dof));
-    values->Swap(&narrowed);
-  }
-
-  /// The full state a grouped request holds the other joints at (every joint, validated and
-  /// clamped), its field rewritten to the group's values.
-  static Eigen::VectorXd TakeHeldState(google::protobuf::RepeatedField<double>* values, const RobotModel& model,
-                                       const PlanningGroup& group, const std::string& field, double tolerance,
-                                       std::vector<std::string>* warnings) {
-    const Eigen::VectorXd held = ConfigurationFromProto(*values, model, field, tolerance, warnings);
-    values->Clear();
-    for (int dof : group.dofs) values->Add(held[dof]);
-    return held;
-  }
-
-  /// PlanRequest.group: the robot with every joint outside the group held where the start puts
-  /// it, and the request's start and goal narrowed to the group's joints; start values clamped
-  /// within bounds_tolerance are reported in *warnings. \throws Error(kInvalidArgument) naming
-  /// the field.
-  static StoredRobot NarrowToGroup(const StoredRobot& robot, v1::PlanRequest* request,
-                                   std::vector<std::string>* warnings) {
-    const RobotModel& model = *robot.model;
-    const PlanningGroup& group = FindGroup(robot, request->group());
-    const double tolerance = BoundsToleranceFromProto(request->bounds_tolerance());
-    const Eigen::VectorXd start =
-        TakeHeldState(request->mutable_start()->mutable_positions(), model, group, "start.positions", tolerance, warnings);
-    if (request->target_case() == v1::PlanRequest::kGoal) {
-      NarrowPositions(request->mutable_goal()->mutable_positions(), model, group, start, "goal.positions",
-                      "start.positions", "the start", tolerance, warnings);
-    }
-    return HoldOutside(robot, group, start);
-  }
-
-  /// OptimizeRequest.group: the robot held outside the group where the first waypoint (path[0] or
-  /// the trajectory's first point, every joint) puts it; every waypoint narrowed to the group's
-  /// joints (velocities and accelerations of trajectory points too, given for the group or for
-  /// every joint). \throws Error(kInvalidArgument) naming the field.
-  static StoredRobot NarrowToGroup(const StoredRobot& robot, v1::OptimizeRequest* request,
-                                   std::vector<std::string>* warnings) {
-    const RobotModel& model = *robot.model;
-    const PlanningGroup& group = FindGroup(robot, request->group());
-    const double tolerance = kDefaultBoundsTolerance;
-    Eigen::VectorXd held;
-    if (request->path_size() > 0) {
-      held = TakeHeldState(request->mutable_path(0)->mutable_positions(), model, group, "path[0].positions", tolerance,
-                           warnings);
-      for (int k = 1; k < request->path_size(); ++k) {
-        NarrowPositions(request->mutable_path(k)->mutable_positions(), model, group, held,
-                        "path[" + std::to_string(k) + "].positions", "path[0].positions", "the first waypoint",
-                        tolerance, warnings);
-      }
-    } else if (request->trajectory().points_size() > 0) {
-      v1::JointTrajectory* trajectory = request->mutable_trajectory();
-      held = TakeHeldState(trajectory->mutable_points(0)->mutable_positions(), model, group,
-                           "trajectory.points[0].positions", tolerance, warnings);
-      for (int k = 0; k < trajectory->points_size(); ++k) {
-        const std::string field = "trajectory.points[" + std::to_string(k) + "]";
-        v1::TrajectoryPoint* point = trajectory->mutable_points(k);
-        if (k > 0) {
-          NarrowPositions(point->mutable_positions(), model, group, held, field + ".positions",
-                          "trajectory.points[0].positions", "the first waypoint", tolerance, warnings);
-        }
-        NarrowDerivatives(point->mutable_velocities(), model, group, field + ".velocities");
-        NarrowDerivatives(point->mutable_accelerations(), model, group, field + ".accelerations");
-      }
-      trajectory->clear_joint_names();
-      for (int dof : group.dofs) trajectory->add_joint_names(model.dof_names()[dof]);
-    } else {
-      ThrowInvalid("path and trajectory are both empty: give the waypoints to optimize");
-    }
-    return HoldOutside(robot, group, held);
-  }
-
   /// TeamRobot.group: when some robot of `request` names a group, *grouped is the request with
   /// those robots' start and goal narrowed to their group, and held["robots[k]"] robot k held
   /// outside its group where its start puts it; else both are left empty. Values clamped within
@@ -1075,23 +913,6 @@ class PlanningService final : public RawService {
                       field + ".start.positions", "the start", tolerance, warnings);
       (*held)[field] = HoldOutside(stored, group, start).model;
     }
-  }
-
-  /// InverseKinematicsRequest.group: the robot with every joint outside the group held where
-  /// initial_guess (every joint, required) puts it, and initial_guess narrowed to the group's
-  /// joints. \throws Error(kInvalidArgument) naming the field.
-  static StoredRobot NarrowToGroup(const StoredRobot& robot, v1::InverseKinematicsRequest* request) {
-    const RobotModel& model = *robot.model;
-    const PlanningGroup& group = FindGroup(robot, request->group());
-    if (request->initial_guess_size() != model.num_dofs()) {
-      ThrowInvalid("initial_guess has " + std::to_string(request->initial_guess_size()) + " values; with group '" +
-                   group.name + "' it must hold all " + std::to_string(model.num_dofs()) + " joints of robot '" +
-                   model.name() + "': those outside the group are held at them");
-    }
-    const Eigen::VectorXd guess = ConfigurationFromProto(request->initial_guess(), model, "initial_guess");
-    request->clear_initial_guess();
-    for (int dof : group.dofs) request->add_initial_guess(guess[dof]);
-    return HoldOutside(robot, group, guess);
   }
 
   /// A plan's warnings: an inline robot's load warnings (an uploaded one reported them at

@@ -461,6 +461,83 @@ TEST_F(RobotsAsShipped, CoordinateMovesEachRobotsPlanningGroup) {
             "'arm_with_torso')");
 }
 
+// PlanRequest.group in a workcell, and CommitTrajectoryRequest.group: the group's trajectory is
+// committed as Plan returns it, the robot's other joints standing at held_positions; a second
+// robot in the same place at the same time is a conflict; a group trajectory committed without
+// the group, or held_positions without a group or of the wrong size, is a named error.
+TEST_F(RobotsAsShipped, AWorkcellPlansAndCommitsAPlanningGroup) {
+  const v1::UploadRobotResponse uploaded = UploadMobileManipulator();
+  ASSERT_FALSE(uploaded.robot_id().empty());
+  {
+    v1::CreateWorkcellRequest create;
+    create.set_name("group_cell");
+    v1::CreateWorkcellResponse created;
+    grpc::ClientContext context;
+    ASSERT_TRUE(server_->stub().CreateWorkcell(&context, create, &created).ok());
+  }
+  const double start[8] = {0.2, 0.0, 0.3, 0.0, 1.0, 0.0, 0.6, 0.0};
+  const double goal[7] = {0.9, -0.4, 0.5, 1.2, -0.4, 0.9, 0.3};
+  v1::PlanRequest request;
+  request.set_robot_id(uploaded.robot_id());
+  request.mutable_scene();
+  request.set_group("arm");
+  request.mutable_workcell()->set_name("group_cell");
+  request.mutable_workcell()->set_robot_name("left");
+  for (double v : start) request.mutable_start()->add_positions(v);
+  for (double v : goal) request.mutable_goal()->add_positions(v);
+  v1::PlanResponse planned;
+  grpc::Status status = server_->Plan(request, &planned);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(planned.outcome(), v1::SUCCESS) << planned.message();
+  ASSERT_EQ(planned.trajectory().joint_names_size(), 7);
+  const v1::TrajectoryPoint& last = planned.trajectory().points(planned.trajectory().points_size() - 1);
+  ASSERT_EQ(last.positions_size(), 7);
+  for (int i = 0; i < 7; ++i) EXPECT_NEAR(last.positions(i), goal[i], 1e-9);
+
+  const auto commit = [&](const std::string& robot_name, const std::string& group, int held,
+                          v1::CommitTrajectoryResponse* response) {
+    v1::CommitTrajectoryRequest c;
+    c.set_workcell("group_cell");
+    c.set_robot_name(robot_name);
+    c.set_robot_id(uploaded.robot_id());
+    c.set_group(group);
+    for (int i = 0; i < held; ++i) c.add_held_positions(start[i]);
+    *c.mutable_trajectory() = planned.trajectory();
+    c.set_hold(600.0);  // from now, held at its end for 10 min: the second commit overlaps it
+    grpc::ClientContext context;
+    return server_->stub().CommitTrajectory(&context, c, response);
+  };
+  v1::CommitTrajectoryResponse committed;
+  status = commit("left", "arm", 8, &committed);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(committed.active_reservations(), 1u);
+
+  // The same robot model in the same place at the same time: the held torso and arm overlap.
+  status = commit("right", "arm", 8, &committed);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << status.error_message();
+  EXPECT_NE(status.error_message().find("conflicts with a committed one"), std::string::npos) << status.error_message();
+
+  status = commit("right", "arm", 7, &committed);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message(),
+            "held_positions has 7 values; with group 'arm' it must hold all 8 joints of robot 'mobile_manipulator': "
+            "those outside the group stand there while the trajectory moves the group's 7 ('shoulder_pan_joint', "
+            "'shoulder_lift_joint', 'upperarm_roll_joint', 'elbow_flex_joint', 'forearm_roll_joint', "
+            "'wrist_flex_joint', 'wrist_roll_joint')");
+  status = commit("right", "", 8, &committed);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message(),
+            "held_positions is set without group: name the planning group the trajectory moves, or send no "
+            "held_positions");
+  status = commit("right", "", 0, &committed);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  status = commit("right", "legs", 8, &committed);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message(),
+            "group = 'legs' is not a planning group of robot 'mobile_manipulator' (its groups: 'arm', "
+            "'arm_with_torso')");
+}
+
 // InverseKinematicsRequest.group: only the group's joints move, the others held at
 // initial_guess; every solution, put back into the whole robot, reaches the pose (checked here
 // with the robot's own forward kinematics).
