@@ -22,6 +22,8 @@
 #include "chasles/collision/scene.h"
 #include "chasles/multi/fleet.h"
 #include "chasles/multi/fleet_lattice.h"
+#include "chasles/multi/fleet_session.h"
+#include "chasles/multi/grid_mapf.h"
 #include "chasles/robot/error.h"
 #include "chasles/robot/mobile.h"
 
@@ -989,6 +991,255 @@ TEST(FleetSchedule, HundredRobotsOnAClutteredLattice) {
   const Certificate late_certificate = CertifyFleet(Trajectories(delayed), bodies, padding, boxes, 0.0, 0.5, g.origin,
                                                     g.Position(g.num_cells() - 1));
   EXPECT_TRUE(late_certificate.ok) << late_certificate.failure;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Lifelong operation (multi/fleet_session.h): goals keep coming, one robot at a time.
+
+/// What each robot actually executes: its plan from each plan's start until the next plan of it
+/// starts, as one trajectory from t = 0.
+class Executed {
+ public:
+  explicit Executed(const FleetSession& session) {
+    for (int i = 0; i < session.num_robots(); ++i) Record(session, i);
+  }
+  void Record(const FleetSession& session, int robot) {
+    const FleetSessionPlan& plan = session.plan(robot);
+    segments_.resize(static_cast<std::size_t>(session.num_robots()));
+    segments_[static_cast<std::size_t>(robot)].push_back({plan.start_time, plan.trajectory});
+  }
+  /// Robot's executed trajectory; *handover_gap the largest jump in position or velocity where
+  /// one plan hands over to the next.
+  TimedTrajectory Of(int robot, double* handover_gap) const {
+    const auto& segments = segments_[static_cast<std::size_t>(robot)];
+    std::vector<TimedTrajectory::Piece> pieces;
+    for (std::size_t k = 0; k < segments.size(); ++k) {
+      const double from = segments[k].first;
+      const double until = k + 1 < segments.size() ? segments[k + 1].first : kInf;
+      if (k + 1 < segments.size()) {
+        const TrajectorySample old_end = segments[k].second.Evaluate(until - from);
+        const TrajectorySample next = segments[k + 1].second.Evaluate(0.0);
+        *handover_gap = std::max({*handover_gap, (old_end.q - next.q).norm(), old_end.qd.norm(), next.qd.norm()});
+      }
+      for (TimedTrajectory::Piece piece : segments[k].second.pieces()) {
+        piece.t0 += from;
+        if (piece.t0 >= until) break;
+        piece.duration = std::min(piece.duration, until - piece.t0);
+        if (piece.duration <= 0.0 && !pieces.empty()) continue;
+        if (!pieces.empty()) {
+          // A hold before the plan starts (the robot stood until `from`).
+          const auto& last = pieces.back();
+          if (piece.t0 > last.t0 + last.duration + 1e-12) {
+            Eigen::VectorXd at = Eigen::VectorXd::Zero(3);
+            for (int i = 0; i < 3; ++i) {
+              double x, v, a;
+              EvalPoly(last.coefficients, i, last.duration, &x, &v, &a);
+              at[i] = x;
+            }
+            pieces.push_back(LinePiece(last.t0 + last.duration, piece.t0 - last.t0 - last.duration, at,
+                                       Eigen::VectorXd::Zero(3), 0.0, 0.0, 0.0));
+          }
+        }
+        pieces.push_back(piece);
+      }
+    }
+    return TimedTrajectory(std::move(pieces), segments.back().second.Evaluate(kInf).q);
+  }
+
+ private:
+  std::vector<std::vector<std::pair<double, TimedTrajectory>>> segments_;
+};
+
+/// The free cells of `map` as upright boxes (one per blocked cell) in a scene, and the lattice
+/// built from it with footprint `radius`.
+std::shared_ptr<const FleetLattice> SceneLattice(const GridMap& map, double s, double radius, Scene* scene,
+                                                 std::vector<UprightBox>* boxes) {
+  for (int y = 0; y < map.height; ++y) {
+    for (int x = 0; x < map.width; ++x) {
+      if (map.blocked[static_cast<std::size_t>(y * map.width + x)]) AddBox(scene, boxes, Box(x * s, y * s, 0.5 * s, 0.5 * s));
+    }
+  }
+  FleetLatticeRequest request;
+  request.spacing = s;
+  request.lower = Eigen::Vector2d(0, 0);
+  request.upper = Eigen::Vector2d((map.width - 1) * s, (map.height - 1) * s) + Eigen::Vector2d::Constant(1e-12);
+  request.footprint = {radius, 0.0, 0.5};
+  return std::make_shared<const FleetLattice>(BuildFleetLattice(*scene, request));
+}
+
+TEST(FleetSession, GoalsKeepComingAndEveryRobotStaysApart) {
+  // 100 robots in a warehouse of shelf rows; 400 goals, each to the robot that is idle first (and
+  // every fourth to a robot still on its way, which finishes its run and turns to the new goal).
+  // Every executed trajectory is then certified independently at 1 ms: pairs, shelves, limits.
+  const GridMap map = WarehouseGridMap(60, 30, 8, 2, 8);
+  const double s = 1.0, radius = 0.3, padding = 0.3;
+  Scene scene;
+  std::vector<UprightBox> boxes;
+  const std::shared_ptr<const FleetLattice> lattice = SceneLattice(map, s, radius, &scene, &boxes);
+  std::vector<GridCell> starts, goals;
+  const int n = 100;
+  RandomScenario(map, n, 11, &starts, &goals);
+  std::vector<FleetSessionRobot> robots(n);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int i = 0; i < n; ++i) {
+    robots[i].pose << lattice->geometry().Position(starts[i]).x(), lattice->geometry().Position(starts[i]).y(),
+        unit(rng) * kPi;
+    if (i % 4 == 0) robots[i].max_velocity = Eigen::Vector3d(0.6, 0.6, 1.0);
+  }
+  FleetSession session(lattice, robots, 0.0);
+  Executed executed(session);
+  std::vector<GridCell> free_cells;
+  for (GridCell c = 0; c < lattice->geometry().num_cells(); ++c) {
+    if (lattice->node_free(c)) free_cells.push_back(c);
+  }
+  int solved = 0, moved_aside = 0, orders = 0, deferred = 0;
+  double now = 0.0, slowest = 0.0;
+  const int goals_total = 400;
+  for (int k = 0; k < goals_total; ++k) {
+    int robot = 0;
+    if (k % 4 == 3) {
+      robot = static_cast<int>(unit(rng) * n);
+    } else {
+      for (int i = 1; i < n; ++i) {
+        if (session.plan(i).finish_time < session.plan(robot).finish_time) robot = i;
+      }
+      now = std::max(now, session.plan(robot).finish_time);
+    }
+    now += 0.05;
+    // A free node no other robot is bound for (as a dispatcher assigns; a goal where another
+    // robot is going to park is a named failure, tested below).
+    GridCell cell = -1;
+    while (cell < 0) {
+      cell = free_cells[static_cast<std::size_t>(unit(rng) * free_cells.size())];
+      for (int i = 0; i < n && cell >= 0; ++i) {
+        const Eigen::Vector2d end = session.plan(i).trajectory.Evaluate(kInf).q.head<2>();
+        if (i != robot && end == lattice->geometry().Position(cell)) cell = -1;
+      }
+    }
+    const Eigen::Vector2d xy = lattice->geometry().Position(cell);
+    const FleetGoalOutcome outcome = session.Assign(robot, Eigen::Vector3d(xy.x(), xy.y(), unit(rng) * kPi), now);
+    slowest = std::max(slowest, outcome.seconds);
+    if (outcome.code != FleetGoalCode::kSuccess) {
+      // A robot bound for a node on every way there: as a dispatcher would, retry once every
+      // robot is idle (then any robot in the way steps aside).
+      ASSERT_NE(outcome.message.find("is going to park at"), std::string::npos) << outcome.message;
+      EXPECT_TRUE(outcome.robots.empty());
+      ++deferred;
+      for (int i = 0; i < n; ++i) now = std::max(now, session.plan(i).finish_time);
+      const FleetGoalOutcome again = session.Assign(robot, Eigen::Vector3d(xy.x(), xy.y(), 0.0), now);
+      ASSERT_EQ(again.code, FleetGoalCode::kSuccess) << "goal " << k << ": " << again.message;
+      for (int r : again.robots) executed.Record(session, r);
+      moved_aside += static_cast<int>(again.robots.size()) - 1;
+      ++solved;
+      continue;
+    }
+    ++solved;
+    ASSERT_EQ(outcome.robots.front(), robot);
+    moved_aside += static_cast<int>(outcome.robots.size()) - 1;
+    orders += static_cast<int>(outcome.orders.size());
+    for (const FleetSessionOrder& order : outcome.orders) EXPECT_LE(order.leaves, order.enters + 1e-9);
+    for (int r : outcome.robots) {
+      EXPECT_GE(session.plan(r).start_time, now - 1e-12);
+      executed.Record(session, r);
+    }
+    const Eigen::Vector3d end = session.plan(robot).trajectory.Evaluate(kInf).q;
+    EXPECT_EQ(end.head<2>(), xy);
+  }
+  EXPECT_EQ(solved, goals_total);
+  EXPECT_GT(moved_aside, 0);
+  EXPECT_GT(orders, 0);
+  std::vector<TimedTrajectory> trajectories;
+  std::vector<Body> bodies;
+  double handover_gap = 0.0;
+  for (int i = 0; i < n; ++i) {
+    trajectories.push_back(executed.Of(i, &handover_gap));
+    Body body;
+    body.radius = radius;
+    body.max_velocity = robots[i].max_velocity;
+    body.max_acceleration = robots[i].max_acceleration;
+    body.start = robots[i].pose;
+    body.start.head<2>() = lattice->geometry().Position(starts[i]);
+    body.goal = trajectories.back().Evaluate(kInf).q;
+    bodies.push_back(body);
+  }
+  EXPECT_LE(handover_gap, 1e-9);
+  const Certificate certificate = CertifyFleet(trajectories, bodies, padding - 0.01, boxes, 0.0, 0.5,
+                                               lattice->geometry().origin,
+                                               lattice->geometry().Position(lattice->geometry().num_cells() - 1));
+  EXPECT_TRUE(certificate.ok) << certificate.failure;
+  EXPECT_GE(certificate.min_pair_gap, 0.0);
+  EXPECT_GE(certificate.min_obstacle_gap, 0.0);
+  std::cout << "[ session  ] " << solved << "/" << goals_total << " goals (" << deferred << " deferred), " << moved_aside
+            << " idle robots moved aside, slowest goal " << slowest * 1e3 << " ms, horizon " << now << " s, "
+            << certificate.samples << " samples, min pair gap " << certificate.min_pair_gap << " m\n";
+}
+
+TEST(FleetSession, AnIdleRobotInTheWayStepsAsideAndFailuresChangeNothing) {
+  // A corridor one node wide with a bay (cells 0..7, bay 11 above 3): robot 1 idles in the
+  // corridor at 5; robot 0 at 0 is sent to 7. Robot 1 must duck into the bay first.
+  GridMap map;
+  map.width = 8;
+  map.height = 2;
+  map.blocked.assign(16, 1);
+  for (int c = 0; c < 8; ++c) map.blocked[c] = 0;
+  map.blocked[11] = 0;
+  Scene scene;
+  std::vector<UprightBox> boxes;
+  const auto lattice = SceneLattice(map, 1.0, 0.3, &scene, &boxes);
+  std::vector<FleetSessionRobot> robots(2);
+  robots[0].pose = Eigen::Vector3d(0, 0, 0);
+  robots[1].pose = Eigen::Vector3d(5, 0, 0);
+  FleetSession session(lattice, robots, 10.0);
+  Executed executed(session);
+  const FleetGoalOutcome outcome = session.Assign(0, Eigen::Vector3d(7, 0, kPi / 2), 10.0);
+  ASSERT_EQ(outcome.code, FleetGoalCode::kSuccess) << outcome.message;
+  ASSERT_EQ(outcome.robots, (std::vector<int>{0, 1}));
+  EXPECT_EQ(session.PoseAt(1, 1e6).head<2>(), Eigen::Vector2d(3, 1));  // in the bay
+  EXPECT_EQ(session.PoseAt(0, 1e6), Eigen::Vector3d(7, 0, kPi / 2));
+  for (int r : outcome.robots) executed.Record(session, r);
+  // Robot 0 passes 3 and 4 only after robot 1 has left them.
+  bool ordered = false;
+  for (const FleetSessionOrder& order : outcome.orders) ordered |= order.before_robot == 1 && order.after_robot == 0;
+  EXPECT_TRUE(ordered);
+  double gap = 0.0;
+  std::vector<TimedTrajectory> trajectories = {executed.Of(0, &gap), executed.Of(1, &gap)};
+  std::vector<Body> bodies(2);
+  for (int i = 0; i < 2; ++i) {
+    bodies[i].radius = 0.3;
+    bodies[i].start = robots[i].pose;
+    bodies[i].goal = trajectories[i].Evaluate(kInf).q;
+  }
+  const Certificate certificate =
+      CertifyFleet(trajectories, bodies, 0.3, boxes, 0.0, 0.5, Eigen::Vector2d(0, 0), Eigen::Vector2d(7, 1));
+  EXPECT_TRUE(certificate.ok) << certificate.failure;
+
+  // An idle robot on the goal steps aside too: robot 1 sent to 7, where robot 0 stands idle.
+  const FleetGoalOutcome swap = session.Assign(1, Eigen::Vector3d(7, 0, 0), 100.0);
+  ASSERT_EQ(swap.code, FleetGoalCode::kSuccess) << swap.message;
+  EXPECT_EQ(swap.robots, (std::vector<int>{1, 0}));
+  // A goal where a moving robot is going to park is a named failure that changes nothing.
+  ASSERT_EQ(session.Assign(0, Eigen::Vector3d(0, 0, 0), 200.0).code, FleetGoalCode::kSuccess);
+  const FleetSessionPlan before = session.plan(1);
+  const FleetGoalOutcome blocked = session.Assign(1, Eigen::Vector3d(0, 0, 0), 200.5);
+  EXPECT_EQ(blocked.message, "the goal node (cell 0) is where robot 0 is going to park");
+  EXPECT_NE(blocked.code, FleetGoalCode::kSuccess);
+  EXPECT_FALSE(blocked.message.empty());
+  EXPECT_TRUE(blocked.robots.empty());
+  EXPECT_EQ(session.plan(1).start_time, before.start_time);
+  EXPECT_EQ(session.PoseAt(1, 1e6), before.trajectory.Evaluate(kInf).q.head<3>());
+  // Named errors.
+  EXPECT_NE(ErrorOf([&] { session.Assign(0, Eigen::Vector3d(2, 1, 0), 200.0); }).find("blocked lattice node"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { session.Assign(0, Eigen::Vector3d(2.5, 0, 0), 200.0); }).find("is not on a lattice node"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { session.Assign(0, Eigen::Vector3d(2, 0, 0), 5.0); }).find("before the session's start"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { session.Assign(2, Eigen::Vector3d(2, 0, 0), 200.0); }).find("robot = 2 must be in [0, 2)"),
+            std::string::npos);
+  robots[1].pose = Eigen::Vector3d(0, 0, 0);
+  EXPECT_NE(ErrorOf([&] { FleetSession(lattice, robots, 0.0); }).find("robots[1].pose = (0, 0) is on the node of robots[0]"),
+            std::string::npos);
 }
 
 }  // namespace
