@@ -2,7 +2,7 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_coordinate|fleet_lattice|benchmark|fairness|memory|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_coordinate|fleet_lattice|fleet_session|benchmark|fairness|memory|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
@@ -51,6 +51,7 @@
 #include "bench_clutter.h"
 #include "bench_fleet.h"
 #include "bench_fleet_lattice.h"
+#include "bench_fleet_session.h"
 #include "bench_mesh_robot.h"
 #include "bench_robots.h"
 #include "bench_sphere_fit.h"
@@ -1060,7 +1061,7 @@ int Main(int argc, char** argv) {
     else if (arg == "--urdf") options.urdfs = Split(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_coordinate|fleet_lattice|benchmark|fairness|memory|all]\n"
+                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|coordination|fleet|fleet_coordinate|fleet_lattice|fleet_session|benchmark|fairness|memory|all]\n"
                    "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
@@ -1125,6 +1126,11 @@ int Main(int argc, char** argv) {
   if (options.section == "kinematics" || options.section == "all") BenchKinematics(options);
   if (options.section == "trajectory" || options.section == "all") BenchTrajectory(options);
   if (options.section == "coordination" || options.section == "all") BenchCoordination(options);
+  if (options.section == "fleet_session" || options.section == "all") {
+    FleetSessionBenchOptions session;
+    session.seed = options.seed;
+    BenchFleetSession(session);
+  }
   if (options.section == "fleet_lattice" || options.section == "all") {
     FleetLatticeBenchOptions fleet;
     fleet.repeats = std::max(options.bench_repeats, 5);

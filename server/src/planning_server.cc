@@ -28,6 +28,7 @@
 #include "chasles/server/convert.h"
 #include "chasles/server/convert_multi.h"
 #include "chasles/server/default_assets.h"
+#include "chasles/server/fleet_sessions.h"
 #include "chasles/server/groups.h"
 #include "chasles/server/heap_tracking.h"
 #include "chasles/server/metrics.h"
@@ -218,7 +219,11 @@ using RawService = v1::Planning::WithRawCallbackMethod_Plan<v1::Planning::WithRa
             v1::Planning::WithRawCallbackMethod_Optimize<v1::Planning::WithRawCallbackMethod_Coordinate<
                 v1::Planning::WithRawCallbackMethod_CreateWorkcell<v1::Planning::WithRawCallbackMethod_CommitTrajectory<
                     v1::Planning::WithRawCallbackMethod_Release<v1::Planning::WithRawCallbackMethod_Benchmark<
-                        v1::Planning::WithRawCallbackMethod_StopBenchmark<v1::Planning::Service>>>>>>>>>>>>>;
+                        v1::Planning::WithRawCallbackMethod_StopBenchmark<
+                            v1::Planning::WithRawCallbackMethod_OpenFleetSession<
+                                v1::Planning::WithRawCallbackMethod_AssignFleetGoals<
+                                    v1::Planning::WithRawCallbackMethod_CloseFleetSession<
+                                        v1::Planning::Service>>>>>>>>>>>>>>>>;
 
 /// The service's collaborators and its share of the server options.
 struct ServiceContext {
@@ -542,6 +547,72 @@ class PlanningService final : public RawService {
                                 {"reservation", committed.id},
                                 {"duration_s", FormatNumber(committed.end_time - committed.start_time)},
                                 {"hold_s", FormatNumber(committed.expires_at - committed.end_time)}};
+        });
+  }
+
+  grpc::ServerUnaryReactor* OpenFleetSession(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                             grpc::ByteBuffer* out) override {
+    return Serve<v1::OpenFleetSessionRequest, v1::OpenFleetSessionResponse>(
+        "OpenFleetSession", context, in, out, Where::kPool, [this](auto& call) {
+          const v1::OpenFleetSessionRequest& request = call.request;
+          call.record.request_id = RequestId(request.request_id(), "fleet");
+          if (!ValidWorkcellName(request.name())) {
+            ThrowInvalid("name = '" + request.name() + "' must be 1 to 64 characters of [A-Za-z0-9_.-]");
+          }
+          const StoredScene scene = SceneOfRequest(*store_, request);
+          const double start_time = request.start_time() == 0.0 ? workcells_->Now() : request.start_time();
+          if (!std::isfinite(start_time) || start_time < 0.0) {
+            ThrowInvalid("start_time = " + FormatNumber(request.start_time()) +
+                         " must be finite and >= 0 s since the Unix epoch (0 = now)");
+          }
+          std::shared_ptr<OpenFleet> fleet = OpenFleetFromProto(
+              request, scene.scene, scene.id,
+              [this](const v1::TeamRobot& robot, const std::string& field) { return TeamRobotOf(robot, field).model; },
+              start_time, options_.max_team_robots, &fleet_lattices_, &call.response);
+          for (int k = 0; k < request.robots_size(); ++k) {
+            if (!request.robots(k).has_robot()) continue;  // an uploaded robot reported them at upload
+            const std::string field = "robots[" + std::to_string(k) + "].robot";
+            const auto model = TeamRobotOf(request.robots(k), "robots[" + std::to_string(k) + "]").model;
+            for (const std::string& w : RobotWarnings(*model, field)) call.response.add_warnings(w);
+          }
+          fleet_sessions_.Add(request.name(), std::move(fleet));
+          call.record.fields = {{"session", request.name()},
+                                {"scene", IdPrefix(scene.id)},
+                                {"robots", std::to_string(request.robots_size())},
+                                {"resolution_m", FormatNumber(call.response.lattice().resolution())}};
+        });
+  }
+
+  grpc::ServerUnaryReactor* AssignFleetGoals(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                             grpc::ByteBuffer* out) override {
+    return Serve<v1::AssignFleetGoalsRequest, v1::AssignFleetGoalsResponse>(
+        "AssignFleetGoals", context, in, out, Where::kPool, [this](auto& call) {
+          const v1::AssignFleetGoalsRequest& request = call.request;
+          call.record.request_id = RequestId(request.request_id(), "goals");
+          if (request.goals_size() > 10000) {
+            ThrowInvalid("goals has " + std::to_string(request.goals_size()) + " entries; send at most 10000 at once");
+          }
+          const std::shared_ptr<OpenFleet> fleet = fleet_sessions_.Find(request.name());
+          const double now = request.now() == 0.0 ? workcells_->Now() : request.now();
+          std::lock_guard<std::mutex> lock(fleet->mutex);
+          const Termination termination = call.Start(BudgetEnd(30.0, call.deadline), call.deadline);
+          AssignFleetGoalsFromProto(*fleet, request, now, termination, &call.response);
+          int solved = 0;
+          for (const v1::FleetGoalResult& result : call.response.results()) solved += result.outcome() == v1::SUCCESS;
+          call.record.fields = {{"session", request.name()},
+                                {"goals", std::to_string(request.goals_size())},
+                                {"solved", std::to_string(solved)},
+                                {"plans", std::to_string(call.response.plans_size())}};
+        });
+  }
+
+  grpc::ServerUnaryReactor* CloseFleetSession(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                              grpc::ByteBuffer* out) override {
+    return Serve<v1::CloseFleetSessionRequest, v1::CloseFleetSessionResponse>(
+        "CloseFleetSession", context, in, out, Where::kInline, [this](auto& call) {
+          call.response.set_closed(fleet_sessions_.Close(call.request.name()));
+          call.record.fields = {{"session", call.request.name()},
+                                {"closed", call.response.closed() ? "true" : "false"}};
         });
   }
 
@@ -961,6 +1032,7 @@ class PlanningService final : public RawService {
   ThreadPool* pool_;
   WorkcellStore* workcells_;
   FleetLatticeCache fleet_lattices_{16};  ///< FLEET lattices by scene id and footprint (fleet_lattice.h)
+  FleetSessionStore fleet_sessions_{64};  ///< open fleet sessions by name (fleet_sessions.h)
   const AccessControl* access_;
   const ServerOptions& options_;
   const LogFormat log_format_;

@@ -23,6 +23,8 @@ std::string EpochText(double seconds) {
   return buffer;
 }
 
+}  // namespace
+
 bool ValidWorkcellName(const std::string& name) {
   if (name.empty() || name.size() > 64) return false;
   return std::all_of(name.begin(), name.end(), [](char c) {
@@ -30,8 +32,6 @@ bool ValidWorkcellName(const std::string& name) {
            c == '-';
   });
 }
-
-}  // namespace
 
 CommittedMotion MotionOf(const Reservation& reservation, double origin) {
   CommittedMotion motion;

@@ -1222,7 +1222,7 @@ TEST(FleetSession, AnIdleRobotInTheWayStepsAsideAndFailuresChangeNothing) {
   ASSERT_EQ(session.Assign(0, Eigen::Vector3d(0, 0, 0), 200.0).code, FleetGoalCode::kSuccess);
   const FleetSessionPlan before = session.plan(1);
   const FleetGoalOutcome blocked = session.Assign(1, Eigen::Vector3d(0, 0, 0), 200.5);
-  EXPECT_EQ(blocked.message, "the goal node (cell 0) is where robot 0 is going to park");
+  EXPECT_EQ(blocked.message, "the goal node (0, 0) (cell 0) is where robot 0 is going to park");
   EXPECT_NE(blocked.code, FleetGoalCode::kSuccess);
   EXPECT_FALSE(blocked.message.empty());
   EXPECT_TRUE(blocked.robots.empty());

@@ -259,6 +259,41 @@ class ServerTest(unittest.TestCase):
             self.check_trajectory(traj, np.array(asked["start"]["positions"]), np.array(asked["goal"]["positions"]),
                                   np.array([1.0, 1.0, 1.0]), np.array([2.0, 2.0, 2.0]))
 
+    def test_fleet_session_answers_goals_as_they_come(self) -> None:
+        request = ROOT / "examples/requests/coordinate_fleet.json"
+        opened = self.client.open_fleet_session("py-depot", str(request))
+        robots = json.loads(request.read_text())["robots"]
+        self.assertEqual(opened.robots, len(robots))
+        first = {r["name"]: r["goal"]["positions"] for r in robots[:10]}
+        response = self.client.assign_fleet_goals("py-depot", first, now=opened.start_time)
+        self.assertEqual([r.robot for r in response.results], list(first))
+        # A goal behind a node another robot of the batch is bound for waits until that robot is idle.
+        deferred = {}
+        for result in response.results:
+            if result.outcome != pb.SUCCESS:
+                self.assertIn("is going to park", result.message)
+                deferred[result.robot] = first[result.robot]
+        self.assertLess(len(deferred), len(first))
+        plans = list(response.plans)
+        if deferred:
+            idle = max(plan.finish_time for plan in plans) + 1.0
+            again = self.client.assign_fleet_goals("py-depot", deferred, now=idle)
+            for result in again.results:
+                self.assertEqual(result.outcome, pb.SUCCESS, result.message)
+                for robot in result.moved_aside:  # idle at its goal, it stepped aside
+                    first.pop(robot, None)
+            plans += list(again.plans)
+        ends = {}
+        for plan in plans:  # in order: a robot's later plan replaces its earlier one
+            ends[plan.robot] = Trajectory.from_knots(plan.knots, period=0.05).q[-1]
+        for robot, goal in first.items():
+            np.testing.assert_allclose(ends[robot][:2], goal[:2], atol=1e-9)
+        with self.assertRaises(ChaslesError) as raised:
+            self.client.assign_fleet_goals("py-depot", {"nobody": [0.5, 0.5, 0.0]})
+        self.assertIn("goals[0].robot = 'nobody'", str(raised.exception))
+        self.assertTrue(self.client.close_fleet_session("py-depot"))
+        self.assertFalse(self.client.close_fleet_session("py-depot"))
+
     def test_cli_plan_writes_a_plot(self) -> None:
         png = self.out / "cli.png"
         done = subprocess.run([sys.executable, "-m", "chasles_client", "--server", _address, "plan",

@@ -296,7 +296,8 @@ TEST(ServerMetrics, LabelValuesStayInTheirBoundedSets) {
   // Every rpc label of every series is a Planning method or "other".
   const std::set<std::string> methods = {"Plan", "ListPlanners", "UploadRobot", "UploadScene", "UpdateScene",
                                          "InverseKinematics", "Optimize", "Coordinate", "CreateWorkcell",
-                                         "CommitTrajectory", "Release", "Benchmark", "StopBenchmark", "other"};
+                                         "CommitTrajectory", "Release", "Benchmark", "StopBenchmark",
+                                         "OpenFleetSession", "AssignFleetGoals", "CloseFleetSession", "other"};
   for (const Sample& sample : samples) {
     const auto rpc = sample.labels.find("rpc");
     if (rpc != sample.labels.end()) {

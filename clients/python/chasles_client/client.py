@@ -364,6 +364,54 @@ class Client:
             timeout = (message.time_budget or 30.0) + 30.0
         return self._call("Coordinate", message, timeout)
 
+    # -- fleet sessions (goals that keep coming) -----------------------------------------------
+
+    def open_fleet_session(self, name: str, request: Union[Message, Mapping[str, Any], str, os.PathLike],
+                           timeout: Optional[float] = 120.0) -> Any:
+        """Opens fleet session ``name`` for the scene and robots of ``request`` (an
+        OpenFleetSessionRequest, or a CoordinateRequest such as
+        ``examples/requests/coordinate_fleet.json``: its scene, robots and fleet_resolution; the
+        goals are ignored) and returns the OpenFleetSessionResponse."""
+        if isinstance(request, os.PathLike) or (isinstance(request, str) and request.endswith(".json")
+                                                 and Path(request).is_file()):
+            request = Path(request).read_text(encoding="utf-8")
+        message = None
+        if not isinstance(request, pb.CoordinateRequest):
+            try:
+                message = to_message(request, pb.OpenFleetSessionRequest, "OpenFleetSessionRequest")
+            except TypeError:
+                if not isinstance(request, (str, Mapping)):
+                    raise
+        if message is None:  # a CoordinateRequest: its scene, robots and lattice
+            team = to_message(request, pb.CoordinateRequest, "CoordinateRequest")
+            message = pb.OpenFleetSessionRequest(fleet_resolution=team.fleet_resolution,
+                                                 robot_padding=team.robot_padding)
+            if team.HasField("scene"):
+                message.scene.CopyFrom(team.scene)
+            elif team.scene_id:
+                message.scene_id = team.scene_id
+            for robot in team.robots:
+                added = message.robots.add()
+                added.CopyFrom(robot)
+                added.ClearField("goal")
+        message.name = name
+        return self._call("OpenFleetSession", message, timeout)
+
+    def assign_fleet_goals(self, name: str, goals: Mapping[str, Sequence[float]], now: float = 0.0,
+                           timeout: Optional[float] = 60.0) -> Any:
+        """Sends goals ``{robot name: (x, y, θ)}`` to session ``name``, answered in order from
+        ``now`` (server clock, s since the epoch; 0 = now). Returns the AssignFleetGoalsResponse:
+        a result per goal, the new plans (``Trajectory.from_knots(plan.knots)`` samples one, from
+        ``plan.start_time``) and the orders at shared nodes."""
+        message = pb.AssignFleetGoalsRequest(name=name, now=now)
+        for robot, positions in goals.items():
+            message.goals.add(robot=robot, positions=[float(v) for v in positions])
+        return self._call("AssignFleetGoals", message, timeout)
+
+    def close_fleet_session(self, name: str, timeout: Optional[float] = 30.0) -> bool:
+        """Closes session ``name``; False when it was not open."""
+        return self._call("CloseFleetSession", pb.CloseFleetSessionRequest(name=name), timeout).closed
+
     def _model_velocity(self, robot_id: str) -> Optional[np.ndarray]:
         info = self._robots.get(robot_id)
         return None if info is None else info.velocity_limits

@@ -1,6 +1,7 @@
 #include "chasles/multi/fleet.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <queue>
@@ -161,6 +162,41 @@ double FleetResolution(const std::vector<double>& radii, double padding) {
     }
   }
   return first + (radii.size() == 1 ? first : second) + padding;
+}
+
+FleetLatticeChoice ChooseFleetLattice(const std::vector<std::shared_ptr<const RobotModel>>& robots,
+                                      const Eigen::Vector2d& anchor, const Scene& scene, const std::string& scene_id,
+                                      double resolution, double padding, FleetLatticeCache* cache,
+                                      const std::string& resolution_field, const std::string& padding_field) {
+  std::vector<Footprint> feet;
+  std::vector<double> radii;
+  for (const auto& robot : robots) {
+    feet.push_back(PlanarFootprint(*robot));
+    radii.push_back(feet.back().radius);
+  }
+  const double safe = FleetResolution(radii, padding);
+  FleetLatticeChoice out;
+  out.radii = radii;
+  out.spacing = resolution > 0.0 ? resolution : safe;
+  if (out.spacing < safe) {
+    ThrowInvalid(resolution_field + " = " + FormatNumber(resolution) +
+                 " m is below the smallest spacing that keeps these robots apart, " + FormatNumber(safe) +
+                 " m (the two largest footprint radii plus " + padding_field + " " + FormatNumber(padding) + " m)");
+  }
+  FleetLatticeRequest request;
+  request.anchor = anchor;
+  request.spacing = out.spacing;
+  std::tie(request.lower, request.upper) = FleetBounds(robots);
+  request.footprint = CoverFootprints(feet);
+  out.footprint = request.footprint;
+  const auto started = std::chrono::steady_clock::now();
+  if (cache != nullptr && !scene_id.empty()) {
+    out.lattice = cache->GetOrBuild(scene_id, scene, request, &out.cached);
+  } else {
+    out.lattice = std::make_shared<const FleetLattice>(BuildFleetLattice(scene, request));
+  }
+  out.seconds = out.cached ? 0.0 : std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return out;
 }
 
 FleetSchedule ScheduleFleet(const FleetScheduleRequest& request) {

@@ -130,34 +130,16 @@ FleetAttempt RunFleet(const CoordinationQuery& query, const std::vector<FleetMem
   FleetSummary& summary = out.summary;
 
   // 1. Footprints, spacing and the lattice (cached under the scene's id).
-  std::vector<Footprint> feet;
-  std::vector<double> radii;
   std::vector<std::shared_ptr<const RobotModel>> models;
-  for (const FleetMember& m : members) {
-    feet.push_back(PlanarFootprint(*m.placement->model));
-    radii.push_back(feet.back().radius);
-    models.push_back(m.placement->model);
-  }
-  const double safe = FleetResolution(radii, query.robot_padding);
-  const double spacing = query.fleet_resolution > 0.0 ? query.fleet_resolution : safe;
-  if (spacing < safe) {
-    ThrowInvalid("fleet_resolution = " + FormatNumber(query.fleet_resolution) +
-                 " m is below the smallest spacing that keeps these robots apart, " + FormatNumber(safe) +
-                 " m (the two largest footprint radii plus robot_padding " + FormatNumber(query.robot_padding) + " m)");
-  }
-  FleetLatticeRequest request;
-  request.anchor = members[0].start.head<2>();
-  request.spacing = spacing;
-  std::tie(request.lower, request.upper) = FleetBounds(models);
-  request.footprint = CoverFootprints(feet);
-  const Clock::time_point t_lattice = Clock::now();
-  std::shared_ptr<const FleetLattice> lattice;
-  if (query.lattice_cache != nullptr && !query.scene_id.empty()) {
-    lattice = query.lattice_cache->GetOrBuild(query.scene_id, *query.scene, request, &summary.lattice_cached);
-  } else {
-    lattice = std::make_shared<const FleetLattice>(BuildFleetLattice(*query.scene, request));
-  }
-  summary.lattice_seconds = summary.lattice_cached ? 0.0 : SecondsSince(t_lattice);
+  for (const FleetMember& m : members) models.push_back(m.placement->model);
+  const FleetLatticeChoice choice =
+      ChooseFleetLattice(models, members[0].start.head<2>(), *query.scene, query.scene_id, query.fleet_resolution,
+                         query.robot_padding, query.lattice_cache);
+  const std::vector<double>& radii = choice.radii;
+  const std::shared_ptr<const FleetLattice>& lattice = choice.lattice;
+  const double spacing = choice.spacing;
+  summary.lattice_cached = choice.cached;
+  summary.lattice_seconds = choice.seconds;
   const LatticeGeometry& geometry = lattice->geometry();
   summary.resolution = spacing;
   summary.width = geometry.width;
@@ -184,7 +166,7 @@ FleetAttempt RunFleet(const CoordinationQuery& query, const std::vector<FleetMem
       if (map.blocked[static_cast<std::size_t>(cell)] == 0) continue;
       out.message = Robot(query, k) + ": its " + what + " node " + Point(geometry.Position(cell)) +
                     " is not free for the fleet's footprint (a cylinder of radius " +
-                    FormatNumber(request.footprint.radius) + " m, the largest robot's) or lies at a blocked edge";
+                    FormatNumber(choice.footprint.radius) + " m, the largest robot's) or lies at a blocked edge";
       return out;
     }
   }

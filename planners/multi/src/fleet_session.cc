@@ -39,16 +39,12 @@ Eigen::Vector3d Unit(LatticeDirection direction) {
 
 std::string RobotField(int robot) { return "robots[" + std::to_string(robot) + "]"; }
 
-std::string PointText(const Eigen::Vector2d& p) {
-  char text[96];
-  std::snprintf(text, sizeof(text), "(%.9g, %.9g)", p.x(), p.y());
-  return text;
-}
+std::string PointText(const Eigen::Vector2d& p) { return "(" + FormatNumber(p.x()) + ", " + FormatNumber(p.y()) + ")"; }
 
 void ValidateLimits(const Eigen::Vector3d& v, const std::string& field) {
   for (int k = 0; k < 3; ++k) {
     if (!(std::isfinite(v[k]) && v[k] > 0.0)) {
-      ThrowInvalid(field + "[" + std::to_string(k) + "] = " + std::to_string(v[k]) + " must be finite and > 0");
+      ThrowInvalid(field + "[" + std::to_string(k) + "] = " + FormatNumber(v[k]) + " must be finite and > 0");
     }
   }
 }
@@ -267,7 +263,7 @@ FleetSession::FleetSession(std::shared_ptr<const FleetLattice> lattice, std::vec
                            double start_time, FleetSessionOptions options)
     : lattice_(std::move(lattice)), options_(options), start_time_(start_time), forgotten_(start_time) {
   if (lattice_ == nullptr) ThrowInvalid("lattice is null");
-  if (!std::isfinite(start_time)) ThrowInvalid("start_time = " + std::to_string(start_time) + " must be finite");
+  if (!std::isfinite(start_time)) ThrowInvalid("start_time = " + FormatNumber(start_time) + " must be finite");
   const LatticeGeometry& g = lattice_->geometry();
   occupancy_.resize(static_cast<std::size_t>(g.num_cells()));
   std::vector<int> holder(static_cast<std::size_t>(g.num_cells()), -1);
@@ -445,6 +441,11 @@ FleetSession::RobotState FleetSession::Replanned(int robot, const Visit& anchor,
   return state;
 }
 
+std::string FleetSession::Name(int robot) const {
+  const std::string& name = robots_[static_cast<std::size_t>(robot)].limits.name;
+  return name.empty() ? "robot " + std::to_string(robot) : "robot '" + name + "'";
+}
+
 GridCell FleetSession::Refuge(int robot, const std::vector<char>& avoid, GridCell goal, double now) const {
   const LatticeGeometry& g = lattice_->geometry();
   const GridCell from = robots_[static_cast<std::size_t>(robot)].visits.back().cell;
@@ -497,8 +498,8 @@ FleetGoalOutcome FleetSession::Assign(int robot, const Eigen::Vector3d& goal, do
     ThrowInvalid("robot = " + std::to_string(robot) + " must be in [0, " + std::to_string(num_robots()) + ")");
   }
   if (!std::isfinite(now) || now < start_time_) {
-    ThrowInvalid("now = " + std::to_string(now) + " must be finite and not before the session's start " +
-                 std::to_string(start_time_));
+    ThrowInvalid("now = " + FormatNumber(now) + " must be finite and not before the session's start " +
+                 FormatNumber(start_time_));
   }
   if (!std::isfinite(goal.z())) ThrowInvalid("goal heading must be finite");
   const LatticeGeometry& g = lattice_->geometry();
@@ -549,8 +550,9 @@ FleetGoalOutcome FleetSession::Assign(int robot, const Eigen::Vector3d& goal, do
   // Another robot parks on the goal for good while still on its way there: nothing to move aside.
   for (const Occupancy& o : occupancy_[static_cast<std::size_t>(goal_cell)]) {
     if (o.robot != robot && o.leave == kInf && !Idle(o.robot, now)) {
-      return finish(FleetGoalCode::kNoPath, "the goal node (cell " + std::to_string(goal_cell) + ") is where robot " +
-                                                std::to_string(o.robot) + " is going to park");
+      return finish(FleetGoalCode::kNoPath, "the goal node " + PointText(g.Position(goal_cell)) + " (cell " +
+                                                std::to_string(goal_cell) + ") is where " + Name(o.robot) +
+                                                " is going to park");
     }
   }
   const std::vector<char> none(robots_.size(), 0);
@@ -582,9 +584,9 @@ FleetGoalOutcome FleetSession::Assign(int robot, const Eigen::Vector3d& goal, do
       if (!Idle(r, now)) {
         const Eigen::Vector2d p = g.Position(other.visits.back().cell);
         return finish(FleetGoalCode::kNoPath,
-                      "robot " + std::to_string(r) + " is going to park at " + PointText(p) + " (cell " +
+                      Name(r) + " is going to park at " + PointText(p) + " (cell " +
                           std::to_string(other.visits.back().cell) + ") on the way, idle from t = " +
-                          std::to_string(other.plan.finish_time) + " s: send it on first, or this goal after then");
+                          FormatNumber(other.plan.finish_time) + " s: send it on first, or this goal after then");
       }
       in_the_way.push_back(r);
     }
@@ -595,11 +597,11 @@ FleetGoalOutcome FleetSession::Assign(int robot, const Eigen::Vector3d& goal, do
                                                   " idle robots stand in the way");
       }
       const GridCell refuge = Refuge(j, on_path, goal_cell, now);
-      if (refuge < 0) return finish(FleetGoalCode::kNoPath, "idle robot " + std::to_string(j) + " has nowhere to go");
+      if (refuge < 0) return finish(FleetGoalCode::kNoPath, "idle " + Name(j) + " has nowhere to go");
       auto [j_anchor, aside] = search(j, none, refuge);
       if (aside.stopped) return finish(FleetGoalCode::kStopped, "stopped before a plan was found");
       if (!aside.found) {
-        return finish(FleetGoalCode::kNoPath, "idle robot " + std::to_string(j) + " cannot move out of the way");
+        return finish(FleetGoalCode::kNoPath, "idle " + Name(j) + " cannot move out of the way");
       }
       commit(j, Replanned(j, j_anchor, aside, robots_[static_cast<std::size_t>(j)].heading));
       outcome.robots.push_back(j);

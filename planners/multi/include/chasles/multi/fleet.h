@@ -52,6 +52,8 @@
 /// makespan times one move's duration in general (tests/multi/fleet_test.cc, 110 robots on a
 /// 32 x 32 lattice: 119 s against 60 steps x 2.55 s = 153 s).
 
+#include <memory>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -67,6 +69,29 @@ namespace chasles {
 /// \throws Error(kInvalidArgument) for an empty list, a radius that is not finite and > 0, or a
 ///         padding that is not finite and >= 0 (naming radii[i] / padding).
 double FleetResolution(const std::vector<double>& radii, double padding);
+
+/// The lattice a fleet of planar robots plans on (FleetLatticeRequest filled for them, built or
+/// taken from a cache).
+struct FleetLatticeChoice {
+  std::shared_ptr<const FleetLattice> lattice;
+  double spacing = 0.0;    ///< [m]
+  Footprint footprint;     ///< CoverFootprints of the robots'
+  std::vector<double> radii;  ///< each robot's footprint radius [m]
+  bool cached = false;     ///< taken from the cache
+  double seconds = 0.0;    ///< building it [s] (0 when cached)
+};
+
+/// The robots' lattice: spacing `resolution`, or FleetResolution of their footprints
+/// (PlanarFootprint) and `padding` when 0; bounds FleetBounds(robots); anchored at `anchor`
+/// (a robot's start); from `cache` under `scene_id` when both are given (else built).
+/// \throws Error(kInvalidArgument) for a resolution below the smallest safe spacing (naming
+///         `resolution_field`, both values and the padding), and what PlanarFootprint,
+///         FleetBounds and BuildFleetLattice throw.
+FleetLatticeChoice ChooseFleetLattice(const std::vector<std::shared_ptr<const RobotModel>>& robots,
+                                      const Eigen::Vector2d& anchor, const Scene& scene, const std::string& scene_id,
+                                      double resolution, double padding, FleetLatticeCache* cache,
+                                      const std::string& resolution_field = "fleet_resolution",
+                                      const std::string& padding_field = "robot_padding");
 
 struct FleetRobot {
   Eigen::Vector3d start = Eigen::Vector3d::Zero();  ///< (x, y, θ) [m, m, rad]; (x, y) on a node

@@ -48,6 +48,7 @@
 namespace chasles {
 
 struct FleetSessionRobot {
+  std::string name;  ///< in messages ("robot 'name'"); empty = "robot <index>"
   Eigen::Vector3d pose = Eigen::Vector3d::Zero();              ///< (x, y, θ) at the session's start; (x, y) on a free node
   Eigen::Vector3d max_velocity = Eigen::Vector3d::Ones();      ///< per coordinate, > 0
   Eigen::Vector3d max_acceleration = Eigen::Vector3d::Ones();  ///< per coordinate, > 0
@@ -112,6 +113,9 @@ class FleetSession {
   const FleetSessionPlan& plan(int robot) const;
   /// The robot's planned pose at session time t (its plan's start pose before it starts).
   Eigen::Vector3d PoseAt(int robot, double t) const;
+  /// The orders robot's plan takes part in at the nodes it occupies after `from`: who leaves
+  /// each node before it enters, and who enters after it leaves.
+  std::vector<FleetSessionOrder> Orders(int robot, double from) const { return OrdersOf(robot, from); }
   /// Occupancy intervals held (all robots), for memory accounting.
   std::size_t occupancy_size() const;
 
@@ -142,6 +146,7 @@ class FleetSession {
   /// New state for `robot`: its visits before anchor, then `path` (cells and run times).
   RobotState Replanned(int robot, const Visit& anchor, const SearchResult& result, double goal_heading) const;
   std::vector<FleetSessionOrder> OrdersOf(int robot, double from) const;
+  std::string Name(int robot) const;
   /// The nearest node (along free edges) from where idle `robot` stands that is not marked in
   /// `avoid`, is not `goal` and that no other robot occupies after `now`; -1 when none.
   GridCell Refuge(int robot, const std::vector<char>& avoid, GridCell goal, double now) const;
