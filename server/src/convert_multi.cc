@@ -5,6 +5,7 @@
 
 #include "chasles/robot/error.h"
 #include "chasles/server/convert.h"
+#include "chasles/server/groups.h"
 
 namespace chasles {
 namespace {
@@ -336,6 +337,44 @@ TimedTrajectory TrajectoryFromPoints(const v1::JointTrajectory& trajectory, cons
   }
   if (pieces.empty()) return HoldTrajectory(q.front(), 0.0);
   return TimedTrajectory(std::move(pieces), q.back());
+}
+
+Reservation ReservationFromCommit(const v1::CommitTrajectoryRequest& request, ModelStore& store, double now) {
+  const StoredRobot described = RobotOfRequest(store, request);
+  StoredRobot robot = described;
+  if (!request.group().empty()) {
+    robot = NarrowToGroup(robot, request);
+  } else if (request.held_positions_size() > 0) {
+    ThrowInvalid("held_positions is set without group: name the planning group the trajectory moves, "
+                 "or send no held_positions");
+  }
+  Reservation reservation;
+  reservation.robot_name = request.robot_name();
+  reservation.placement.name = request.robot_name();
+  reservation.placement.model = robot.model;
+  if (request.has_base_pose()) reservation.placement.base_pose = PoseFromProto(request.base_pose(), "base_pose");
+  reservation.trajectory = TrajectoryFromPoints(request.trajectory(), *robot.model, "trajectory");
+  const double start_time = request.start_time();
+  if (!std::isfinite(start_time) || start_time < 0.0) {
+    ThrowInvalid("start_time = " + FormatNumber(start_time) + " must be finite and >= 0 s since the Unix epoch (0 = now)");
+  }
+  reservation.start_time = start_time == 0.0 ? now : start_time;
+  reservation.end_time = reservation.start_time + reservation.trajectory.duration();
+  reservation.expires_at = reservation.end_time + request.hold();
+  // What another replica rebuilds it from: the robot by id, the start resolved.
+  v1::CommitTrajectoryRequest record = request;
+  record.set_robot_id(described.id);
+  record.set_start_time(reservation.start_time);
+  reservation.record = record.SerializeAsString();
+  return reservation;
+}
+
+Reservation ReservationFromRecord(const std::string& bytes, ModelStore& store) {
+  v1::CommitTrajectoryRequest record;
+  if (!record.ParseFromString(bytes)) {
+    throw Error(ErrorCode::kFailedPrecondition, "the shared store holds an unreadable reservation record");
+  }
+  return ReservationFromCommit(record, store, record.start_time());
 }
 
 }  // namespace chasles

@@ -26,6 +26,10 @@ extern "C" void OnSignal(int signal) { g_signal.store(signal); }
 /// (messages name the flag, the value and the rule).
 void AddFlags(CLI::App& app, chasles::ServerOptions& o, std::size_t& document_mb) {
   app.add_option("--listen", o.listen, "address:port to listen on (port 0 = any free port)")->capture_default_str();
+  app.add_option("--store", o.store,
+                 "where robots, scenes, workcells and reservations live: memory, or redis://HOST[:PORT][/DB] "
+                 "shared by every replica pointed at it")
+      ->capture_default_str();
   app.add_option("--threads", o.threads, "planning worker threads (0 = hardware threads)")->capture_default_str();
   app.add_option("--max-message-mb", o.max_message_mb, "largest request/response message [MiB], in [1, 2047]")
       ->capture_default_str();

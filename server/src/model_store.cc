@@ -71,6 +71,7 @@ StoredRobot ModelStore::AddRobot(const v1::RobotModel& robot, const std::string&
     }
     return std::shared_ptr<const StoredRobot>(std::move(entry));
   });
+  if (redis_ != nullptr) Share("chasles:robot:" + id, robot.SerializeAsString());
   return *cache_.Put<StoredRobot>("robot:" + id, std::move(parsed), bytes);
 }
 
@@ -80,6 +81,7 @@ StoredScene ModelStore::AddScene(const v1::Scene& scene, const std::string& fiel
   if (auto stored = cache_.Get<Scene>("scene:" + id)) return {id, stored};
   std::uint64_t bytes = 0;
   auto parsed = Measured(scene.ByteSizeLong(), &bytes, [&] { return SceneFromProto(scene, field, limits_); });
+  if (redis_ != nullptr) Share("chasles:scene:" + id, scene.SerializeAsString());
   auto stored = cache_.Put<Scene>("scene:" + id, std::move(parsed), bytes);
   return {std::move(id), std::move(stored)};
 }
@@ -89,17 +91,21 @@ StoredScene ModelStore::PutScene(const std::string& id, std::shared_ptr<const Sc
   return {id, cache_.Put<Scene>("scene:" + id, std::move(scene), std::max<std::uint64_t>(bytes, 1))};
 }
 
-StoredRobot ModelStore::FindRobot(const std::string& id) const {
+StoredRobot ModelStore::FindRobot(const std::string& id) {
   if (id == default_robot_.id) return default_robot_;
   if (auto stored = cache_.Get<StoredRobot>("robot:" + id)) return *stored;
+  v1::RobotModel shared;
+  if (Fetch("chasles:robot:" + id, &shared)) return AddRobot(shared, "robot_id '" + id + "' (from the shared store)");
   throw Error(ErrorCode::kNotFound, "robot_id '" + id +
                                         "' is not stored on this server (never uploaded here, or evicted); "
                                         "re-send the robot inline (the request's robot field) or call UploadRobot again");
 }
 
-StoredScene ModelStore::FindScene(const std::string& id) const {
+StoredScene ModelStore::FindScene(const std::string& id) {
   if (id == default_scene_.id) return default_scene_;
   if (auto scene = cache_.Get<Scene>("scene:" + id)) return {id, scene};
+  v1::Scene shared;
+  if (Fetch("chasles:scene:" + id, &shared)) return AddScene(shared, "scene_id '" + id + "' (from the shared store)");
   throw Error(ErrorCode::kNotFound, "scene_id '" + id +
                                         "' is not stored on this server (never uploaded here, or evicted); "
                                         "send the scene inline (the request's scene field) or call UploadScene again");
@@ -122,6 +128,28 @@ std::shared_ptr<const CollisionChecker> ModelStore::Checker(const StoredRobot& r
     return std::make_shared<const CollisionChecker>(robot.model, scene.scene, options);
   });
   return cache_.Put<CollisionChecker>(key, std::move(built), std::max<std::uint64_t>(bytes, 1));
+}
+
+void ModelStore::UseShared(std::shared_ptr<RedisClient> redis) { redis_ = std::move(redis); }
+
+void ModelStore::Share(const std::string& key, const std::string& bytes) {
+  const RedisReply reply = redis_->Command({"SET", key, bytes, "NX"});
+  if (reply.type == RedisReply::Type::kError) {
+    throw Error(ErrorCode::kUnavailable, "the shared store refused to keep " + key + ": " + reply.str);
+  }
+}
+
+bool ModelStore::Fetch(const std::string& key, google::protobuf::Message* message) {
+  if (redis_ == nullptr) return false;
+  const RedisReply reply = redis_->Command({"GET", key});
+  if (reply.type == RedisReply::Type::kError) {
+    throw Error(ErrorCode::kUnavailable, "the shared store failed to read " + key + ": " + reply.str);
+  }
+  if (reply.type != RedisReply::Type::kString) return false;
+  if (!message->ParseFromString(reply.str)) {
+    throw Error(ErrorCode::kFailedPrecondition, "the shared store holds an unreadable " + key);
+  }
+  return true;
 }
 
 }  // namespace chasles

@@ -33,6 +33,7 @@
 #include "chasles/server/heap_tracking.h"
 #include "chasles/server/metrics.h"
 #include "chasles/server/model_store.h"
+#include "chasles/server/redis_client.h"
 #include "chasles/server/request_log.h"
 #include "chasles/server/security.h"
 #include "chasles/server/status.h"
@@ -516,25 +517,7 @@ class PlanningService final : public RawService {
                                    " (--max-samples); commit a coarser trajectory (the server interpolates between "
                                    "points with cubic Hermite pieces)");
           }
-          StoredRobot robot = RobotOfRequest(*store_, request);
-          if (!request.group().empty()) {
-            robot = NarrowToGroup(robot, request);
-          } else if (request.held_positions_size() > 0) {
-            ThrowInvalid("held_positions is set without group: name the planning group the trajectory moves, "
-                         "or send no held_positions");
-          }
-          Reservation reservation;
-          reservation.robot_name = request.robot_name();
-          reservation.placement.name = request.robot_name();
-          reservation.placement.model = robot.model;
-          if (request.has_base_pose()) reservation.placement.base_pose = PoseFromProto(request.base_pose(), "base_pose");
-          reservation.trajectory = TrajectoryFromPoints(request.trajectory(), *robot.model, "trajectory");
-          const double start_time = request.start_time();
-          if (!std::isfinite(start_time) || start_time < 0.0) {
-            ThrowInvalid("start_time = " + FormatNumber(start_time) +
-                         " must be finite and >= 0 s since the Unix epoch (0 = now)");
-          }
-          reservation.start_time = start_time == 0.0 ? workcells_->Now() : start_time;
+          const Reservation reservation = ReservationFromCommit(request, *store_, workcells_->Now());
           const Reservation committed =
               workcells_->Commit(request.workcell(), reservation, request.hold(), request.robot_padding());
           response.set_reservation_id(committed.id);
@@ -1051,6 +1034,7 @@ void ServerOptions::Validate() const {
   if (cache_mb < 1 || cache_mb > (1ull << 30)) ThrowInvalid("--cache-mb = " + std::to_string(cache_mb) + " must be within [1, 2^30]");
   if (max_samples < 1) ThrowInvalid("--max-samples = 0 must be >= 1");
   if (max_team_robots < 1) ThrowInvalid("--max-team-robots = " + std::to_string(max_team_robots) + " must be >= 1");
+  if (store != "memory") ParseRedisUrl(store, "--store");
   if (request_memory_mb > (1ull << 30)) {
     ThrowInvalid("--request-memory-mb = " + std::to_string(request_memory_mb) + " must be within [0, 2^30] (0 = no cap)");
   }
@@ -1094,6 +1078,15 @@ PlanningServer::PlanningServer(const ServerOptions& options) : impl_(std::make_u
   RegisterDefaultPlanners(&impl_->registry);
   impl_->store =
       std::make_unique<ModelStore>(DefaultRobotProto(), DefaultSceneProto(), options.cache_mb << 20, options.limits);
+  if (options.store != "memory") {
+    // Two connections: model reads and writes do not wait behind a workcell commit's transaction.
+    const RedisAddress address = ParseRedisUrl(options.store, "--store");
+    impl_->store->UseShared(std::make_shared<RedisClient>(address));
+    ModelStore* models = impl_->store.get();
+    impl_->workcells.UseShared(std::make_shared<RedisClient>(address), [models](const std::string& record) {
+      return ReservationFromRecord(record, *models);
+    });
+  }
   PoolOptions pool;
   pool.threads = options.threads;
   pool.max_queued = options.max_queued;

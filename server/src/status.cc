@@ -26,6 +26,7 @@ grpc::Status StatusFromExceptionRaw(std::exception_ptr error) {
       case ErrorCode::kNotFound: return grpc::Status(grpc::StatusCode::NOT_FOUND, e.what());
       case ErrorCode::kFailedPrecondition: return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION, e.what());
       case ErrorCode::kResourceExhausted: return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, e.what());
+      case ErrorCode::kUnavailable: return grpc::Status(grpc::StatusCode::UNAVAILABLE, e.what());
     }
     return grpc::Status(grpc::StatusCode::INTERNAL, e.what());
   } catch (const std::bad_alloc&) {

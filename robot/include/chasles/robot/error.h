@@ -14,6 +14,8 @@ enum class ErrorCode {
   kFailedPrecondition,  ///< a capability that is not there for this input
   kResourceExhausted,   ///< an input within the rules but beyond a size cap of this server
                         ///< (the message names the field, the size, the cap and what to change)
+  kUnavailable,         ///< a service the server depends on (the shared store) cannot be reached;
+                        ///< retrying may succeed
 };
 
 /// `text` with bytes below 0x20 and 0x7f written as `\xHH` (other bytes, UTF-8 included, kept).

@@ -10,6 +10,8 @@
 
 #include "chasles/multi/coordinator.h"
 #include "chasles/planners/registry.h"
+#include "chasles/server/model_store.h"
+#include "chasles/server/workcells.h"
 #include "chasles/v1/chasles.pb.h"
 
 namespace chasles {
@@ -61,5 +63,16 @@ void WorkcellPlanToProto(const CoordinationOutcome& outcome, const CoordinationQ
 ///         negative or not increasing, joint counts, non-finite values.
 TimedTrajectory TrajectoryFromPoints(const v1::JointTrajectory& trajectory, const RobotModel& robot,
                                      const std::string& field);
+
+/// The reservation a CommitTrajectoryRequest asks for: the robot resolved (inline, by id — from
+/// the shared store when this replica lacks it — or the default) and narrowed to `group`, the
+/// trajectory rebuilt from its points, start_time resolved (0 = `now`), end_time and expires_at
+/// filled in; `record` is the request as another replica rebuilds it (robot by id, start_time
+/// resolved). \throws Error(kInvalidArgument) naming the field; Error(kNotFound) for an unknown
+/// robot id.
+Reservation ReservationFromCommit(const v1::CommitTrajectoryRequest& request, ModelStore& store, double now);
+
+/// A reservation rebuilt from its record (ReservationFromCommit's), as WorkcellStore's loader.
+Reservation ReservationFromRecord(const std::string& record, ModelStore& store);
 
 }  // namespace chasles

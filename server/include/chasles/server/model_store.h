@@ -12,6 +12,7 @@
 #include "chasles/collision/robot_spheres.h"
 #include "chasles/robot/input_limits.h"
 #include "chasles/server/lru_cache.h"
+#include "chasles/server/redis_client.h"
 #include "chasles/robot/planning_groups.h"
 #include "chasles/v1/chasles.pb.h"
 
@@ -57,8 +58,9 @@ class ModelStore {
   /// `bytes` is its estimated size (e.g. measured with a HeapScope around its making).
   StoredScene PutScene(const std::string& id, std::shared_ptr<const Scene> scene, std::uint64_t bytes);
   /// \throws Error(kNotFound) telling the client to re-send the robot/scene inline.
-  StoredRobot FindRobot(const std::string& id) const;
-  StoredScene FindScene(const std::string& id) const;
+  /// With a shared store, an id not cached here is read from Redis (and parsed once here).
+  StoredRobot FindRobot(const std::string& id);
+  StoredScene FindScene(const std::string& id);
   const StoredRobot& default_robot() const { return default_robot_; }
   const StoredScene& default_scene() const { return default_scene_; }
 
@@ -71,7 +73,17 @@ class ModelStore {
   CacheStats cache_stats() const { return cache_.stats(); }
   const InputLimits& limits() const { return limits_; }
 
+  /// Shares uploaded robots and scenes through Redis from now on (before serving): each parsed
+  /// robot or scene is kept there under "chasles:robot:<id>" / "chasles:scene:<id>" (its message,
+  /// content-addressed, never expiring), and an id this replica does not hold is read from there.
+  /// Scenes made by UpdateScene stay on the replica that made them.
+  void UseShared(std::shared_ptr<RedisClient> redis);
+
  private:
+  void Share(const std::string& key, const std::string& bytes);
+  bool Fetch(const std::string& key, google::protobuf::Message* message);
+
+  std::shared_ptr<RedisClient> redis_;
   StoredRobot default_robot_;
   StoredScene default_scene_;
   InputLimits limits_;

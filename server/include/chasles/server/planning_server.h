@@ -40,6 +40,10 @@ struct ServerOptions {
   /// Prometheus endpoint "HOST:PORT" (or "PORT" = 127.0.0.1:PORT, loopback by default; port 0
   /// picks a free port) serving /metrics; "" = no endpoint. See ServerMetrics.
   std::string metrics_listen;
+  /// Where uploaded robots and scenes, workcells and reservations live: "memory" (this process
+  /// only) or "redis://HOST[:PORT][/DB]" (shared by every replica pointed at the same Redis,
+  /// surviving restarts as far as Redis persists; see workcells.h and model_store.h).
+  std::string store = "memory";
   /// TLS, mutual TLS and bearer tokens (--tls-cert, --tls-key, --tls-client-ca, --tokens);
   /// all empty = plaintext without authentication. See security.h.
   SecurityOptions security;

@@ -2,7 +2,7 @@
 /// \file
 /// Workcell reservations: trajectories committed by a long-running coordinator, which later
 /// planning requests in the same workcell avoid in space and time. The state lives in this
-/// process only (one server replica; lost on restart). Thread-safe.
+/// process (one replica; lost on restart) or, with the shared store, in Redis. Thread-safe.
 
 #include <cstdint>
 #include <functional>
@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "chasles/multi/coordinator.h"
+#include "chasles/server/redis_client.h"
 
 namespace chasles {
 
@@ -22,6 +23,9 @@ struct Reservation {
   std::string robot_name;
   PlacedRobot placement;   ///< placement.name == robot_name
   TimedTrajectory trajectory;
+  /// What another replica rebuilds it from (the shared store): the CommitTrajectoryRequest as
+  /// committed, robot by id, start_time resolved. Empty with the memory store.
+  std::string record;
   double start_time = 0.0;  ///< trajectory's t = 0
   double end_time = 0.0;    ///< start_time + duration
   double expires_at = 0.0;  ///< end_time + hold: the robot occupies its final configuration until then
@@ -36,8 +40,19 @@ struct WorkcellLimits {
   std::size_t max_pieces_per_workcell = 500000;  ///< pieces of the active reservations together
 };
 
+/// Where workcells and their reservations live. By default in this process (lost on restart,
+/// not seen by other replicas); with UseShared, in Redis: every replica sharing the store sees
+/// the same workcells and reservations, a commit is atomic across replicas (WATCH/MULTI/EXEC on
+/// the workcell's version, retried when another replica wrote meanwhile), and a reservation's
+/// record expires with it (a Redis TTL at expires_at). Replicas compare reservations against
+/// their own clocks, which must agree (NTP).
 class WorkcellStore {
  public:
+  /// Rebuilds a reservation from its record (robot resolved, trajectory rebuilt; id, end_time and
+  /// expires_at filled in).
+  using ReservationLoader = std::function<Reservation(const std::string& record)>;
+  static constexpr const char* kWorkcellsKey = "chasles:workcells";
+
   /// The clock [s since the Unix epoch]; the default reads the system clock. Tests inject theirs.
   using Clock = std::function<double()>;
   explicit WorkcellStore(Clock clock = {}, WorkcellLimits limits = {});
@@ -69,7 +84,19 @@ class WorkcellStore {
   /// Active reservations of the workcell (0 for an unknown one).
   int ActiveCount(const std::string& workcell);
 
+  /// Keeps workcells and reservations in Redis from now on (before serving).
+  void UseShared(std::shared_ptr<RedisClient> redis, ReservationLoader load);
+
  private:
+  using RedisSend = std::function<RedisReply(const std::vector<std::string>&)>;
+  void CheckCommit(const std::string& workcell, const std::vector<Reservation>& others, std::uint64_t number,
+                   double hold, double padding, Reservation* reservation) const;
+  std::vector<Reservation> ReadShared(const std::string& workcell, const RedisSend& send);
+  Reservation CommitShared(const std::string& workcell, Reservation reservation, double hold, double padding);
+  int ReleaseShared(const std::string& workcell, const std::string& reservation_id, const std::string& robot_name);
+  /// `reply`, or Error(kUnavailable) for a Redis error reply.
+  static const RedisReply& Reply(const RedisReply& reply);
+
   struct Cell {
     std::mutex mutex;  ///< serialises commits, so two conflicting commits cannot both succeed
     std::vector<Reservation> reservations;
@@ -82,6 +109,10 @@ class WorkcellStore {
   WorkcellLimits limits_;
   std::mutex mutex_;  ///< guards cells_ (the map, not the cells' contents)
   std::map<std::string, std::unique_ptr<Cell>> cells_;
+  std::shared_ptr<RedisClient> redis_;
+  ReservationLoader load_;
+  std::mutex loaded_mutex_;
+  std::map<std::string, Reservation> loaded_;  ///< shared reservations rebuilt here, by id
 };
 
 /// A reservation's motion on a time line whose t = 0 is `origin` [s since epoch].
