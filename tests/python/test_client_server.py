@@ -294,6 +294,42 @@ class ServerTest(unittest.TestCase):
         self.assertTrue(self.client.close_fleet_session("py-depot"))
         self.assertFalse(self.client.close_fleet_session("py-depot"))
 
+    def test_several_replicas_balanced_and_one_killed_costs_no_call(self) -> None:
+        # Two more replicas; the client balances over all three and retries UNAVAILABLE.
+        binary = os.environ["CHASLES_SERVER_BIN"]
+        extra = []
+        try:
+            for k in range(2):
+                log = Path(_workdir.name) / f"replica{k}.log"
+                with log.open("w") as out:
+                    process = subprocess.Popen([binary, "--listen", "127.0.0.1:0", "--threads", "1"], stdout=out,
+                                               stderr=out, preexec_fn=_stop_with_this_process)
+                deadline = time.monotonic() + 30.0
+                port = None
+                while port is None and time.monotonic() < deadline:
+                    match = re.search(r"listening on \S+ \(port (\d+)\)", log.read_text())
+                    port = match.group(1) if match else None
+                    time.sleep(0.05)
+                self.assertIsNotNone(port, log.read_text())
+                extra.append((process, f"127.0.0.1:{port}"))
+            with Client(",".join([_address] + [a for _, a in extra]), timeout=30.0) as client:
+                client.wait_until_serving(timeout=20.0)
+                for _ in range(6):
+                    self.assertTrue(client.planners())
+                # Round-robin: every replica answered some of them.
+                for k in range(2):
+                    self.assertIn("ListPlanners request", (Path(_workdir.name) / f"replica{k}.log").read_text())
+                extra[0][0].kill()  # SIGKILL: its connections break
+                extra[0][0].wait()
+                results = [client.plan(START, GOAL, planner="rrt_connect", time_budget=2.0, seed=s)
+                           for s in range(1, 13)]
+                self.assertTrue(all(r.success for r in results), [r.message for r in results])
+        finally:
+            for process, _ in extra:
+                if process.poll() is None:
+                    process.kill()
+                    process.wait()
+
     def test_cli_plan_writes_a_plot(self) -> None:
         png = self.out / "cli.png"
         done = subprocess.run([sys.executable, "-m", "chasles_client", "--server", _address, "plan",

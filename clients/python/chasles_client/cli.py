@@ -26,7 +26,8 @@ def _parser() -> argparse.ArgumentParser:
                     "protobuf JSON files such as examples/requests/*.json.",
         epilog="exit status: 0 ok, 1 failed (RPC error or no trajectory), 2 bad arguments or files")
     parser.add_argument("--server", default=os.environ.get("CHASLES_SERVER", "127.0.0.1:50051"),
-                        help="server address (default $CHASLES_SERVER or 127.0.0.1:50051)")
+                        help="server address, or several replicas separated by commas (balanced round-robin, "
+                             "idempotent calls retried on UNAVAILABLE) (default $CHASLES_SERVER or 127.0.0.1:50051)")
     parser.add_argument("--tls-ca", metavar="FILE", help="use TLS; trust server certificates signed by this CA (PEM)")
     parser.add_argument("--tls-cert", metavar="FILE", help="client certificate (PEM) for mutual TLS; with --tls-key")
     parser.add_argument("--tls-key", metavar="FILE", help="the client certificate's private key (PEM)")

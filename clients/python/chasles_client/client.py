@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import os
+import socket
 import time
 import uuid
 from pathlib import Path
@@ -71,12 +73,60 @@ def channel_credentials(*, tls_ca: Optional[PathLike] = None, tls_cert: Optional
 #: Default deadline of unary calls [s] (planning budgets are at most 600 s; pass more if needed).
 DEFAULT_TIMEOUT = 60.0
 
+#: Methods a client may send again when the server was UNAVAILABLE (a replica down or draining):
+#: they change nothing, or nothing twice (content-addressed uploads, create-if-missing).
+IDEMPOTENT_METHODS = ("Plan", "ListPlanners", "UploadRobot", "UploadScene", "UpdateScene", "InverseKinematics",
+                      "Optimize", "Coordinate", "CreateWorkcell")
+
+
+def service_config(retries: int = 5) -> str:
+    """The gRPC service config the client uses: round_robin over the addresses it resolves, and
+    up to ``retries`` attempts of the idempotent methods on UNAVAILABLE, backing off 0.1 s × 2ᵏ
+    up to 1 s (jittered by gRPC)."""
+    return json.dumps({
+        "loadBalancingConfig": [{"round_robin": {}}],
+        "methodConfig": [{
+            "name": [{"service": "chasles.v1.Planning", "method": m} for m in IDEMPOTENT_METHODS],
+            "retryPolicy": {"maxAttempts": max(2, min(int(retries), 5)), "initialBackoff": "0.1s",
+                            "maxBackoff": "1s", "backoffMultiplier": 2,
+                            "retryableStatusCodes": ["UNAVAILABLE"]},
+        }],
+    })
+
+
+def channel_target(address: Union[str, Sequence[str]]) -> str:
+    """A gRPC target for one ``host:port``, or several (a comma-separated string or a list):
+    each host resolved here to its addresses, all of them balanced round-robin by the channel."""
+    addresses = [a.strip() for a in (address.split(",") if isinstance(address, str) else address) if a.strip()]
+    if not addresses:
+        raise ValueError("address is empty: give host:port, or several separated by commas")
+    if len(addresses) == 1:
+        return addresses[0]
+    resolved = []
+    for a in addresses:
+        host, _, port = a.rpartition(":")
+        if not host or not port.isdigit():
+            raise ValueError(f"address '{a}' must be host:port")
+        host = host.strip("[]")
+        for family, _, _, _, sockaddr in socket.getaddrinfo(host, int(port), proto=socket.IPPROTO_TCP):
+            text = f"[{sockaddr[0]}]:{port}" if family == socket.AF_INET6 else f"{sockaddr[0]}:{port}"
+            if text not in resolved:
+                resolved.append(text)
+    v6 = [r for r in resolved if r.startswith("[")]
+    if v6 and len(v6) != len(resolved):
+        raise ValueError("addresses mix IPv4 and IPv6; give one family")
+    return ("ipv6:" if v6 else "ipv4:") + ",".join(resolved)
+
 
 class Client:
     """A connection to a chasles-server.
 
     Args:
-        address: ``host:port`` of the server.
+        address: ``host:port`` of the server, or of several replicas (``"a:50051,b:50051"`` or a
+            list): calls are spread round-robin over them, and the idempotent methods
+            (IDEMPOTENT_METHODS) are retried on UNAVAILABLE with backoff, so a replica that goes
+            down costs no failed call while another answers.
+        retries: attempts of an idempotent call on UNAVAILABLE, in [2, 5] (gRPC's cap).
         timeout: default deadline of each unary call [s]; ``None`` = no deadline. Every method
             also takes its own ``timeout``. A plan's ``time_budget`` must fit in it.
         max_message_mb: largest message sent or received [MiB] (the server's default is 64).
@@ -95,22 +145,25 @@ class Client:
     The client is usable from several threads at once (gRPC channels are thread-safe).
     """
 
-    def __init__(self, address: str = "127.0.0.1:50051", timeout: Optional[float] = DEFAULT_TIMEOUT, *,
+    def __init__(self, address: Union[str, Sequence[str]] = "127.0.0.1:50051",
+                 timeout: Optional[float] = DEFAULT_TIMEOUT, *,
                  max_message_mb: int = 64, channel: Optional[grpc.Channel] = None,
                  tls_ca: Optional[PathLike] = None, tls_cert: Optional[PathLike] = None,
                  tls_key: Optional[PathLike] = None, tls_server_name: Optional[str] = None,
-                 token: Optional[str] = None) -> None:
+                 token: Optional[str] = None, retries: int = 5) -> None:
         self.address = address
         self.timeout = timeout
         if channel is None:
             size = int(max_message_mb) * 1024 * 1024
-            options = [("grpc.max_send_message_length", size), ("grpc.max_receive_message_length", size)]
+            options = [("grpc.max_send_message_length", size), ("grpc.max_receive_message_length", size),
+                       ("grpc.enable_retries", 1), ("grpc.service_config", service_config(retries))]
             credentials = channel_credentials(tls_ca=tls_ca, tls_cert=tls_cert, tls_key=tls_key,
                                               tls_server_name=tls_server_name, token=token, options=options)
+            target = channel_target(address)
             if credentials is None:
-                channel = grpc.insecure_channel(address, options=options)
+                channel = grpc.insecure_channel(target, options=options)
             else:
-                channel = grpc.secure_channel(address, credentials, options=options)
+                channel = grpc.secure_channel(target, credentials, options=options)
             self._owns_channel = True
         else:
             self._owns_channel = False
