@@ -1,0 +1,178 @@
+"""Several replicas behind a proxy (issue 15, item 2b): a real redis-server, three chasles-server
+replicas on the shared store and Debian's nginx started with deploy/nginx/nginx.conf (its ports
+rewritten to free ones), all on loopback, bounded and cleaned up. Plans go through nginx and are
+spread over the replicas; a trajectory committed on one replica is a conflict on another.
+"""
+from __future__ import annotations
+
+import ctypes
+import json
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+from pathlib import Path
+from typing import List
+
+import grpc
+
+from chasles_client import Client
+from chasles_client._stubs import pb
+
+ROOT = Path(__file__).resolve().parents[2]
+REDIS = "/usr/bin/redis-server"
+NGINX = "/usr/sbin/nginx"
+
+
+def _stop_with_this_process() -> None:
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _wait_for(predicate, what: str, timeout: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(0.05)
+    raise RuntimeError(f"{what} within {timeout} s")
+
+
+def _port_open(port: int) -> bool:
+    with socket.socket() as s:
+        s.settimeout(0.2)
+        return s.connect_ex(("127.0.0.1", port)) == 0
+
+
+class ReplicasBehindNginx(unittest.TestCase):
+    processes: List[subprocess.Popen]
+    work: tempfile.TemporaryDirectory
+
+    @classmethod
+    def setUpClass(cls) -> None:
+        binary = os.environ.get("CHASLES_SERVER_BIN")
+        if not binary:
+            raise unittest.SkipTest("CHASLES_SERVER_BIN is not set (ctest sets it to the built chasles-server)")
+        for tool in (REDIS, NGINX):
+            if not Path(tool).exists():
+                raise RuntimeError(f"{tool} is missing: scripts/setup installs redis-server and nginx")
+        cls.work = tempfile.TemporaryDirectory(prefix="chasles_replicas_")
+        work = Path(cls.work.name)
+        cls.processes = []
+        try:
+            cls._start(work, binary)
+        except BaseException:
+            cls.tearDownClass()
+            raise
+
+    @classmethod
+    def _spawn(cls, args: List[str], log: Path) -> subprocess.Popen:
+        with log.open("w") as out:
+            process = subprocess.Popen(args, stdout=out, stderr=out, preexec_fn=_stop_with_this_process)
+        cls.processes.append(process)
+        return process
+
+    @classmethod
+    def _start(cls, work: Path, binary: str) -> None:
+        redis_port = _free_port()
+        (work / "redis").mkdir()
+        cls._spawn([REDIS, "--port", str(redis_port), "--bind", "127.0.0.1", "--dir", str(work / "redis"),
+                    "--appendonly", "yes", "--save", "", "--daemonize", "no"], work / "redis.log")
+        _wait_for(lambda: _port_open(redis_port), "redis-server did not listen")
+        cls.replicas = []
+        cls.logs = []
+        for k in range(3):
+            log = work / f"replica{k}.log"
+            cls._spawn([binary, "--listen", "127.0.0.1:0", "--threads", "1",
+                        "--store", f"redis://127.0.0.1:{redis_port}"], log)
+            found: List[str] = []
+
+            def listening() -> bool:
+                match = re.search(r"listening on \S+ \(port (\d+)\)", log.read_text())
+                if match:
+                    found.append(match.group(1))
+                return bool(match)
+
+            _wait_for(listening, f"replica {k} did not report its port")
+            cls.replicas.append(f"127.0.0.1:{found[0]}")
+            cls.logs.append(log)
+        # The repository's nginx.conf with this test's ports.
+        conf = (ROOT / "deploy/nginx/nginx.conf").read_text()
+        defaults = ["127.0.0.1:50051", "127.0.0.1:50052", "127.0.0.1:50053"]
+        for default, actual in zip(defaults, cls.replicas):
+            conf = conf.replace(f"server {default};", f"server {actual};")
+        cls.proxy_port = _free_port()
+        conf = conf.replace("listen 127.0.0.1:8080 http2;", f"listen 127.0.0.1:{cls.proxy_port} http2;")
+        prefix = work / "nginx"
+        for sub in ("temp", "logs"):
+            (prefix / sub).mkdir(parents=True)
+        (prefix / "nginx.conf").write_text(conf)
+        cls._spawn([NGINX, "-p", str(prefix), "-c", str(prefix / "nginx.conf"), "-e", "stderr",
+                    "-g", "daemon off; pid nginx.pid;"], work / "nginx.log")
+        _wait_for(lambda: _port_open(cls.proxy_port), "nginx did not listen")
+
+    @classmethod
+    def tearDownClass(cls) -> None:
+        for process in reversed(getattr(cls, "processes", [])):
+            if process.poll() is None:
+                process.send_signal(signal.SIGTERM)
+        for process in reversed(getattr(cls, "processes", [])):
+            try:
+                process.wait(timeout=10.0)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+        if getattr(cls, "work", None) is not None:
+            cls.work.cleanup()
+
+    def test_plans_through_nginx_spread_over_the_replicas(self) -> None:
+        before = [log.read_text().count("Plan request") for log in self.logs]
+        with Client(f"127.0.0.1:{self.proxy_port}", timeout=60.0) as client:
+            robot_id = client.upload_robot(ROOT / "examples/robots/panda.urdf", ROOT / "examples/robots/panda.srdf")
+            example = json.loads((ROOT / "examples/requests/panda_table.json").read_text())
+            results = [client.plan(example["start"]["positions"], example["goal"]["positions"], robot_id=robot_id,
+                                   time_budget=2.0, seed=s) for s in range(1, 10)]
+            self.assertTrue(all(r.success for r in results), [r.message for r in results])
+        served = [log.read_text().count("Plan request") - b for log, b in zip(self.logs, before)]
+        # nginx balances round-robin; every replica resolved the robot id from the shared store.
+        self.assertGreaterEqual(sum(1 for n in served if n > 0), 2, served)
+        self.assertEqual(sum(served), 9, served)
+
+    def test_a_commit_on_one_replica_is_a_conflict_on_another(self) -> None:
+        first, second = Client(self.replicas[0], timeout=60.0), Client(self.replicas[1], timeout=60.0)
+        with first, second:
+            robot_id = first.upload_robot(ROOT / "examples/robots/panda.urdf", ROOT / "examples/robots/panda.srdf")
+            example = json.loads((ROOT / "examples/requests/panda_table.json").read_text())
+            planned = first.plan(example["start"]["positions"], example["goal"]["positions"], robot_id=robot_id,
+                                 time_budget=2.0)
+            self.assertTrue(planned.success, planned.message)
+            first.stub.CreateWorkcell(pb.CreateWorkcellRequest(name="proxy_cell"), timeout=30)
+            commit = pb.CommitTrajectoryRequest(workcell="proxy_cell", robot_name="left", robot_id=robot_id,
+                                                trajectory=planned.trajectory.to_message(), start_time=4.0e9,
+                                                hold=600.0)
+            first.stub.CommitTrajectory(commit, timeout=30)
+            commit.robot_name = "right"
+            with self.assertRaises(grpc.RpcError) as raised:
+                second.stub.CommitTrajectory(commit, timeout=30)
+            self.assertEqual(raised.exception.code(), grpc.StatusCode.FAILED_PRECONDITION)
+            self.assertIn("conflicts with a committed one", raised.exception.details())
+        # And through the proxy, whichever replica answers.
+        with Client(f"127.0.0.1:{self.proxy_port}", timeout=60.0) as proxied:
+            created = proxied.stub.CreateWorkcell(pb.CreateWorkcellRequest(name="proxy_cell"), timeout=30)
+            self.assertFalse(created.created)
+            self.assertEqual(created.active_reservations, 1)
+
+
+if __name__ == "__main__":
+    unittest.main()
