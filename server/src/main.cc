@@ -26,6 +26,10 @@ extern "C" void OnSignal(int signal) { g_signal.store(signal); }
 /// (messages name the flag, the value and the rule).
 void AddFlags(CLI::App& app, chasles::ServerOptions& o, std::size_t& document_mb) {
   app.add_option("--listen", o.listen, "address:port to listen on (port 0 = any free port)")->capture_default_str();
+  app.add_option("--shutdown-grace", o.shutdown_grace,
+                 "on SIGTERM/SIGINT: seconds the calls in flight may take to finish while health says NOT_SERVING "
+                 "and new calls are refused with UNAVAILABLE")
+      ->capture_default_str();
   app.add_option("--store", o.store,
                  "where robots, scenes, workcells and reservations live: memory, or redis://HOST[:PORT][/DB] "
                  "shared by every replica pointed at it")
@@ -107,7 +111,8 @@ int main(int argc, char** argv) {
       "UploadScene, UpdateScene, Coordinate, workcells, Benchmark, StopBenchmark), the standard gRPC health\n"
       "service and server reflection. Requests that name no robot/scene use the embedded Franka Panda and table\n"
       "scene. Planning, benchmark runs and coordination share the worker threads. SIGINT/SIGTERM shut the\n"
-      "server down cleanly (running calls get 2 s to finish).",
+      "server down cleanly: health turns NOT_SERVING, new calls are refused, running calls get --shutdown-grace\n"
+      "to finish.",
       "chasles-server"};
   std::size_t document_mb = options.limits.max_document_bytes >> 20;
   AddFlags(app, options, document_mb);
@@ -144,7 +149,7 @@ int main(int argc, char** argv) {
       if (g_signal.load() != 0) {
         std::fprintf(stderr, "chasles-server: signal %d, shutting down\n", g_signal.load());
       }
-      server.Shutdown(std::chrono::milliseconds(2000));
+      server.Shutdown(std::chrono::milliseconds(static_cast<long long>(options.shutdown_grace * 1e3)));
     });
     server.Wait();
     done.store(true);

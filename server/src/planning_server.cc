@@ -11,6 +11,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <utility>
 
 #include <google/protobuf/util/json_util.h>
@@ -673,6 +674,12 @@ class PlanningService final : public RawService {
 
   /// A call the credentials refused before any handler ran (see AccessControl): one log line and
   /// its metrics, like every other call; the client is the token's name when it was known.
+  /// Shutting down: from now on every new unary call is refused with UNAVAILABLE (clients retry
+  /// it on another replica); calls already accepted run to their end.
+  void StartDraining() { draining_.store(true); }
+  /// Unary calls accepted and not yet answered.
+  int in_flight() const { return in_flight_.load(); }
+
   void RecordRefusal(const AccessRefusal& refusal) const {
     RequestRecord record;
     record.rpc = refusal.rpc.substr(refusal.rpc.rfind('/') + 1);
@@ -721,8 +728,17 @@ class PlanningService final : public RawService {
                                   grpc::ByteBuffer* out, Where where, Work work) {
     using Call = UnaryCall<Request, Response>;
     services_.metrics->RequestStarted(rpc);
-    auto* call = new Call(rpc, context, out, [this](const RequestRecord& record) { Record(record); });
+    in_flight_.fetch_add(1);
+    auto* call = new Call(rpc, context, out, [this](const RequestRecord& record) {
+      Record(record);
+      in_flight_.fetch_sub(1);
+    });
     call->record.client = ClientOf(*context);
+    if (draining_.load()) {
+      call->Complete(grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                                  "this server is shutting down and takes no new calls; send it to another replica"));
+      return call;
+    }
     if (grpc::Status refused = access_->Authorize(*context, rpc); !refused.ok()) {
       call->Complete(refused);
       return call;
@@ -1016,6 +1032,8 @@ class PlanningService final : public RawService {
   WorkcellStore* workcells_;
   FleetLatticeCache fleet_lattices_{16};  ///< FLEET lattices by scene id and footprint (fleet_lattice.h)
   FleetSessionStore fleet_sessions_{64};  ///< open fleet sessions by name (fleet_sessions.h)
+  std::atomic<bool> draining_{false};
+  std::atomic<int> in_flight_{0};
   const AccessControl* access_;
   const ServerOptions& options_;
   const LogFormat log_format_;
@@ -1035,6 +1053,9 @@ void ServerOptions::Validate() const {
   if (max_samples < 1) ThrowInvalid("--max-samples = 0 must be >= 1");
   if (max_team_robots < 1) ThrowInvalid("--max-team-robots = " + std::to_string(max_team_robots) + " must be >= 1");
   if (store != "memory") ParseRedisUrl(store, "--store");
+  if (!(shutdown_grace >= 0.0 && shutdown_grace <= 3600.0)) {
+    ThrowInvalid("--shutdown-grace = " + FormatNumber(shutdown_grace) + " must be within [0, 3600] s");
+  }
   if (request_memory_mb > (1ull << 30)) {
     ThrowInvalid("--request-memory-mb = " + std::to_string(request_memory_mb) + " must be within [0, 2^30] (0 = no cap)");
   }
@@ -1144,8 +1165,23 @@ std::string PlanningServer::security_description() const { return impl_->access-
 
 void PlanningServer::Shutdown(std::chrono::milliseconds grace) {
   std::call_once(impl_->shutdown_once, [&] {
+    // Drain: health says NOT_SERVING and new calls are refused (UNAVAILABLE, so balancing
+    // clients retry elsewhere) while the calls in flight finish, for at most `grace`; then the
+    // listener closes and what still runs is cancelled.
+    const auto end = std::chrono::steady_clock::now() + grace;
+    impl_->service->StartDraining();
+    if (auto* health = impl_->server->GetHealthCheckService()) {
+      health->SetServingStatus(false);
+      health->SetServingStatus("chasles.v1.Planning", false);
+    }
+    while (impl_->service->in_flight() > 0 && std::chrono::steady_clock::now() < end) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
     if (auto* health = impl_->server->GetHealthCheckService()) health->Shutdown();
-    impl_->server->Shutdown(std::chrono::system_clock::now() + grace);
+    const auto left = std::max(std::chrono::steady_clock::duration(std::chrono::milliseconds(100)),
+                               end - std::chrono::steady_clock::now());
+    impl_->server->Shutdown(std::chrono::system_clock::now() +
+                            std::chrono::duration_cast<std::chrono::system_clock::duration>(left));
   });
 }
 

@@ -21,7 +21,7 @@ from typing import List
 
 import grpc
 
-from chasles_client import Client
+from chasles_client import ChaslesError, Client
 from chasles_client._stubs import pb
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -172,6 +172,109 @@ class ReplicasBehindNginx(unittest.TestCase):
             created = proxied.stub.CreateWorkcell(pb.CreateWorkcellRequest(name="proxy_cell"), timeout=30)
             self.assertFalse(created.created)
             self.assertEqual(created.active_reservations, 1)
+
+
+class ReplicaFailures(unittest.TestCase):
+    """Replicas that stop: SIGTERM drains (in-flight calls finish, new ones are refused, health
+    says NOT_SERVING), SIGKILL under load costs no call of a client balancing over the others."""
+
+    def setUp(self) -> None:
+        binary = os.environ.get("CHASLES_SERVER_BIN")
+        if not binary:
+            raise unittest.SkipTest("CHASLES_SERVER_BIN is not set")
+        self.binary = binary
+        self.work = tempfile.TemporaryDirectory(prefix="chasles_failures_")
+        self.processes: List[subprocess.Popen] = []
+
+    def tearDown(self) -> None:
+        for process in self.processes:
+            if process.poll() is None:
+                process.kill()
+                process.wait()
+        self.work.cleanup()
+
+    def start_replica(self, k: int) -> str:
+        log = Path(self.work.name) / f"replica{k}.log"
+        with log.open("w") as out:
+            self.processes.append(subprocess.Popen([self.binary, "--listen", "127.0.0.1:0", "--threads", "2"],
+                                                   stdout=out, stderr=out, preexec_fn=_stop_with_this_process))
+        found: List[str] = []
+
+        def listening() -> bool:
+            match = re.search(r"listening on \S+ \(port (\d+)\)", log.read_text())
+            if match:
+                found.append(match.group(1))
+            return bool(match)
+
+        _wait_for(listening, f"replica {k} did not report its port")
+        return f"127.0.0.1:{found[0]}"
+
+    def test_sigterm_finishes_the_call_in_flight_and_refuses_new_ones(self) -> None:
+        address = self.start_replica(0)
+        example = json.loads((ROOT / "examples/requests/panda_table.json").read_text())
+        with Client(address, timeout=30.0, retries=2) as client:
+            client.wait_until_serving(timeout=20.0)
+            outcome: List[object] = []
+
+            def long_plan() -> None:  # RRT* uses its whole budget
+                outcome.append(client.plan(example["start"]["positions"], example["goal"]["positions"],
+                                           planner="rrt_star", time_budget=1.2))
+
+            import threading
+            worker = threading.Thread(target=long_plan)
+            worker.start()
+            time.sleep(0.4)
+            stopped_at = time.monotonic()
+            self.processes[0].send_signal(signal.SIGTERM)
+            time.sleep(0.2)
+            # Draining: health says so, and a new call is refused as UNAVAILABLE (a balancing
+            # client would retry it on another replica) ...
+            self.assertEqual(client.health(timeout=5.0), "NOT_SERVING")
+            with self.assertRaises(ChaslesError) as refused:
+                client.planners(timeout=5.0)
+            self.assertIn("UNAVAILABLE", str(refused.exception))
+            self.assertIn("shutting down", str(refused.exception))
+            # ... while the call in flight finishes with its answer.
+            worker.join(timeout=30.0)
+            self.assertTrue(outcome and outcome[0].success, outcome)
+            self.processes[0].wait(timeout=15.0)
+            self.assertLess(time.monotonic() - stopped_at, 10.0)  # --shutdown-grace (10 s by default)
+
+    def test_a_replica_killed_under_load_costs_no_call(self) -> None:
+        import threading
+        addresses = [self.start_replica(k) for k in range(3)]
+        example = json.loads((ROOT / "examples/requests/panda_table.json").read_text())
+        failures: List[str] = []
+        done = [0]
+        lock = threading.Lock()
+        stop = time.monotonic() + 4.0
+        with Client(",".join(addresses), timeout=30.0) as client:
+            client.wait_until_serving(timeout=20.0)
+
+            def load(seed: int) -> None:
+                while time.monotonic() < stop:
+                    try:
+                        result = client.plan(example["start"]["positions"], example["goal"]["positions"],
+                                             time_budget=1.0, seed=seed)
+                        ok = result.success
+                        why = result.message
+                    except Exception as error:  # noqa: BLE001 - every failure counts
+                        ok, why = False, str(error)
+                    with lock:
+                        done[0] += 1
+                        if not ok:
+                            failures.append(why)
+                    seed += 4
+
+            threads = [threading.Thread(target=load, args=(s,)) for s in range(1, 5)]
+            for t in threads:
+                t.start()
+            time.sleep(1.5)
+            self.processes[1].kill()  # SIGKILL, mid-call for some of the threads
+            for t in threads:
+                t.join(timeout=60.0)
+        self.assertEqual(failures, [])
+        self.assertGreater(done[0], 20)
 
 
 if __name__ == "__main__":

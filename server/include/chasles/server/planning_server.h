@@ -44,6 +44,7 @@ struct ServerOptions {
   /// only) or "redis://HOST[:PORT][/DB]" (shared by every replica pointed at the same Redis,
   /// surviving restarts as far as Redis persists; see workcells.h and model_store.h).
   std::string store = "memory";
+  double shutdown_grace = 10.0;  ///< [s] in-flight calls may take to finish on SIGTERM, in [0, 3600]
   /// TLS, mutual TLS and bearer tokens (--tls-cert, --tls-key, --tls-client-ca, --tokens);
   /// all empty = plaintext without authentication. See security.h.
   SecurityOptions security;
@@ -67,7 +68,9 @@ class PlanningServer {
   int metrics_port() const;
   /// One line on transport security and authentication, e.g. "TLS with client certificates, 3 bearer tokens".
   std::string security_description() const;
-  /// Stops accepting calls; calls still running after `grace` are cancelled. Idempotent.
+  /// Drains, then stops: health turns NOT_SERVING and new calls are refused with UNAVAILABLE
+  /// while the calls in flight finish, for at most `grace`; then the listener closes and calls
+  /// still running are cancelled. SIGTERM and SIGINT do this with --shutdown-grace. Idempotent.
   void Shutdown(std::chrono::milliseconds grace = std::chrono::milliseconds(2000));
   /// Blocks until the server has shut down.
   void Wait();
