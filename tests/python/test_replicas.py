@@ -115,8 +115,7 @@ class ReplicasBehindNginx(unittest.TestCase):
         cls.proxy_port = _free_port()
         conf = conf.replace("listen 127.0.0.1:8080 http2;", f"listen 127.0.0.1:{cls.proxy_port} http2;")
         prefix = work / "nginx"
-        for sub in ("temp", "logs"):
-            (prefix / sub).mkdir(parents=True)
+        (prefix / "logs").mkdir(parents=True)  # nginx opens logs/error.log before it reads -e
         (prefix / "nginx.conf").write_text(conf)
         cls._spawn([NGINX, "-p", str(prefix), "-c", str(prefix / "nginx.conf"), "-e", "stderr",
                     "-g", "daemon off; pid nginx.pid;"], work / "nginx.log")
