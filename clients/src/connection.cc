@@ -1,11 +1,19 @@
 #include "connection.h"
 
+#include <arpa/inet.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 namespace chasles::cli {
 namespace {
@@ -46,10 +54,77 @@ std::string Token(const ConnectionOptions& options) {
   return env != nullptr ? Trim(env) : std::string();
 }
 
+/// Methods a client may send again on UNAVAILABLE: they change nothing, or nothing twice.
+constexpr const char* kIdempotentMethods[] = {"Plan",   "ListPlanners", "UploadRobot", "UploadScene",   "UpdateScene",
+                                              "InverseKinematics", "Optimize", "Coordinate", "CreateWorkcell"};
+
+/// round_robin over the resolved addresses; the idempotent methods retried on UNAVAILABLE,
+/// up to 5 attempts, backing off 0.1 s × 2^k up to 1 s (as the Python client).
+std::string ServiceConfig() {
+  std::string names;
+  for (const char* method : kIdempotentMethods) {
+    names += std::string(names.empty() ? "" : ",") + R"({"service":"chasles.v1.Planning","method":")" + method + "\"}";
+  }
+  return R"({"loadBalancingConfig":[{"round_robin":{}}],"methodConfig":[{"name":[)" + names +
+         R"(],"retryPolicy":{"maxAttempts":5,"initialBackoff":"0.1s","maxBackoff":"1s","backoffMultiplier":2,)"
+         R"("retryableStatusCodes":["UNAVAILABLE"]}}]})";
+}
+
+/// The channel target of --server: one address as given, or several (comma-separated) resolved
+/// here into one static list (ipv4:a,b or ipv6:[a],[b]).
+std::string Target(const std::string& server) {
+  std::vector<std::string> addresses;
+  std::stringstream list(server);
+  for (std::string item; std::getline(list, item, ',');) {
+    item = Trim(item);
+    if (!item.empty()) addresses.push_back(item);
+  }
+  if (addresses.empty()) ConnectionError("--server is empty: give HOST:PORT, or several separated by commas");
+  if (addresses.size() == 1) return addresses[0];
+  std::vector<std::string> resolved;
+  bool v4 = false, v6 = false;
+  for (const std::string& address : addresses) {
+    const std::size_t colon = address.rfind(':');
+    if (colon == std::string::npos || colon == 0) ConnectionError("--server '" + address + "' must be HOST:PORT");
+    std::string host = address.substr(0, colon);
+    const std::string port = address.substr(colon + 1);
+    if (host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+    addrinfo hints{};
+    hints.ai_socktype = SOCK_STREAM;
+    addrinfo* found = nullptr;
+    if (const int error = getaddrinfo(host.c_str(), port.c_str(), &hints, &found); error != 0) {
+      ConnectionError("--server '" + address + "' does not resolve: " + gai_strerror(error));
+    }
+    for (addrinfo* a = found; a != nullptr; a = a->ai_next) {
+      char text[INET6_ADDRSTRLEN] = {0};
+      std::string entry;
+      if (a->ai_family == AF_INET) {
+        inet_ntop(AF_INET, &reinterpret_cast<sockaddr_in*>(a->ai_addr)->sin_addr, text, sizeof(text));
+        entry = std::string(text) + ":" + port;
+        v4 = true;
+      } else if (a->ai_family == AF_INET6) {
+        inet_ntop(AF_INET6, &reinterpret_cast<sockaddr_in6*>(a->ai_addr)->sin6_addr, text, sizeof(text));
+        entry = "[" + std::string(text) + "]:" + port;
+        v6 = true;
+      }
+      if (!entry.empty() && std::find(resolved.begin(), resolved.end(), entry) == resolved.end()) {
+        resolved.push_back(entry);
+      }
+    }
+    freeaddrinfo(found);
+  }
+  if (v4 && v6) ConnectionError("--server '" + server + "' mixes IPv4 and IPv6 addresses; give one family");
+  std::string target = v6 ? "ipv6:" : "ipv4:";
+  for (std::size_t i = 0; i < resolved.size(); ++i) target += (i > 0 ? "," : "") + resolved[i];
+  return target;
+}
+
 }  // namespace
 
 const char kConnectionUsage[] =
-    "  --server ADDR          server address (default 127.0.0.1:50051)\n"
+    "  --server ADDR          server address, or several replicas separated by commas: calls are\n"
+    "                         balanced round-robin and idempotent ones retried on UNAVAILABLE\n"
+    "                         (default 127.0.0.1:50051)\n"
     "  --tls-ca FILE          use TLS; trust server certificates signed by this CA (PEM)\n"
     "  --tls-cert FILE        client certificate (PEM) for mutual TLS; with --tls-key FILE\n"
     "  --tls-key FILE         the client certificate's private key (PEM)\n"
@@ -106,7 +181,8 @@ std::shared_ptr<grpc::Channel> MakeChannel(const ConnectionOptions& options, con
   if (!token.empty()) {
     credentials = grpc::CompositeChannelCredentials(credentials, grpc::AccessTokenCredentials(token));
   }
-  return grpc::CreateCustomChannel(options.server, credentials, channel_args);
+  channel_args.SetServiceConfigJSON(ServiceConfig());
+  return grpc::CreateCustomChannel(Target(options.server), credentials, channel_args);
 }
 
 }  // namespace chasles::cli

@@ -310,6 +310,31 @@ void ExpectSameTrajectory(const v1::JointTrajectory& a, const v1::JointTrajector
 
 // plan --planner/--budget/--seed/--sample-period/--padding replace the JSON's planner.plannerId,
 // timeBudget (3 s in planar_2r_posts.json), seed (7), trajectory.samplePeriod and padding.
+// Several replicas in --server (issue 15, item 2a): calls are balanced round-robin over them and
+// idempotent ones retried on UNAVAILABLE, so a list whose first replica is down still answers,
+// every time; an address that does not resolve is a usage error naming it.
+TEST(Cli, SeveralServersBalanceAndSkipOneThatIsDown) {
+  LoopbackServer a, b;
+  int down = 0;
+  {
+    LoopbackServer gone;  // a port that was a server's a moment ago
+    down = gone.port();
+  }
+  const std::string list = "--server 127.0.0.1:" + std::to_string(down) + "," + a.address() + ",localhost:" +
+                           std::to_string(b.port()) + " ";
+  for (int k = 0; k < 4; ++k) {
+    const CommandResult planners = RunCli(list + "planners");
+    EXPECT_EQ(planners.exit_code, 0) << planners.output;
+    EXPECT_NE(planners.output.find("rrt_connect"), std::string::npos) << planners.output;
+  }
+  const CommandResult plan = RunCli(list + "plan " + ExamplePath("requests/panda_table.json"));
+  EXPECT_EQ(plan.exit_code, 0) << plan.output;
+  const CommandResult unresolved = RunCli("--server " + a.address() + ",no-such-host.invalid:1 planners");
+  EXPECT_EQ(unresolved.exit_code, 2) << unresolved.output;
+  EXPECT_NE(unresolved.output.find("--server 'no-such-host.invalid:1' does not resolve"), std::string::npos)
+      << unresolved.output;
+}
+
 TEST(Cli, PlanOverridesPlannerBudgetSeedAndSamplePeriod) {
   ServerOptions options = LoopbackServer::QuietOptions(2);
   options.max_budget = 1.0;  // planar_2r_posts.json asks for 3 s: it plans only with --budget <= 1
