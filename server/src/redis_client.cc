@@ -132,6 +132,35 @@ RedisReply RedisClient::Send(const std::vector<std::string>& args) {
   return out;
 }
 
+std::vector<RedisReply> RedisClient::PipelineHeld(const std::vector<std::vector<std::string>>& commands) {
+  if (context_ == nullptr) Connect();
+  for (const std::vector<std::string>& args : commands) {
+    std::vector<const char*> argv;
+    std::vector<std::size_t> lengths;
+    for (const std::string& a : args) {
+      argv.push_back(a.data());
+      lengths.push_back(a.size());
+    }
+    if (redisAppendCommandArgv(context_, static_cast<int>(args.size()), argv.data(), lengths.data()) != REDIS_OK) {
+      throw Error(ErrorCode::kUnavailable, "the shared store Redis at " + address_.text() + " failed: " +
+                                               std::string(context_->errstr));
+    }
+  }
+  std::vector<RedisReply> replies;
+  for (std::size_t k = 0; k < commands.size(); ++k) {
+    void* raw = nullptr;
+    if (redisGetReply(context_, &raw) != REDIS_OK || raw == nullptr) {
+      const std::string why = context_->errstr;
+      redisFree(context_);
+      context_ = nullptr;
+      throw Error(ErrorCode::kUnavailable, "the shared store Redis at " + address_.text() + " failed: " + why);
+    }
+    replies.push_back(Convert(static_cast<redisReply*>(raw)));
+    freeReplyObject(raw);
+  }
+  return replies;
+}
+
 RedisReply RedisClient::Command(const std::vector<std::string>& args) {
   std::lock_guard<std::mutex> lock(mutex_);
   try {

@@ -225,7 +225,9 @@ void WorkcellStore::UseShared(std::shared_ptr<RedisClient> redis, ReservationLoa
 }
 
 std::vector<Reservation> WorkcellStore::ReadShared(const std::string& workcell, const RedisSend& send) {
-  if (Reply(send({"SISMEMBER", kWorkcellsKey, workcell})).integer != 1) {
+  const std::vector<RedisReply> first =
+      redis_->PipelineHeld({{"SISMEMBER", kWorkcellsKey, workcell}, {"SMEMBERS", CellKey(workcell, "ids")}});
+  if (Reply(first[0]).integer != 1) {
     std::string known;
     for (const RedisReply& name : Reply(send({"SMEMBERS", kWorkcellsKey})).elements) {
       known += (known.empty() ? "" : ", ") + name.str;
@@ -233,7 +235,7 @@ std::vector<Reservation> WorkcellStore::ReadShared(const std::string& workcell, 
     throw Error(ErrorCode::kNotFound, "workcell '" + workcell + "' is unknown (known: " +
                                           (known.empty() ? "none" : known) + "); create it with CreateWorkcell");
   }
-  const RedisReply ids = Reply(send({"SMEMBERS", CellKey(workcell, "ids")}));
+  const RedisReply& ids = Reply(first[1]);
   std::vector<Reservation> active;
   if (ids.elements.empty()) return active;
   std::vector<std::string> get = {"MGET"};
@@ -269,12 +271,13 @@ Reservation WorkcellStore::CommitShared(const std::string& workcell, Reservation
       const std::uint64_t number = static_cast<std::uint64_t>(Reply(send({"INCR", CellKey(workcell, "next")})).integer);
       CheckCommit(workcell, others, number, hold, padding, &candidate);
       const long long expires_ms = static_cast<long long>(std::ceil(candidate.expires_at * 1e3));
-      Reply(send({"MULTI"}));
-      send({"SET", CellKey(workcell, "r:" + candidate.id), candidate.record, "PXAT", std::to_string(expires_ms)});
-      send({"SADD", CellKey(workcell, "ids"), candidate.id});
-      send({"INCR", CellKey(workcell, "version")});
-      const RedisReply done = Reply(send({"EXEC"}));
-      committed = !done.nil();  // nil: the version changed since WATCH
+      const std::vector<RedisReply> replies = redis_->PipelineHeld(
+          {{"MULTI"},
+           {"SET", CellKey(workcell, "r:" + candidate.id), candidate.record, "PXAT", std::to_string(expires_ms)},
+           {"SADD", CellKey(workcell, "ids"), candidate.id},
+           {"INCR", CellKey(workcell, "version")},
+           {"EXEC"}});
+      committed = !Reply(replies.back()).nil();  // nil: the version changed since WATCH
     });
     if (committed) {
       std::lock_guard<std::mutex> lock(loaded_mutex_);
@@ -302,13 +305,14 @@ int WorkcellStore::ReleaseShared(const std::string& workcell, const std::string&
                                               "' is not an active reservation of workcell '" + workcell +
                                               "' (released, expired or never committed)");
       }
-      Reply(send({"MULTI"}));
+      std::vector<std::vector<std::string>> commands = {{"MULTI"}};
       for (const std::string& id : ids) {
-        send({"DEL", CellKey(workcell, "r:" + id)});
-        send({"SREM", CellKey(workcell, "ids"), id});
+        commands.push_back({"DEL", CellKey(workcell, "r:" + id)});
+        commands.push_back({"SREM", CellKey(workcell, "ids"), id});
       }
-      send({"INCR", CellKey(workcell, "version")});
-      if (!Reply(send({"EXEC"})).nil()) released = static_cast<int>(ids.size());
+      commands.push_back({"INCR", CellKey(workcell, "version")});
+      commands.push_back({"EXEC"});
+      if (!Reply(redis_->PipelineHeld(commands).back()).nil()) released = static_cast<int>(ids.size());
     });
     if (released >= 0) return released;
   }

@@ -5,15 +5,10 @@ spread over the replicas; a trajectory committed on one replica is a conflict on
 """
 from __future__ import annotations
 
-import ctypes
 import json
 import os
-import re
 import signal
-import socket
-import subprocess
 import sys
-import tempfile
 import time
 import unittest
 from pathlib import Path
@@ -24,120 +19,35 @@ import grpc
 from chasles_client import ChaslesError, Client
 from chasles_client._stubs import pb
 
-ROOT = Path(__file__).resolve().parents[2]
-REDIS = "/usr/bin/redis-server"
-NGINX = "/usr/sbin/nginx"
-
-
-def _stop_with_this_process() -> None:
-    if sys.platform.startswith("linux"):
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def _wait_for(predicate, what: str, timeout: float = 30.0) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return
-        time.sleep(0.05)
-    raise RuntimeError(f"{what} within {timeout} s")
-
-
-def _port_open(port: int) -> bool:
-    with socket.socket() as s:
-        s.settimeout(0.2)
-        return s.connect_ex(("127.0.0.1", port)) == 0
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from local_cluster import ROOT, LocalCluster  # noqa: E402
 
 
 class ReplicasBehindNginx(unittest.TestCase):
-    processes: List[subprocess.Popen]
-    work: tempfile.TemporaryDirectory
+    cluster: LocalCluster
 
     @classmethod
     def setUpClass(cls) -> None:
         binary = os.environ.get("CHASLES_SERVER_BIN")
         if not binary:
             raise unittest.SkipTest("CHASLES_SERVER_BIN is not set (ctest sets it to the built chasles-server)")
-        for tool in (REDIS, NGINX):
-            if not Path(tool).exists():
-                raise RuntimeError(f"{tool} is missing: scripts/setup installs redis-server and nginx")
-        cls.work = tempfile.TemporaryDirectory(prefix="chasles_replicas_")
-        work = Path(cls.work.name)
-        cls.processes = []
+        cls.cluster = LocalCluster(binary)
         try:
-            cls._start(work, binary)
+            store = cls.cluster.start_redis()
+            cls.replicas = [cls.cluster.start_replica(store) for _ in range(3)]
+            cls.logs = cls.cluster.replica_logs
+            cls.proxy = cls.cluster.start_nginx(cls.replicas)
         except BaseException:
-            cls.tearDownClass()
+            cls.cluster.stop()
             raise
 
     @classmethod
-    def _spawn(cls, args: List[str], log: Path) -> subprocess.Popen:
-        with log.open("w") as out:
-            process = subprocess.Popen(args, stdout=out, stderr=out, preexec_fn=_stop_with_this_process)
-        cls.processes.append(process)
-        return process
-
-    @classmethod
-    def _start(cls, work: Path, binary: str) -> None:
-        redis_port = _free_port()
-        (work / "redis").mkdir()
-        cls._spawn([REDIS, "--port", str(redis_port), "--bind", "127.0.0.1", "--dir", str(work / "redis"),
-                    "--appendonly", "yes", "--save", "", "--daemonize", "no"], work / "redis.log")
-        _wait_for(lambda: _port_open(redis_port), "redis-server did not listen")
-        cls.replicas = []
-        cls.logs = []
-        for k in range(3):
-            log = work / f"replica{k}.log"
-            cls._spawn([binary, "--listen", "127.0.0.1:0", "--threads", "1",
-                        "--store", f"redis://127.0.0.1:{redis_port}"], log)
-            found: List[str] = []
-
-            def listening() -> bool:
-                match = re.search(r"listening on \S+ \(port (\d+)\)", log.read_text())
-                if match:
-                    found.append(match.group(1))
-                return bool(match)
-
-            _wait_for(listening, f"replica {k} did not report its port")
-            cls.replicas.append(f"127.0.0.1:{found[0]}")
-            cls.logs.append(log)
-        # The repository's nginx.conf with this test's ports.
-        conf = (ROOT / "deploy/nginx/nginx.conf").read_text()
-        defaults = ["127.0.0.1:50051", "127.0.0.1:50052", "127.0.0.1:50053"]
-        for default, actual in zip(defaults, cls.replicas):
-            conf = conf.replace(f"server {default};", f"server {actual};")
-        cls.proxy_port = _free_port()
-        conf = conf.replace("listen 127.0.0.1:8080 http2;", f"listen 127.0.0.1:{cls.proxy_port} http2;")
-        prefix = work / "nginx"
-        (prefix / "logs").mkdir(parents=True)  # nginx opens logs/error.log before it reads -e
-        (prefix / "nginx.conf").write_text(conf)
-        cls._spawn([NGINX, "-p", str(prefix), "-c", str(prefix / "nginx.conf"), "-e", "stderr",
-                    "-g", "daemon off; pid nginx.pid;"], work / "nginx.log")
-        _wait_for(lambda: _port_open(cls.proxy_port), "nginx did not listen")
-
-    @classmethod
     def tearDownClass(cls) -> None:
-        for process in reversed(getattr(cls, "processes", [])):
-            if process.poll() is None:
-                process.send_signal(signal.SIGTERM)
-        for process in reversed(getattr(cls, "processes", [])):
-            try:
-                process.wait(timeout=10.0)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
-        if getattr(cls, "work", None) is not None:
-            cls.work.cleanup()
+        cls.cluster.stop()
 
     def test_plans_through_nginx_spread_over_the_replicas(self) -> None:
         before = [log.read_text().count("Plan request") for log in self.logs]
-        with Client(f"127.0.0.1:{self.proxy_port}", timeout=60.0) as client:
+        with Client(self.proxy, timeout=60.0) as client:
             robot_id = client.upload_robot(ROOT / "examples/robots/panda.urdf", ROOT / "examples/robots/panda.srdf")
             example = json.loads((ROOT / "examples/requests/panda_table.json").read_text())
             results = [client.plan(example["start"]["positions"], example["goal"]["positions"], robot_id=robot_id,
@@ -167,7 +77,7 @@ class ReplicasBehindNginx(unittest.TestCase):
             self.assertEqual(raised.exception.code(), grpc.StatusCode.FAILED_PRECONDITION)
             self.assertIn("conflicts with a committed one", raised.exception.details())
         # And through the proxy, whichever replica answers.
-        with Client(f"127.0.0.1:{self.proxy_port}", timeout=60.0) as proxied:
+        with Client(self.proxy, timeout=60.0) as proxied:
             created = proxied.stub.CreateWorkcell(pb.CreateWorkcellRequest(name="proxy_cell"), timeout=30)
             self.assertFalse(created.created)
             self.assertEqual(created.active_reservations, 1)
@@ -181,32 +91,13 @@ class ReplicaFailures(unittest.TestCase):
         binary = os.environ.get("CHASLES_SERVER_BIN")
         if not binary:
             raise unittest.SkipTest("CHASLES_SERVER_BIN is not set")
-        self.binary = binary
-        self.work = tempfile.TemporaryDirectory(prefix="chasles_failures_")
-        self.processes: List[subprocess.Popen] = []
+        self.cluster = LocalCluster(binary)
 
     def tearDown(self) -> None:
-        for process in self.processes:
-            if process.poll() is None:
-                process.kill()
-                process.wait()
-        self.work.cleanup()
+        self.cluster.stop()
 
     def start_replica(self, k: int) -> str:
-        log = Path(self.work.name) / f"replica{k}.log"
-        with log.open("w") as out:
-            self.processes.append(subprocess.Popen([self.binary, "--listen", "127.0.0.1:0", "--threads", "2"],
-                                                   stdout=out, stderr=out, preexec_fn=_stop_with_this_process))
-        found: List[str] = []
-
-        def listening() -> bool:
-            match = re.search(r"listening on \S+ \(port (\d+)\)", log.read_text())
-            if match:
-                found.append(match.group(1))
-            return bool(match)
-
-        _wait_for(listening, f"replica {k} did not report its port")
-        return f"127.0.0.1:{found[0]}"
+        return self.cluster.start_replica(threads=2)
 
     def test_sigterm_finishes_the_call_in_flight_and_refuses_new_ones(self) -> None:
         address = self.start_replica(0)
@@ -224,7 +115,7 @@ class ReplicaFailures(unittest.TestCase):
             worker.start()
             time.sleep(0.4)
             stopped_at = time.monotonic()
-            self.processes[0].send_signal(signal.SIGTERM)
+            self.cluster.processes[0].send_signal(signal.SIGTERM)
             time.sleep(0.2)
             # Draining: health says so, and a new call is refused as UNAVAILABLE (a balancing
             # client would retry it on another replica) ...
@@ -236,7 +127,7 @@ class ReplicaFailures(unittest.TestCase):
             # ... while the call in flight finishes with its answer.
             worker.join(timeout=30.0)
             self.assertTrue(outcome and outcome[0].success, outcome)
-            self.processes[0].wait(timeout=15.0)
+            self.cluster.processes[0].wait(timeout=15.0)
             self.assertLess(time.monotonic() - stopped_at, 10.0)  # --shutdown-grace (10 s by default)
 
     def test_a_replica_killed_under_load_costs_no_call(self) -> None:
@@ -269,7 +160,7 @@ class ReplicaFailures(unittest.TestCase):
             for t in threads:
                 t.start()
             time.sleep(1.5)
-            self.processes[1].kill()  # SIGKILL, mid-call for some of the threads
+            self.cluster.processes[1].kill()  # SIGKILL, mid-call for some of the threads
             for t in threads:
                 t.join(timeout=60.0)
         self.assertEqual(failures, [])

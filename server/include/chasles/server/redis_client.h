@@ -56,6 +56,10 @@ class RedisClient {
   /// inside: a failure is Error(kUnavailable).
   void Transaction(const std::function<void(const std::function<RedisReply(const std::vector<std::string>&)>&)>& body);
 
+  /// Inside Transaction's body (the connection held): several commands sent at once and their
+  /// replies read in order — one round trip, e.g. MULTI … EXEC. \throws Error(kUnavailable).
+  std::vector<RedisReply> PipelineHeld(const std::vector<std::vector<std::string>>& commands);
+
   const RedisAddress& address() const { return address_; }
 
  private:
