@@ -41,15 +41,48 @@ void AddPlan(const OpenFleet& fleet, int r, v1::AssignFleetGoalsResponse* respon
   KnotsToProto(plan.trajectory, fleet.joint_names[static_cast<std::size_t>(r)], out->mutable_knots());
 }
 
+constexpr const char* kFleetsKey = "chasles:fleets";
+
+std::string FleetKey(const std::string& name, const std::string& what) { return "chasles:fleet:" + name + ":" + what; }
+
+/// `reply`, or Error(kUnavailable) for a Redis error reply.
+const RedisReply& Reply(const RedisReply& reply) {
+  if (reply.type == RedisReply::Type::kError) {
+    throw Error(ErrorCode::kUnavailable, "the shared store answered with an error: " + reply.str);
+  }
+  return reply;
+}
+
 }  // namespace
 
-void FleetSessionStore::Add(const std::string& name, std::shared_ptr<OpenFleet> fleet) {
+void FleetSessionStore::UseShared(std::shared_ptr<RedisClient> redis, Rebuild rebuild) {
+  redis_ = std::move(redis);
+  rebuild_ = std::move(rebuild);
+}
+
+void FleetSessionStore::Add(const std::string& name, std::shared_ptr<OpenFleet> fleet,
+                            const v1::OpenFleetSessionRequest& record) {
   if (!ValidWorkcellName(name)) ThrowInvalid("name = '" + name + "' must be 1 to 64 characters of [A-Za-z0-9_.-]");
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (sessions_.count(name) > 0) {
-    throw Error(ErrorCode::kFailedPrecondition,
-                "fleet session '" + name + "' is open already; close it first (CloseFleetSession) or use another name");
+  const std::string already =
+      "fleet session '" + name + "' is open already; close it first (CloseFleetSession) or use another name";
+  if (redis_ != nullptr) {
+    const long long open = Reply(redis_->Command({"SCARD", kFleetsKey})).integer;
+    if (static_cast<std::size_t>(open) >= max_sessions_) {
+      ThrowResourceExhausted("the shared store holds " + std::to_string(open) +
+                             " fleet sessions already, the server's cap; close one (CloseFleetSession)");
+    }
+    fleet->record = record.SerializeAsString();
+    fleet->applied = 0;
+    if (Reply(redis_->Command({"SET", FleetKey(name, "open"), fleet->record, "NX"})).nil()) {
+      throw Error(ErrorCode::kFailedPrecondition, already);
+    }
+    Reply(redis_->Command({"SADD", kFleetsKey, name}));
+    std::lock_guard<std::mutex> lock(mutex_);
+    sessions_[name] = std::move(fleet);
+    return;
   }
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (sessions_.count(name) > 0) throw Error(ErrorCode::kFailedPrecondition, already);
   if (sessions_.size() >= max_sessions_) {
     ThrowResourceExhausted("this server holds " + std::to_string(sessions_.size()) +
                            " fleet sessions already, its cap; close one (CloseFleetSession)");
@@ -57,7 +90,8 @@ void FleetSessionStore::Add(const std::string& name, std::shared_ptr<OpenFleet> 
   sessions_.emplace(name, std::move(fleet));
 }
 
-std::shared_ptr<OpenFleet> FleetSessionStore::Find(const std::string& name) const {
+std::shared_ptr<OpenFleet> FleetSessionStore::Find(const std::string& name) {
+  if (redis_ != nullptr) return FindShared(name);
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = sessions_.find(name);
   if (it != sessions_.end()) return it->second;
@@ -67,14 +101,126 @@ std::shared_ptr<OpenFleet> FleetSessionStore::Find(const std::string& name) cons
                                         (known.empty() ? "none" : known) + "); open it with OpenFleetSession");
 }
 
-bool FleetSessionStore::Close(const std::string& name) {
+std::shared_ptr<OpenFleet> FleetSessionStore::FindShared(const std::string& name) {
+  const RedisReply record = Reply(redis_->Command({"GET", FleetKey(name, "open")}));
+  if (record.nil()) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      sessions_.erase(name);
+    }
+    std::string known;
+    for (const RedisReply& open : Reply(redis_->Command({"SMEMBERS", kFleetsKey})).elements) {
+      known += (known.empty() ? "" : ", ") + open.str;
+    }
+    throw Error(ErrorCode::kNotFound, "fleet session '" + name + "' is not open (open: " +
+                                          (known.empty() ? "none" : known) + "); open it with OpenFleetSession");
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = sessions_.find(name);
+    if (it != sessions_.end() && it->second->record == record.str) return it->second;
+  }
+  // Opened on another replica (or closed and opened again): built here from its record.
+  v1::OpenFleetSessionRequest request;
+  if (!request.ParseFromString(record.str)) {
+    throw Error(ErrorCode::kFailedPrecondition, "the shared store holds an unreadable fleet session '" + name + "'");
+  }
+  std::shared_ptr<OpenFleet> fleet = rebuild_(request);
+  fleet->record = record.str;
+  fleet->applied = 0;
   std::lock_guard<std::mutex> lock(mutex_);
-  return sessions_.erase(name) > 0;
+  auto& slot = sessions_[name];
+  if (slot == nullptr || slot->record != record.str) slot = fleet;
+  return slot;
 }
 
-std::size_t FleetSessionStore::size() const {
+void FleetSessionStore::Assign(const std::string& name, const v1::AssignFleetGoalsRequest& request, double now,
+                               const Termination& termination, v1::AssignFleetGoalsResponse* response) {
+  const std::shared_ptr<OpenFleet> fleet = Find(name);
+  std::lock_guard<std::mutex> lock(fleet->mutex);
+  if (redis_ != nullptr) return AssignShared(name, *fleet, request, now, termination, response);
+  AssignFleetGoalsFromProto(*fleet, request, now, termination, response);
+}
+
+void FleetSessionStore::AssignShared(const std::string& name, OpenFleet& fleet, const v1::AssignFleetGoalsRequest& request,
+                                     double now, const Termination& termination,
+                                     v1::AssignFleetGoalsResponse* response) {
+  const std::string log = FleetKey(name, "log");
+  for (int attempt = 0; attempt < 50; ++attempt) {
+    bool done = false;
+    redis_->Transaction([&](const std::function<RedisReply(const std::vector<std::string>&)>& send) {
+      Reply(send({"WATCH", log}));
+      const std::vector<RedisReply> state =
+          redis_->PipelineHeld({{"GET", FleetKey(name, "open")}, {"LLEN", log}});
+      if (Reply(state[0]).nil() || state[0].str != fleet.record) {
+        throw Error(ErrorCode::kNotFound, "fleet session '" + name + "' was closed meanwhile; open it again");
+      }
+      const std::uint64_t length = static_cast<std::uint64_t>(Reply(state[1]).integer);
+      if (length > fleet.applied) {
+        // Catch up with the batches other replicas appended.
+        const RedisReply batches = Reply(send({"LRANGE", log, std::to_string(fleet.applied), std::to_string(length - 1)}));
+        for (const RedisReply& batch : batches.elements) {
+          ReplayFleetGoals(fleet, batch.str);
+          ++fleet.applied;
+        }
+      }
+      // Plan on a copy: it becomes the session only once the batch is in the log.
+      OpenFleet trial;
+      trial.session = std::make_unique<FleetSession>(*fleet.session);
+      trial.names = fleet.names;
+      trial.joint_names = fleet.joint_names;
+      trial.index = fleet.index;
+      response->Clear();
+      AssignFleetGoalsFromProto(trial, request, now, termination, response);
+      v1::AssignFleetGoalsRequest batch;
+      batch.set_now(now);
+      for (int k = 0; k < request.goals_size(); ++k) {
+        v1::FleetGoal* goal = batch.add_goals();
+        goal->set_robot(request.goals(k).robot());
+        if (response->results(k).outcome() == v1::SUCCESS) *goal->mutable_positions() = request.goals(k).positions();
+      }
+      const std::vector<RedisReply> replies =
+          redis_->PipelineHeld({{"MULTI"}, {"RPUSH", log, batch.SerializeAsString()}, {"EXEC"}});
+      if (Reply(replies.back()).nil()) return;  // another replica appended first: start over
+      fleet.session = std::move(trial.session);
+      ++fleet.applied;
+      done = true;
+    });
+    if (done) return;
+  }
+  throw Error(ErrorCode::kUnavailable, "fleet session '" + name + "' changed under this call 50 times in a row; try again");
+}
+
+bool FleetSessionStore::Close(const std::string& name) {
+  bool closed = false;
+  if (redis_ != nullptr) {
+    closed = Reply(redis_->Command({"DEL", FleetKey(name, "open"), FleetKey(name, "log")})).integer > 0;
+    Reply(redis_->Command({"SREM", kFleetsKey, name}));
+  }
   std::lock_guard<std::mutex> lock(mutex_);
-  return sessions_.size();
+  closed = sessions_.erase(name) > 0 || closed;
+  return closed;
+}
+
+void ReplayFleetGoals(OpenFleet& fleet, const std::string& bytes) {
+  v1::AssignFleetGoalsRequest batch;
+  if (!batch.ParseFromString(bytes)) {
+    throw Error(ErrorCode::kFailedPrecondition, "the shared store holds an unreadable fleet goal batch");
+  }
+  for (const v1::FleetGoal& goal : batch.goals()) {
+    const auto it = fleet.index.find(goal.robot());
+    if (it == fleet.index.end()) throw Error(ErrorCode::kFailedPrecondition, "a stored goal names an unknown robot");
+    if (goal.positions_size() != 3) {
+      fleet.session->Skip(batch.now());
+      continue;
+    }
+    const Eigen::Vector3d target(goal.positions(0), goal.positions(1), goal.positions(2));
+    const FleetGoalOutcome outcome = fleet.session->Assign(it->second, target, batch.now());
+    if (outcome.code != FleetGoalCode::kSuccess) {
+      throw Error(ErrorCode::kFailedPrecondition, "replaying the shared fleet session diverged at a goal of robot '" +
+                                                      goal.robot() + "': " + outcome.message);
+    }
+  }
 }
 
 std::shared_ptr<OpenFleet> OpenFleetFromProto(const v1::OpenFleetSessionRequest& request,

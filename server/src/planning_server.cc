@@ -553,13 +553,18 @@ class PlanningService final : public RawService {
               request, scene.scene, scene.id,
               [this](const v1::TeamRobot& robot, const std::string& field) { return TeamRobotOf(robot, field).model; },
               start_time, options_.max_team_robots, &fleet_lattices_, &call.response);
+          // The record another replica rebuilds the session from: robots and scene by id.
+          v1::OpenFleetSessionRequest record = request;
+          record.set_scene_id(scene.id);
+          record.set_start_time(start_time);
           for (int k = 0; k < request.robots_size(); ++k) {
             if (!request.robots(k).has_robot()) continue;  // an uploaded robot reported them at upload
             const std::string field = "robots[" + std::to_string(k) + "].robot";
-            const auto model = TeamRobotOf(request.robots(k), "robots[" + std::to_string(k) + "]").model;
-            for (const std::string& w : RobotWarnings(*model, field)) call.response.add_warnings(w);
+            const StoredRobot stored = TeamRobotOf(request.robots(k), "robots[" + std::to_string(k) + "]");
+            for (const std::string& w : RobotWarnings(*stored.model, field)) call.response.add_warnings(w);
+            record.mutable_robots(k)->set_robot_id(stored.id);
           }
-          fleet_sessions_.Add(request.name(), std::move(fleet));
+          fleet_sessions_.Add(request.name(), std::move(fleet), record);
           call.record.fields = {{"session", request.name()},
                                 {"scene", IdPrefix(scene.id)},
                                 {"robots", std::to_string(request.robots_size())},
@@ -576,11 +581,9 @@ class PlanningService final : public RawService {
           if (request.goals_size() > 10000) {
             ThrowInvalid("goals has " + std::to_string(request.goals_size()) + " entries; send at most 10000 at once");
           }
-          const std::shared_ptr<OpenFleet> fleet = fleet_sessions_.Find(request.name());
           const double now = request.now() == 0.0 ? workcells_->Now() : request.now();
-          std::lock_guard<std::mutex> lock(fleet->mutex);
           const Termination termination = call.Start(BudgetEnd(30.0, call.deadline), call.deadline);
-          AssignFleetGoalsFromProto(*fleet, request, now, termination, &call.response);
+          fleet_sessions_.Assign(request.name(), request, now, termination, &call.response);
           int solved = 0;
           for (const v1::FleetGoalResult& result : call.response.results()) solved += result.outcome() == v1::SUCCESS;
           call.record.fields = {{"session", request.name()},
@@ -674,6 +677,19 @@ class PlanningService final : public RawService {
 
   /// A call the credentials refused before any handler ran (see AccessControl): one log line and
   /// its metrics, like every other call; the client is the token's name when it was known.
+  /// Fleet sessions in the shared store (before serving): a session opened on another replica is
+  /// rebuilt here from its record, with this replica's model store and lattice cache.
+  void UseSharedFleets(std::shared_ptr<RedisClient> redis) {
+    fleet_sessions_.UseShared(std::move(redis), [this](const v1::OpenFleetSessionRequest& record) {
+      const StoredScene scene = SceneOfRequest(*store_, record);
+      v1::OpenFleetSessionResponse ignored;
+      return OpenFleetFromProto(
+          record, scene.scene, scene.id,
+          [this](const v1::TeamRobot& robot, const std::string& field) { return TeamRobotOf(robot, field).model; },
+          record.start_time(), options_.max_team_robots, &fleet_lattices_, &ignored);
+    });
+  }
+
   /// Shutting down: from now on every new unary call is refused with UNAVAILABLE (clients retry
   /// it on another replica); calls already accepted run to their end.
   void StartDraining() { draining_.store(true); }
@@ -1099,9 +1115,11 @@ PlanningServer::PlanningServer(const ServerOptions& options) : impl_(std::make_u
   RegisterDefaultPlanners(&impl_->registry);
   impl_->store =
       std::make_unique<ModelStore>(DefaultRobotProto(), DefaultSceneProto(), options.cache_mb << 20, options.limits);
+  std::optional<RedisAddress> shared;
   if (options.store != "memory") {
-    // Two connections: model reads and writes do not wait behind a workcell commit's transaction.
+    // Own connections: model reads and writes do not wait behind a workcell commit's transaction.
     const RedisAddress address = ParseRedisUrl(options.store, "--store");
+    shared = address;
     impl_->store->UseShared(std::make_shared<RedisClient>(address));
     ModelStore* models = impl_->store.get();
     impl_->workcells.UseShared(std::make_shared<RedisClient>(address), [models](const std::string& record) {
@@ -1132,6 +1150,7 @@ PlanningServer::PlanningServer(const ServerOptions& options) : impl_(std::make_u
   services.metrics = impl_->metrics.get();
   services.options = &impl_->options;
   impl_->service = std::make_unique<PlanningService>(services);
+  if (shared) impl_->service->UseSharedFleets(std::make_shared<RedisClient>(*shared));
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();

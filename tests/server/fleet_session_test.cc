@@ -10,11 +10,13 @@
 #include <map>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <google/protobuf/util/json_util.h>
 #include <gtest/gtest.h>
 
+#include "redis_fixture.h"
 #include "server_fixture.h"
 
 namespace chasles::testing {
@@ -50,6 +52,72 @@ struct KnotMotion {
     *speed = std::hypot(v[0], v[1]);
   }
 };
+
+/// The independent check at 1 ms of every robot's executed motion (its start, then each plan from
+/// its start_time until the robot's next plan starts), rebuilt from the knots alone: discs of
+/// 0.4 m at least 0.2 m apart (1 m spacing), 0.1 m from the scene's unit boxes, at most 1 m/s;
+/// a new plan starts where the robot is, at rest.
+void CheckExecuted(const v1::CoordinateRequest& example, std::map<std::string, std::vector<KnotMotion>> motions,
+                   double from, double horizon) {
+  const int n = example.robots_size();
+  std::map<std::string, std::vector<double>> starts;
+  for (const v1::TeamRobot& r : example.robots()) starts[r.name()] = {r.start().positions(0), r.start().positions(1)};
+  // The scene's boxes are unit cells: blocked[(cx, cy)] with the box centred at (cx + 0.5, cy + 0.5).
+  std::set<std::pair<int, int>> blocked;
+  for (const v1::Box& box : example.scene().boxes()) {
+    ASSERT_EQ(box.size().x(), 1.0);
+    ASSERT_EQ(box.size().y(), 1.0);
+    blocked.insert({static_cast<int>(std::floor(box.pose().position().x())),
+                    static_cast<int>(std::floor(box.pose().position().y()))});
+  }
+  std::vector<std::string> names;
+  for (const v1::TeamRobot& r : example.robots()) names.push_back(r.name());
+  const double radius = 0.4;
+  double min_pair = 1e9, min_box = 1e9, max_speed = 0.0;
+  std::vector<double> x(static_cast<std::size_t>(n)), y(static_cast<std::size_t>(n));
+  for (double t = from; t <= horizon + 1e-9; t += 1e-3) {
+    for (int i = 0; i < n; ++i) {
+      const auto& list = motions[names[static_cast<std::size_t>(i)]];
+      double speed = 0.0;
+      x[i] = starts[names[static_cast<std::size_t>(i)]][0];
+      y[i] = starts[names[static_cast<std::size_t>(i)]][1];
+      for (std::size_t k = 0; k < list.size(); ++k) {
+        if (list[k].start > t) break;
+        list[k].At(t, &x[i], &y[i], &speed);
+      }
+      max_speed = std::max(max_speed, speed);
+      const int cx = static_cast<int>(std::floor(x[i])), cy = static_cast<int>(std::floor(y[i]));
+      for (int bx = cx - 1; bx <= cx + 1; ++bx) {
+        for (int by = cy - 1; by <= cy + 1; ++by) {
+          if (blocked.count({bx, by}) == 0) continue;
+          const double dx = std::max(std::abs(x[i] - (bx + 0.5)) - 0.5, 0.0);
+          const double dy = std::max(std::abs(y[i] - (by + 0.5)) - 0.5, 0.0);
+          min_box = std::min(min_box, std::hypot(dx, dy) - radius);
+        }
+      }
+    }
+    for (int i = 0; i < n; ++i) {
+      for (int j = i + 1; j < n; ++j) {
+        const double dx = x[i] - x[j], dy = y[i] - y[j];
+        if (std::abs(dx) < 2.0 && std::abs(dy) < 2.0) min_pair = std::min(min_pair, std::hypot(dx, dy) - 2 * radius);
+      }
+    }
+  }
+  // Hand-overs: a new plan starts where the robot is at that moment, at rest.
+  for (const auto& [name, list] : motions) {
+    for (std::size_t k = 1; k < list.size(); ++k) {
+      double x0, y0, s0, x1, y1, s1;
+      list[k - 1].At(list[k].start, &x0, &y0, &s0);
+      list[k].At(list[k].start, &x1, &y1, &s1);
+      EXPECT_NEAR(x0, x1, 1e-9) << name;
+      EXPECT_NEAR(y0, y1, 1e-9) << name;
+      EXPECT_NEAR(s0, 0.0, 1e-9) << name;
+    }
+  }
+  EXPECT_GE(min_pair, 0.2 - 1e-9);  // spacing 1 m: discs of 0.4 m keep 0.2 m
+  EXPECT_GE(min_box, 0.1 - 1e-9);   // nodes 0.5 m from a box edge
+  EXPECT_LE(max_speed, 1.0 + 1e-9);  // 1 m/s, along one axis at a time
+}
 
 class FleetSessions : public SharedServerTest<> {
  protected:
@@ -92,10 +160,6 @@ TEST_F(FleetSessions, GoalsThatKeepComingAreAnsweredApartAndCertifiedIndependent
 
   const int n = example.robots_size();
   std::map<std::string, std::vector<KnotMotion>> motions;
-  std::map<std::string, std::vector<double>> starts;
-  for (const v1::TeamRobot& r : example.robots()) {
-    starts[r.name()] = {r.start().positions(0), r.start().positions(1)};
-  }
   // Round 1: the example's goals, in three batches 2 s apart (robots of the first batches are
   // moving when the later ones come). Round 2: every robot back to its start, once all are idle.
   double now = 1000.0, horizon = 1000.0, slowest = 0.0;
@@ -154,62 +218,7 @@ TEST_F(FleetSessions, GoalsThatKeepComingAreAnsweredApartAndCertifiedIndependent
   std::cout << "[ session  ] " << answered << " goals answered (" << deferred_total << " retried once all idle), slowest "
             << slowest * 1e3 << " ms; horizon " << horizon - 1000.0 << " s\n";
 
-  // The independent check at 1 ms.
-  // The scene's boxes are unit cells: blocked[(cx, cy)] with the box centred at (cx + 0.5, cy + 0.5).
-  std::set<std::pair<int, int>> blocked;
-  for (const v1::Box& box : example.scene().boxes()) {
-    ASSERT_EQ(box.size().x(), 1.0);
-    ASSERT_EQ(box.size().y(), 1.0);
-    blocked.insert({static_cast<int>(std::floor(box.pose().position().x())),
-                    static_cast<int>(std::floor(box.pose().position().y()))});
-  }
-  std::vector<std::string> names;
-  for (const v1::TeamRobot& r : example.robots()) names.push_back(r.name());
-  const double radius = 0.4;
-  double min_pair = 1e9, min_box = 1e9, max_speed = 0.0;
-  std::vector<double> x(static_cast<std::size_t>(n)), y(static_cast<std::size_t>(n));
-  for (double t = 1000.0; t <= horizon + 1e-9; t += 1e-3) {
-    for (int i = 0; i < n; ++i) {
-      const auto& list = motions[names[static_cast<std::size_t>(i)]];
-      double speed = 0.0;
-      x[i] = starts[names[static_cast<std::size_t>(i)]][0];
-      y[i] = starts[names[static_cast<std::size_t>(i)]][1];
-      for (std::size_t k = 0; k < list.size(); ++k) {
-        if (list[k].start > t) break;
-        list[k].At(t, &x[i], &y[i], &speed);
-      }
-      max_speed = std::max(max_speed, speed);
-      const int cx = static_cast<int>(std::floor(x[i])), cy = static_cast<int>(std::floor(y[i]));
-      for (int bx = cx - 1; bx <= cx + 1; ++bx) {
-        for (int by = cy - 1; by <= cy + 1; ++by) {
-          if (blocked.count({bx, by}) == 0) continue;
-          const double dx = std::max(std::abs(x[i] - (bx + 0.5)) - 0.5, 0.0);
-          const double dy = std::max(std::abs(y[i] - (by + 0.5)) - 0.5, 0.0);
-          min_box = std::min(min_box, std::hypot(dx, dy) - radius);
-        }
-      }
-    }
-    for (int i = 0; i < n; ++i) {
-      for (int j = i + 1; j < n; ++j) {
-        const double dx = x[i] - x[j], dy = y[i] - y[j];
-        if (std::abs(dx) < 2.0 && std::abs(dy) < 2.0) min_pair = std::min(min_pair, std::hypot(dx, dy) - 2 * radius);
-      }
-    }
-  }
-  // Hand-overs: a new plan starts where the robot is at that moment, at rest.
-  for (const auto& [name, list] : motions) {
-    for (std::size_t k = 1; k < list.size(); ++k) {
-      double x0, y0, s0, x1, y1, s1;
-      list[k - 1].At(list[k].start, &x0, &y0, &s0);
-      list[k].At(list[k].start, &x1, &y1, &s1);
-      EXPECT_NEAR(x0, x1, 1e-9) << name;
-      EXPECT_NEAR(y0, y1, 1e-9) << name;
-      EXPECT_NEAR(s0, 0.0, 1e-9) << name;
-    }
-  }
-  EXPECT_GE(min_pair, 0.2 - 1e-9);  // spacing 1 m: discs of 0.4 m keep 0.2 m
-  EXPECT_GE(min_box, 0.1 - 1e-9);   // nodes 0.5 m from a box edge
-  EXPECT_LE(max_speed, 1.0 + 1e-9);  // 1 m/s, along one axis at a time
+  CheckExecuted(example, motions, 1000.0, horizon);
 }
 
 TEST_F(FleetSessions, BadInputGetsNamedErrorsAndChangesNothing) {
@@ -280,6 +289,124 @@ TEST_F(FleetSessions, BadInputGetsNamedErrorsAndChangesNothing) {
   EXPECT_TRUE(closed.closed());
   ASSERT_TRUE(Call(close, &closed, &v1::Planning::Stub::CloseFleetSession).ok());
   EXPECT_FALSE(closed.closed());
+}
+
+// With --store redis://… a session opened on one replica is served by every replica: batches sent
+// alternately to two replicas each plan against the other's plans (the shared log replayed), two
+// robots sent to one node at the same moment through two replicas: exactly one gets it, every
+// time; every executed motion is certified as above; closed on one, gone on the other.
+TEST(FleetSessionsShared, TwoReplicasServeOneSession) {
+  RedisServer redis;
+  ServerOptions options = LoopbackServer::QuietOptions(2);
+  options.store = redis.url();
+  LoopbackServer a(options), b(options);
+  LoopbackServer* replicas[2] = {&a, &b};
+  const auto call = [](LoopbackServer& server, const auto& request, auto* response, auto method) {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+    return (server.stub().*method)(&context, request, response);
+  };
+  v1::CoordinateRequest example;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(ReadText(ExamplePath("requests/coordinate_fleet.json")),
+                                                           &example)
+                  .ok());
+  v1::OpenFleetSessionRequest open;
+  open.set_name("shared_depot");
+  *open.mutable_scene() = example.scene();
+  for (const v1::TeamRobot& robot : example.robots()) {
+    *open.add_robots() = robot;
+    open.mutable_robots(open.robots_size() - 1)->clear_goal();
+  }
+  open.set_fleet_resolution(1.0);
+  open.set_start_time(1000.0);
+  v1::OpenFleetSessionResponse opened;
+  grpc::Status status = call(a, open, &opened, &v1::Planning::Stub::OpenFleetSession);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  status = call(b, open, &opened, &v1::Planning::Stub::OpenFleetSession);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << status.error_message();
+
+  std::map<std::string, std::vector<KnotMotion>> motions;
+  double horizon = 1000.0, now = 1000.0;
+  const auto keep = [&](const v1::AssignFleetGoalsResponse& response) {
+    for (const v1::FleetPlan& plan : response.plans()) {
+      motions[plan.robot()].push_back({plan.start_time(), plan.knots()});
+      horizon = std::max(horizon, plan.finish_time());
+    }
+  };
+  // Batches of 6 goals, alternately to a and b; deferred goals again once every robot is idle.
+  std::vector<int> pending;
+  for (int k = 0; k < example.robots_size(); ++k) pending.push_back(k);
+  for (int round = 0; round < 4 && !pending.empty(); ++round) {
+    std::vector<int> deferred;
+    for (std::size_t from = 0, batch = 0; from < pending.size(); from += 6, ++batch) {
+      v1::AssignFleetGoalsRequest goals;
+      goals.set_name("shared_depot");
+      goals.set_now(now);
+      for (std::size_t i = from; i < std::min(pending.size(), from + 6); ++i) {
+        const v1::TeamRobot& robot = example.robots(pending[i]);
+        v1::FleetGoal* goal = goals.add_goals();
+        goal->set_robot(robot.name());
+        *goal->mutable_positions() = robot.goal().positions();
+      }
+      v1::AssignFleetGoalsResponse response;
+      status = call(*replicas[batch % 2], goals, &response, &v1::Planning::Stub::AssignFleetGoals);
+      ASSERT_TRUE(status.ok()) << status.error_message();
+      for (int k = 0; k < response.results_size(); ++k) {
+        if (response.results(k).outcome() != v1::SUCCESS) deferred.push_back(pending[from + static_cast<std::size_t>(k)]);
+      }
+      keep(response);
+      now += 1.0;
+    }
+    pending = deferred;
+    now = std::max(now, horizon + 0.5);
+  }
+  EXPECT_TRUE(pending.empty());
+
+  // The race: robot i through a, robot j through b, one node, the same moment.
+  int a_won = 0, b_won = 0;
+  for (int round = 0; round < 10; ++round) {
+    const v1::TeamRobot& first = example.robots(2 * round);
+    const v1::TeamRobot& second = example.robots(2 * round + 1);
+    v1::AssignFleetGoalsRequest left, right;
+    for (auto* request : {&left, &right}) {
+      request->set_name("shared_depot");
+      request->set_now(now);
+    }
+    v1::FleetGoal* goal = left.add_goals();
+    goal->set_robot(first.name());
+    *goal->mutable_positions() = first.start().positions();  // back where it started
+    *right.add_goals() = *goal;
+    right.mutable_goals(0)->set_robot(second.name());
+    v1::AssignFleetGoalsResponse answer_a, answer_b;
+    grpc::Status status_a, status_b;
+    std::thread ta([&] { status_a = call(a, left, &answer_a, &v1::Planning::Stub::AssignFleetGoals); });
+    std::thread tb([&] { status_b = call(b, right, &answer_b, &v1::Planning::Stub::AssignFleetGoals); });
+    ta.join();
+    tb.join();
+    ASSERT_TRUE(status_a.ok()) << status_a.error_message();
+    ASSERT_TRUE(status_b.ok()) << status_b.error_message();
+    const bool won_a = answer_a.results(0).outcome() == v1::SUCCESS;
+    const bool won_b = answer_b.results(0).outcome() == v1::SUCCESS;
+    ASSERT_NE(won_a, won_b) << "round " << round << ": " << answer_a.results(0).message() << " / "
+                            << answer_b.results(0).message();
+    (won_a ? a_won : b_won) += 1;
+    keep(answer_a);
+    keep(answer_b);
+    now = std::max(now, horizon + 0.5);
+  }
+  std::cout << "[ shared   ] 10 races for one node: replica a won " << a_won << ", b " << b_won << "\n";
+  CheckExecuted(example, motions, 1000.0, horizon);
+
+  v1::CloseFleetSessionRequest close;
+  close.set_name("shared_depot");
+  v1::CloseFleetSessionResponse closed;
+  ASSERT_TRUE(call(b, close, &closed, &v1::Planning::Stub::CloseFleetSession).ok());
+  EXPECT_TRUE(closed.closed());
+  v1::AssignFleetGoalsRequest late;
+  late.set_name("shared_depot");
+  v1::AssignFleetGoalsResponse response;
+  status = call(a, late, &response, &v1::Planning::Stub::AssignFleetGoals);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::NOT_FOUND) << status.error_message();
 }
 
 }  // namespace

@@ -261,7 +261,11 @@ class FleetSession::Search {
 
 FleetSession::FleetSession(std::shared_ptr<const FleetLattice> lattice, std::vector<FleetSessionRobot> robots,
                            double start_time, FleetSessionOptions options)
-    : lattice_(std::move(lattice)), options_(options), start_time_(start_time), forgotten_(start_time) {
+    : lattice_(std::move(lattice)),
+      options_(options),
+      start_time_(start_time),
+      forgotten_(start_time),
+      latest_now_(start_time) {
   if (lattice_ == nullptr) ThrowInvalid("lattice is null");
   if (!std::isfinite(start_time)) ThrowInvalid("start_time = " + FormatNumber(start_time) + " must be finite");
   const LatticeGeometry& g = lattice_->geometry();
@@ -491,16 +495,31 @@ std::vector<FleetSessionOrder> FleetSession::OrdersOf(int robot, double from) co
   return orders;
 }
 
+void FleetSession::CheckNow(double now) const {
+  if (!std::isfinite(now) || now < start_time_) {
+    ThrowInvalid("now = " + FormatNumber(now) + " must be finite and not before the session's start " +
+                 FormatNumber(start_time_));
+  }
+}
+
+void FleetSession::Advance(double now) {
+  latest_now_ = std::max(latest_now_, now);
+  if (++assigns_ % 32 == 0) Forget(now - 1.0);
+}
+
+void FleetSession::Skip(double now) {
+  CheckNow(now);
+  Advance(now);
+}
+
 FleetGoalOutcome FleetSession::Assign(int robot, const Eigen::Vector3d& goal, double now,
                                       const Termination& termination) {
   const auto started = std::chrono::steady_clock::now();
   if (robot < 0 || robot >= num_robots()) {
     ThrowInvalid("robot = " + std::to_string(robot) + " must be in [0, " + std::to_string(num_robots()) + ")");
   }
-  if (!std::isfinite(now) || now < start_time_) {
-    ThrowInvalid("now = " + FormatNumber(now) + " must be finite and not before the session's start " +
-                 FormatNumber(start_time_));
-  }
+  CheckNow(now);
+  now = std::max(now, latest_now_);  // the session's clock never goes back
   if (!std::isfinite(goal.z())) ThrowInvalid("goal heading must be finite");
   const LatticeGeometry& g = lattice_->geometry();
   const GridCell goal_cell = g.NodeAt(goal.head<2>(), "goal");
@@ -508,7 +527,7 @@ FleetGoalOutcome FleetSession::Assign(int robot, const Eigen::Vector3d& goal, do
     ThrowInvalid("goal = " + PointText(goal.head<2>()) + " is on a blocked lattice node (cell " +
                  std::to_string(goal_cell) + "): the footprint there touches the scene");
   }
-  if (++assigns_ % 32 == 0) Forget(now - 1.0);
+  Advance(now);
 
   FleetGoalOutcome outcome;
   std::vector<std::pair<int, RobotState>> saved;  // for rollback, first change of each robot

@@ -103,9 +103,18 @@ class FleetSession {
                double start_time, FleetSessionOptions options = {});
 
   /// Plans `robot` to `goal` (x, y on a node; θ its final heading) from session time `now`.
+  /// The session's clock never goes back: a `now` before an earlier call's is taken as that one
+  /// (two dispatchers, or two replicas' clocks, a little apart).
   /// \throws Error(kInvalidArgument) for a robot index out of range, a goal off the lattice's
   ///         nodes or on a blocked node, or `now` not finite or before the session's start.
+  /// Deterministic: the same calls on two sessions made alike give the same plans (unless
+  /// `termination` stops a search, which then changes nothing).
   FleetGoalOutcome Assign(int robot, const Eigen::Vector3d& goal, double now, const Termination& termination = {});
+
+  /// What an Assign that changed nothing leaves behind (its clock and bookkeeping), for a
+  /// session replaying another's calls: every call that failed there is a Skip here.
+  /// \throws what Assign throws for `now`.
+  void Skip(double now);
 
   int num_robots() const { return static_cast<int>(robots_.size()); }
   const FleetLattice& lattice() const { return *lattice_; }
@@ -137,6 +146,8 @@ class FleetSession {
   struct SearchResult;
   class Search;
 
+  void CheckNow(double now) const;
+  void Advance(double now);
   void Index(int robot);
   void Unindex(int robot);
   void Forget(double before);
@@ -155,6 +166,7 @@ class FleetSession {
   FleetSessionOptions options_;
   double start_time_ = 0.0;
   double forgotten_ = 0.0;
+  double latest_now_ = 0.0;  ///< the latest `now` of a call
   int assigns_ = 0;
   std::vector<RobotState> robots_;
   std::vector<std::vector<Occupancy>> occupancy_;  ///< per cell, any order
