@@ -12,6 +12,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <functional>
+#include <memory>
+#include <mutex>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -331,6 +334,158 @@ void PrintTable(const v1::BenchmarkSummary& summary) {
 
 }  // namespace
 
+/// One server's share of a benchmark: its request (runs first_run … first_run + runs - 1 of the
+/// whole, seeded as they would be there) and what it answered.
+struct Shard {
+  ConnectionOptions connection;
+  v1::BenchmarkRequest request;
+  std::uint32_t first_run = 0;
+  grpc::ClientContext context;
+  std::unique_ptr<v1::Planning::Stub> stub;
+  std::vector<v1::BenchmarkRun> finished;
+  v1::BenchmarkProgress progress;
+  std::uint32_t solved = 0;
+  v1::BenchmarkSummary summary;
+  bool have_summary = false;
+  grpc::Status status;
+
+  Shard() = default;
+  Shard(Shard&& other) noexcept
+      : connection(std::move(other.connection)), request(std::move(other.request)), first_run(other.first_run) {}
+
+  /// Streams the benchmark; `report` is called (under `mutex`'s protection of this shard's
+  /// progress) after every message.
+  void Run(double timeout, std::mutex& mutex, const std::function<void()>& report) {
+    grpc::ChannelArguments channel_args;
+    channel_args.SetMaxReceiveMessageSize(-1);
+    channel_args.SetMaxSendMessageSize(-1);
+    stub = v1::Planning::NewStub(MakeChannel(connection, channel_args));
+    if (timeout > 0) {
+      context.set_deadline(std::chrono::system_clock::now() + std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                                                                  std::chrono::duration<double>(timeout)));
+    }
+    auto reader = stub->Benchmark(&context, request);
+    v1::BenchmarkResponse message;
+    while (reader->Read(&message)) {
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (message.has_run()) {
+          v1::BenchmarkRun run = message.run();
+          run.set_run(run.run() + first_run);
+          if (run.solved()) ++solved;
+          finished.push_back(std::move(run));
+        }
+        if (message.has_summary()) {
+          summary = message.summary();
+          have_summary = true;
+        }
+        progress = message.progress();
+      }
+      report();
+    }
+    status = reader->Finish();
+  }
+
+  /// StopBenchmark for this shard (its server answers the summary of the finished runs).
+  void Stop() {
+    if (stub == nullptr) return;
+    grpc::ClientContext stop_context;
+    stop_context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+    v1::StopBenchmarkRequest stop;
+    stop.set_request_id(request.request_id());
+    v1::StopBenchmarkResponse stopped;
+    (void)stub->StopBenchmark(&stop_context, stop, &stopped);
+  }
+};
+
+/// The OMPL logs of one problem from several shards as one: the first's header and settings,
+/// every shard's run lines under each planner (in shard order, so in run order), the run and time
+/// totals updated. \throws ConfigError when the logs do not have the same planners.
+std::string MergeOmplLogs(const std::vector<std::string>& logs, std::uint32_t runs_per_planner, double seconds) {
+  std::vector<std::vector<std::string>> lines(logs.size());
+  for (std::size_t k = 0; k < logs.size(); ++k) {
+    std::istringstream in(logs[k]);
+    for (std::string line; std::getline(in, line);) lines[k].push_back(line);
+  }
+  const auto ends_with = [](const std::string& line, const std::string& tail) {
+    return line.size() >= tail.size() && line.compare(line.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  // Per shard: where each planner's "N runs" line is.
+  std::vector<std::vector<std::size_t>> run_lines(logs.size());
+  for (std::size_t k = 0; k < logs.size(); ++k) {
+    for (std::size_t i = 0; i < lines[k].size(); ++i) {
+      const std::string& line = lines[k][i];
+      if (ends_with(line, " runs") && line.find_first_not_of("0123456789") == line.size() - 5) run_lines[k].push_back(i);
+    }
+    if (run_lines[k].size() != run_lines[0].size()) throw ConfigError{"the shards' OMPL logs list different planners"};
+  }
+  std::ostringstream out;
+  const auto copy = [&](std::size_t from, std::size_t until) {  // shard 0's lines, totals updated
+    for (std::size_t i = from; i < until; ++i) {
+      const std::string& line = lines[0][i];
+      if (ends_with(line, " runs per planner")) {
+        out << runs_per_planner << " runs per planner\n";
+      } else if (ends_with(line, " seconds spent to collect the data")) {
+        out << seconds << " seconds spent to collect the data\n";
+      } else {
+        out << line << "\n";
+      }
+    }
+  };
+  std::size_t next = 0;
+  for (std::size_t p = 0; p < run_lines[0].size(); ++p) {
+    copy(next, run_lines[0][p]);
+    std::vector<std::string> rows;  // this planner's runs, shard after shard
+    for (std::size_t k = 0; k < logs.size(); ++k) {
+      const std::size_t at = run_lines[k][p];
+      const std::size_t n = std::stoul(lines[k][at]);
+      for (std::size_t r = 0; r < n && at + 1 + r < lines[k].size(); ++r) rows.push_back(lines[k][at + 1 + r]);
+    }
+    out << rows.size() << " runs\n";
+    for (const std::string& row : rows) out << row << "\n";
+    next = run_lines[0][p] + 1 + std::stoul(lines[0][run_lines[0][p]]);
+  }
+  copy(next, lines[0].size());
+  return out.str();
+}
+
+/// One summary from the shards': names from the first, configuration summaries from every run,
+/// each problem's OMPL log merged.
+v1::BenchmarkSummary MergeSummaries(const std::vector<const v1::BenchmarkSummary*>& parts,
+                                    const std::vector<v1::BenchmarkRun>& runs, const std::string& request_id,
+                                    double wall_time) {
+  v1::BenchmarkSummary merged;
+  const v1::BenchmarkSummary& first = *parts.front();
+  *merged.mutable_problem_names() = first.problem_names();
+  *merged.mutable_config_names() = first.config_names();
+  const std::vector<std::string> config_names(first.config_names().begin(), first.config_names().end());
+  for (v1::ConfigSummary& c : SummarizeConfigs(runs, config_names)) *merged.add_configs() = std::move(c);
+  std::uint32_t runs_total = 0, parallelism = 0, runs_per_planner = 0;
+  for (const v1::BenchmarkSummary* part : parts) {
+    runs_total += part->runs_total();
+    parallelism += part->parallelism();
+    merged.set_stopped(merged.stopped() || part->stopped());
+  }
+  const std::uint32_t cells = static_cast<std::uint32_t>(std::max(1, first.problem_names_size() * first.config_names_size()));
+  runs_per_planner = runs_total / cells;
+  for (int p = 0; p < first.logs_size(); ++p) {
+    std::vector<std::string> logs;
+    for (const v1::BenchmarkSummary* part : parts) {
+      if (p < part->logs_size()) logs.push_back(part->logs(p).ompl_log());
+    }
+    v1::ProblemLog* log = merged.add_logs();
+    log->set_problem(first.logs(p).problem());
+    log->set_name(first.logs(p).name());
+    log->set_ompl_log(MergeOmplLogs(logs, runs_per_planner, wall_time));
+  }
+  merged.set_runs_finished(static_cast<std::uint32_t>(runs.size()));
+  merged.set_runs_total(runs_total);
+  merged.set_wall_time(wall_time);
+  merged.set_parallelism(parallelism);
+  merged.set_request_id(request_id);
+  return merged;
+}
+
 int BenchCommand(const ConnectionOptions& connection, double timeout, const std::vector<std::string>& args) {
   const std::string& server = connection.server;
   std::string config_path, out_dir;
@@ -400,18 +555,37 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
   request.set_request_id("cli-bench-" + std::to_string(getpid()) + "-" +
                          std::to_string(std::chrono::system_clock::now().time_since_epoch().count() % 1000000007));
 
-  grpc::ChannelArguments channel_args;
-  channel_args.SetMaxReceiveMessageSize(-1);
-  channel_args.SetMaxSendMessageSize(-1);
-  auto channel = MakeChannel(connection, channel_args);
-  auto stub = v1::Planning::NewStub(channel);
-  grpc::ClientContext context;
-  if (timeout > 0) {
-    context.set_deadline(std::chrono::system_clock::now() +
-                         std::chrono::duration_cast<std::chrono::system_clock::duration>(std::chrono::duration<double>(timeout)));
+  // One shard per --server address: each runs its share of the runs (run r keeps seed + r), and
+  // the answers are merged into one set of runs, summaries and OMPL logs.
+  std::vector<std::string> servers;
+  {
+    std::stringstream list(server);
+    for (std::string item; std::getline(list, item, ',');) {
+      if (item.find_first_not_of(" \t") != std::string::npos) servers.push_back(item);
+    }
   }
+  if (servers.empty()) servers.push_back(server);
+  const std::uint32_t total_runs = request.runs() == 0 ? 10 : request.runs();
+  const std::uint64_t first_seed = request.seed() == 0 ? 1 : request.seed();
+  std::vector<Shard> shards;
+  for (std::size_t k = 0, start = 0; k < servers.size(); ++k) {
+    const std::uint32_t share = static_cast<std::uint32_t>(total_runs / servers.size() + (k < total_runs % servers.size()));
+    if (share == 0) continue;
+    Shard shard;
+    shard.connection = connection;
+    shard.connection.server = servers[k];
+    shard.first_run = static_cast<std::uint32_t>(start);
+    shard.request = request;
+    shard.request.set_runs(share);
+    shard.request.set_seed(first_seed + start);
+    if (servers.size() > 1) shard.request.set_request_id(request.request_id() + "-" + std::to_string(k));
+    shards.push_back(std::move(shard));
+    start += share;
+  }
+  const std::uint32_t total = total_runs * static_cast<std::uint32_t>(request.problems_size() * request.configs_size());
+  const auto started = std::chrono::steady_clock::now();
 
-  // Ctrl-C: first StopBenchmark (the server answers the summary of the finished runs), then cancel.
+  // Ctrl-C: first StopBenchmark (the servers answer the summary of the finished runs), then cancel.
   g_interrupts = 0;
   std::signal(SIGINT, OnInterrupt);
   std::atomic<bool> streaming{true};
@@ -423,14 +597,9 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
         handled = seen;
         if (handled == 1) {
           std::fprintf(stderr, "\nchasles: stopping the benchmark (finished runs are kept; Ctrl-C again to abandon it)\n");
-          grpc::ClientContext stop_context;
-          stop_context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
-          v1::StopBenchmarkRequest stop;
-          stop.set_request_id(request.request_id());
-          v1::StopBenchmarkResponse stopped;
-          (void)stub->StopBenchmark(&stop_context, stop, &stopped);
+          for (Shard& shard : shards) shard.Stop();
         } else {
-          context.TryCancel();
+          for (Shard& shard : shards) shard.context.TryCancel();
         }
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -438,29 +607,62 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
   });
 
   ProgressBar bar(quiet);
-  std::vector<v1::BenchmarkRun> finished;
-  std::uint32_t solved = 0;
-  v1::BenchmarkSummary summary;
-  bool have_summary = false;
-  auto reader = stub->Benchmark(&context, request);
-  v1::BenchmarkResponse message;
-  while (reader->Read(&message)) {
-    if (message.has_run()) {
-      finished.push_back(message.run());
-      if (message.run().solved()) ++solved;
+  std::mutex progress_mutex;
+  const auto report = [&] {  // the shards' progress together
+    std::lock_guard<std::mutex> lock(progress_mutex);
+    v1::BenchmarkProgress p;
+    std::uint32_t solved = 0;
+    double eta = 0.0;
+    for (const Shard& shard : shards) {
+      p.set_done(p.done() + shard.progress.done());
+      p.set_running(p.running() + shard.progress.running());
+      eta = std::max(eta, shard.progress.eta());
+      solved += shard.solved;
     }
-    if (message.has_summary()) {
-      summary = message.summary();
-      have_summary = true;
-    }
-    bar.Update(message.progress(), solved);
+    p.set_total(total);
+    p.set_elapsed(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+    p.set_eta(eta);
+    bar.Update(p, solved);
+  };
+  std::vector<std::thread> readers;
+  for (Shard& shard : shards) {
+    readers.emplace_back([&shard, &report, &progress_mutex, timeout] { shard.Run(timeout, progress_mutex, report); });
   }
-  const grpc::Status status = reader->Finish();
+  for (std::thread& reader : readers) reader.join();
   streaming = false;
   watcher.join();
   std::signal(SIGINT, SIG_DFL);
   bar.End();
 
+  // Merge: runs renumbered from their shard's first run; summaries from all runs; each problem's
+  // OMPL log with every shard's runs.
+  std::vector<v1::BenchmarkRun> finished;
+  grpc::Status status;
+  bool have_summary = true;
+  std::vector<const v1::BenchmarkSummary*> summaries;
+  for (const Shard& shard : shards) {
+    finished.insert(finished.end(), shard.finished.begin(), shard.finished.end());
+    if (!shard.status.ok() && status.ok()) {
+      status = grpc::Status(shard.status.error_code(), shard.connection.server + ": " + shard.status.error_message());
+    }
+    if (shard.have_summary) {
+      summaries.push_back(&shard.summary);
+    } else {
+      have_summary = false;
+    }
+  }
+  v1::BenchmarkSummary summary;
+  if (have_summary && summaries.size() == 1) {
+    summary = *summaries[0];
+  } else if (have_summary) {
+    try {
+      summary = MergeSummaries(summaries, finished, request.request_id(),
+                               std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+    } catch (const ConfigError& e) {
+      std::cerr << "chasles: " << e.message << "\n";
+      return kExitFailed;
+    }
+  }
   std::vector<std::string> problem_names, config_names;
   if (have_summary) {
     problem_names.assign(summary.problem_names().begin(), summary.problem_names().end());

@@ -9,8 +9,11 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -98,6 +101,60 @@ TEST_F(BenchCli, WritesLogsDatabaseCsvJsonAndATable) {
   std::size_t runs = 0;
   for (std::size_t at = json.find("\"worker\""); at != std::string::npos; at = json.find("\"worker\"", at + 1)) ++runs;
   EXPECT_EQ(runs, 18u);
+}
+
+/// runs.csv rows as "problem,config,run,seed,outcome,solved" -> path_length, sorted.
+std::map<std::string, std::string> RunsByKey(const std::string& csv) {
+  std::map<std::string, std::string> rows;
+  std::istringstream in(csv);
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    std::vector<std::string> fields;
+    std::stringstream split(line);
+    for (std::string field; std::getline(split, field, ',');) fields.push_back(field);
+    if (fields.size() < 11) continue;
+    rows[fields[0] + "," + fields[1] + "," + fields[2] + "," + fields[3] + "," + fields[4] + "," + fields[5]] = fields[10];
+  }
+  return rows;
+}
+
+// Issue 15, item 4: `chasles --server a,b,c bench` spreads the runs over the replicas (run r keeps
+// seed + r) and merges the answers into the same files: the same runs, seeds, outcomes and path
+// lengths as on one server, one OMPL log per problem that ompl_benchmark_statistics reads.
+TEST_F(BenchCli, SeveralServersShareTheRunsAndTheFilesAreTheSame) {
+  LoopbackServer a(1), b(1), c(1);
+  const fs::path config = Write("fan.yaml",
+                                "experiment: fan\n"
+                                "runs: 5\n"
+                                "run_budget: 1.5\n"
+                                "seed: 5\n"
+                                "problems:\n"
+                                "  - request: " + ExamplePath("requests/planar_2r_table.json") + "\n"
+                                "    name: table\n"
+                                "configs:\n"
+                                "  - planner: rrt_connect\n"
+                                "  - planner: rrt\n");
+  const fs::path one = dir_ / "one", three = dir_ / "three";
+  CliResult result = RunCli("--server " + a.address() + " bench '" + config.string() + "' --out '" + one.string() +
+                                "' --quiet",
+                            dir_ / "one.txt");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  result = RunCli("--server " + a.address() + "," + b.address() + "," + c.address() + " bench '" + config.string() +
+                      "' --out '" + three.string() + "' --quiet",
+                  dir_ / "three.txt");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("10 of 10 runs finished"), std::string::npos) << result.output;
+  const auto single = RunsByKey(ReadText((one / "runs.csv").string()));
+  const auto shared = RunsByKey(ReadText((three / "runs.csv").string()));
+  EXPECT_EQ(single.size(), 10u);
+  EXPECT_EQ(shared, single);
+  const std::string log = ReadText((three / "table.log").string());
+  EXPECT_NE(log.find("5 runs per planner"), std::string::npos) << log.substr(0, 600);
+  std::size_t planners = 0;
+  for (std::size_t at = log.find("\n5 runs\n"); at != std::string::npos; at = log.find("\n5 runs\n", at + 1)) ++planners;
+  EXPECT_EQ(planners, 2u) << log;
+  EXPECT_TRUE(fs::exists(three / "results.db")) << result.output;
 }
 
 TEST_F(BenchCli, ConfigurationErrorsNameFileAndKey) {
