@@ -167,5 +167,41 @@ class ReplicaFailures(unittest.TestCase):
         self.assertGreater(done[0], 20)
 
 
+class BenchmarkFanOut(unittest.TestCase):
+    """A client of several replicas spreads a benchmark's runs over them (issue 15, item 4) and
+    merges the answers: the same runs as one server makes, the same summaries, one OMPL log."""
+
+    def test_two_replicas_give_the_runs_one_server_gives(self) -> None:
+        binary = os.environ.get("CHASLES_SERVER_BIN")
+        if not binary:
+            raise unittest.SkipTest("CHASLES_SERVER_BIN is not set")
+        cluster = LocalCluster(binary)
+        try:
+            replicas = [cluster.start_replica(threads=1) for _ in range(2)]
+            problem = json.loads((ROOT / "examples/requests/planar_2r_table.json").read_text())
+            problem["name"] = "table"
+            kwargs = dict(problems=[problem], configs=["rrt_connect", "rrt"], runs=5, run_budget=1.5, seed=5)
+            with Client(replicas[0], timeout=60.0) as one:
+                single = one.benchmark(**kwargs)
+            seen = []
+            with Client(",".join(replicas), timeout=60.0) as both:
+                shared = both.benchmark(**kwargs, on_run=lambda r: seen.append(r.run))
+        finally:
+            cluster.stop()
+
+        def key(result):
+            return sorted((r.config, r.run, r.seed, r.outcome, r.solved, r.path_length) for r in result.runs)
+
+        self.assertEqual(len(shared.runs), 10)
+        self.assertEqual(key(shared), key(single))
+        self.assertEqual(sorted(seen), sorted(r.run for r in single.runs))
+        for a, b in zip(shared.summaries, single.summaries):
+            self.assertEqual((a.name, a.runs, a.solved, a.median_length), (b.name, b.runs, b.solved, b.median_length))
+        log = shared.ompl_logs["table"]
+        self.assertIn("\n5 runs per planner\n", log)
+        self.assertEqual(log.count("\n5 runs\n"), 2)
+        self.assertEqual(len(log.splitlines()), len(single.ompl_logs["table"].splitlines()))
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -119,6 +119,72 @@ class ConfigSummary:
         return cls(**{f.name: getattr(message, f.name) for f in dataclasses.fields(cls)})
 
 
+def _quantile(values: List[float], p: float) -> float:
+    """The server's quantile (linear between the two nearest of the sorted values); 0 when empty."""
+    if not values:
+        return 0.0
+    ordered = sorted(values)
+    position = min(max(p, 0.0), 1.0) * (len(ordered) - 1)
+    below = int(position)
+    above = min(below + 1, len(ordered) - 1)
+    return ordered[below] + (position - below) * (ordered[above] - ordered[below])
+
+
+def summarize_configs(runs: List["BenchmarkRun"], config_names: List[str]) -> List[ConfigSummary]:
+    """ConfigSummary per configuration from runs, as the server computes it (for merged results)."""
+    out = []
+    for c, name in enumerate(config_names):
+        mine = [r for r in runs if r.config == c]
+        solved = [r for r in mine if r.solved]
+        out.append(ConfigSummary(
+            config=c, name=name, runs=len(mine), solved=len(solved),
+            approximate=sum(1 for r in mine if r.approximate),
+            success_rate=len(solved) / len(mine) if mine else 0.0,
+            median_time=_quantile([r.total_time for r in mine], 0.5),
+            p95_time=_quantile([r.total_time for r in mine], 0.95),
+            median_plan_time=_quantile([r.plan_time for r in mine], 0.5),
+            median_length=_quantile([r.path_length for r in solved], 0.5),
+            median_duration=_quantile([r.duration for r in solved], 0.5),
+            median_clearance=_quantile([r.min_clearance for r in solved], 0.5),
+            median_peak_memory=_quantile([float(r.peak_memory) for r in mine], 0.5)))
+    return out
+
+
+_RUNS_LINE = re.compile(r"^(\d+) runs$")
+
+
+def merge_ompl_logs(logs: List[str], runs_per_planner: int, seconds: float) -> str:
+    """One problem's OMPL benchmark logs from several shards as one: the first's header and
+    settings, every shard's run rows under each planner (in shard order), totals updated."""
+    lines = [text.split("\n") for text in logs]
+    run_lines = [[i for i, line in enumerate(shard) if _RUNS_LINE.match(line)] for shard in lines]
+    if any(len(r) != len(run_lines[0]) for r in run_lines):
+        raise ValueError("the shards' OMPL logs list different planners")
+    out: List[str] = []
+
+    def copy(start: int, until: int) -> None:
+        for line in lines[0][start:until]:
+            if line.endswith(" runs per planner"):
+                out.append(f"{runs_per_planner} runs per planner")
+            elif line.endswith(" seconds spent to collect the data"):
+                out.append(f"{seconds:.6g} seconds spent to collect the data")
+            else:
+                out.append(line)
+
+    start = 0
+    for p, at0 in enumerate(run_lines[0]):
+        copy(start, at0)
+        rows: List[str] = []
+        for shard, at in zip(lines, (r[p] for r in run_lines)):
+            n = int(_RUNS_LINE.match(shard[at]).group(1))
+            rows += shard[at + 1:at + 1 + n]
+        out.append(f"{len(rows)} runs")
+        out += rows
+        start = at0 + 1 + int(_RUNS_LINE.match(lines[0][at0]).group(1))
+    copy(start, len(lines[0]))
+    return "\n".join(out)
+
+
 def _file_name(name: str) -> str:
     """A file-system-safe version of a problem name."""
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("._") or "problem"
@@ -182,6 +248,28 @@ class BenchmarkResult:
         else:
             result.runs_finished = len(result.runs)
         return result
+
+    @classmethod
+    def merge(cls, parts: List["BenchmarkResult"], first_runs: List[int], request_id: str,
+              wall_time: float) -> "BenchmarkResult":
+        """The results of shards of one benchmark (shard k ran runs first_runs[k] … of the whole,
+        seeded as they would be there) as one: runs renumbered, summaries recomputed from all
+        runs, each problem's OMPL log merged."""
+        head = parts[0]
+        merged = cls(request_id=request_id, problem_names=list(head.problem_names), config_names=list(head.config_names))
+        for part, first in zip(parts, first_runs):
+            merged.runs += [dataclasses.replace(run, run=run.run + first) for run in part.runs]
+        merged.summaries = summarize_configs(merged.runs, merged.config_names)
+        merged.runs_total = sum(p.runs_total for p in parts)
+        merged.runs_finished = len(merged.runs)
+        merged.stopped = any(p.stopped for p in parts)
+        merged.wall_time = wall_time
+        merged.parallelism = sum(p.parallelism for p in parts)
+        cells = max(1, len(merged.problem_names) * len(merged.config_names))
+        for name in head.ompl_logs:
+            texts = [p.ompl_logs[name] for p in parts if name in p.ompl_logs]
+            merged.ompl_logs[name] = merge_ompl_logs(texts, merged.runs_total // cells, wall_time)
+        return merged
 
     def _apply_summary(self, summary: pb.BenchmarkSummary) -> None:
         if summary.problem_names:

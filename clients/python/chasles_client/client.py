@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import socket
@@ -153,7 +154,14 @@ class Client:
                  token: Optional[str] = None, retries: int = 5) -> None:
         self.address = address
         self.timeout = timeout
+        # Each replica on its own, for benchmarks spread over them (benchmark_request).
+        self._replicas: List[str] = []
         if channel is None:
+            listed = [a.strip() for a in (address.split(",") if isinstance(address, str) else address) if a.strip()]
+            if len(listed) > 1:
+                self._replicas = listed
+            self._replica_options = dict(max_message_mb=max_message_mb, tls_ca=tls_ca, tls_cert=tls_cert,
+                                         tls_key=tls_key, tls_server_name=tls_server_name, token=token)
             size = int(max_message_mb) * 1024 * 1024
             options = [("grpc.max_send_message_length", size), ("grpc.max_receive_message_length", size),
                        ("grpc.enable_retries", 1), ("grpc.service_config", service_config(retries))]
@@ -513,10 +521,17 @@ class Client:
                               on_progress: Optional[Callable[[BenchmarkProgress], Any]] = None,
                               on_run: Optional[Callable[[BenchmarkRun], Any]] = None,
                               timeout: Optional[float] = None) -> BenchmarkResult:
-        """Sends a whole BenchmarkRequest (message, dict or JSON text) and consumes its stream."""
+        """Sends a whole BenchmarkRequest (message, dict or JSON text) and consumes its stream.
+
+        A client of several replicas spreads the runs over them: replica k runs its share from
+        run ``first`` on, seeded ``seed + first`` (so every run is the one a single server would
+        make), in parallel; the answers are merged into one result (runs renumbered, summaries
+        recomputed, OMPL logs merged). ``on_run`` is then called from the replicas' threads."""
         message = to_message(request, pb.BenchmarkRequest, "BenchmarkRequest")
         if not message.request_id:  # known before the call, so another thread can stop it
             message.request_id = f"py-{uuid.uuid4().hex[:12]}"
+        if self._replicas:
+            return self._benchmark_shards(message, on_progress, on_run, timeout)
         call = self._stub.Benchmark(message, timeout=timeout)
         try:
             return BenchmarkResult.from_stream(call, message, on_progress=on_progress, on_run=on_run)
@@ -525,6 +540,67 @@ class Client:
         except BaseException:
             call.cancel()
             raise
+
+    def _benchmark_shards(self, message: pb.BenchmarkRequest,
+                          on_progress: Optional[Callable[[BenchmarkProgress], Any]],
+                          on_run: Optional[Callable[[BenchmarkRun], Any]],
+                          timeout: Optional[float]) -> BenchmarkResult:
+        import threading
+
+        total_runs = message.runs or 10
+        first_seed = message.seed or 1
+        shards = []
+        first = 0
+        for k, address in enumerate(self._replicas):
+            share = total_runs // len(self._replicas) + (1 if k < total_runs % len(self._replicas) else 0)
+            if share == 0:
+                continue
+            part = pb.BenchmarkRequest()
+            part.CopyFrom(message)
+            part.runs = share
+            part.seed = first_seed + first
+            part.request_id = f"{message.request_id}-{k}"
+            shards.append((address, part, first))
+            first += share
+        results: List[Optional[BenchmarkResult]] = [None] * len(shards)
+        errors: List[BaseException] = []
+        lock = threading.Lock()
+        progress = [BenchmarkProgress(0, 0, 0, 0.0, -1.0) for _ in shards]
+        started = time.monotonic()
+
+        def run(k: int) -> None:
+            address, part, offset = shards[k]
+
+            def shard_progress(p: BenchmarkProgress) -> None:
+                if on_progress is None:
+                    return
+                with lock:
+                    progress[k] = p
+                    on_progress(BenchmarkProgress(sum(q.done for q in progress), total_runs * len(
+                        part.problems) * len(part.configs), sum(q.running for q in progress),
+                        time.monotonic() - started, max(q.eta for q in progress)))
+
+            def shard_run(r: BenchmarkRun) -> None:
+                if on_run is not None:
+                    on_run(dataclasses.replace(r, run=r.run + offset))
+
+            try:
+                with Client(address, timeout=self.timeout, **self._replica_options) as replica:
+                    results[k] = replica.benchmark_request(part, on_progress=shard_progress, on_run=shard_run,
+                                                           timeout=timeout)
+            except BaseException as error:  # noqa: BLE001 - re-raised below
+                with lock:
+                    errors.append(error)
+
+        threads = [threading.Thread(target=run, args=(k,)) for k in range(len(shards))]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        if errors:
+            raise errors[0]
+        return BenchmarkResult.merge([r for r in results if r is not None], [s[2] for s in shards],
+                                     message.request_id, time.monotonic() - started)
 
     def stop_benchmark(self, request_id: str, timeout: Optional[float] = None) -> bool:
         """Stops a running benchmark; its ``benchmark`` call still returns the finished runs.
