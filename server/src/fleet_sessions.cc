@@ -109,7 +109,8 @@ std::shared_ptr<OpenFleet> FleetSessionStore::FindShared(const std::string& name
       sessions_.erase(name);
     }
     std::string known;
-    for (const RedisReply& open : Reply(redis_->Command({"SMEMBERS", kFleetsKey})).elements) {
+    const RedisReply members = redis_->Command({"SMEMBERS", kFleetsKey});  // kept: the loop reads it
+    for (const RedisReply& open : Reply(members).elements) {
       known += (known.empty() ? "" : ", ") + open.str;
     }
     throw Error(ErrorCode::kNotFound, "fleet session '" + name + "' is not open (open: " +

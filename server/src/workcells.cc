@@ -229,7 +229,8 @@ std::vector<Reservation> WorkcellStore::ReadShared(const std::string& workcell, 
       redis_->PipelineHeld({{"SISMEMBER", kWorkcellsKey, workcell}, {"SMEMBERS", CellKey(workcell, "ids")}});
   if (Reply(first[0]).integer != 1) {
     std::string known;
-    for (const RedisReply& name : Reply(send({"SMEMBERS", kWorkcellsKey})).elements) {
+    const RedisReply members = send({"SMEMBERS", kWorkcellsKey});  // kept: the loop reads it
+    for (const RedisReply& name : Reply(members).elements) {
       known += (known.empty() ? "" : ", ") + name.str;
     }
     throw Error(ErrorCode::kNotFound, "workcell '" + workcell + "' is unknown (known: " +

@@ -3,7 +3,9 @@
 // directory and append-only file, started and stopped by the test: bounded (it answers PING
 // within 10 s or the test fails), killed and reaped on destruction.
 
+#include <fcntl.h>
 #include <netinet/in.h>
+#include <sys/prctl.h>
 #include <signal.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
@@ -58,6 +60,13 @@ class RedisServer {
   void Start() {
     pid_ = ::fork();
     if (pid_ == 0) {
+      // Not the test's stdout/stderr (ctest waits for every holder of its pipes to close them),
+      // and gone with the test however it ends.
+      const int null = ::open("/dev/null", O_RDWR);
+      ::dup2(null, STDIN_FILENO);
+      ::dup2(null, STDOUT_FILENO);
+      ::dup2(null, STDERR_FILENO);
+      ::prctl(PR_SET_PDEATHSIG, SIGTERM);
       const std::string port = std::to_string(port_);
       const std::string log = dir_ + "/redis.log";
       ::execl("/usr/bin/redis-server", "redis-server", "--port", port.c_str(), "--bind", "127.0.0.1", "--dir",
