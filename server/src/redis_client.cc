@@ -76,10 +76,17 @@ RedisAddress ParseRedisUrl(const std::string& url, const std::string& field) {
 RedisClient::RedisClient(RedisAddress address, double timeout_seconds)
     : address_(std::move(address)), timeout_seconds_(timeout_seconds) {
   std::lock_guard<std::mutex> lock(mutex_);
-  Connect();
-  const RedisReply pong = Send({"PING"});
-  if (pong.type == RedisReply::Type::kError) {
-    throw Error(ErrorCode::kUnavailable, "Redis at " + address_.text() + " answered PING with: " + pong.str);
+  try {
+    Connect();
+    const RedisReply pong = Send({"PING"});
+    if (pong.type == RedisReply::Type::kError) {  // e.g. LOADING while it reads its append-only file
+      throw Error(ErrorCode::kUnavailable, "Redis at " + address_.text() + " answered PING with: " + pong.str);
+    }
+  } catch (...) {
+    // No destructor runs for a constructor that throws: free the connection here.
+    if (context_ != nullptr) redisFree(context_);
+    context_ = nullptr;
+    throw;
   }
 }
 
