@@ -70,10 +70,19 @@ class LocalCluster:
         """A redis-server with its append-only file; returns its redis:// URL."""
         port = free_port()
         (self.work / "redis").mkdir(exist_ok=True)
-        self.spawn([REDIS, "--port", str(port), "--bind", "127.0.0.1", "--dir", str(self.work / "redis"),
-                    "--appendonly", "yes", "--save", "", "--daemonize", "no"], self.work / "redis.log")
-        wait_for(lambda: port_open(port), "redis-server did not listen")
+        self.redis_port = port
+        self.restart_redis()
         return f"redis://127.0.0.1:{port}"
+
+    def restart_redis(self) -> subprocess.Popen:
+        """(Re)starts redis-server on its port and directory: it reads its append-only file back.
+        Every write is fsynced before Redis answers (appendfsync always)."""
+        port = self.redis_port
+        self.redis = self.spawn([REDIS, "--port", str(port), "--bind", "127.0.0.1", "--dir", str(self.work / "redis"),
+                                 "--appendonly", "yes", "--appendfsync", "always", "--save", "",
+                                 "--daemonize", "no"], self.work / "redis.log")
+        wait_for(lambda: port_open(port), "redis-server did not listen")
+        return self.redis
 
     def start_replica(self, store: Optional[str] = None, threads: int = 1) -> str:
         """A chasles-server on a free port (on `store` when given); returns host:port."""

@@ -130,6 +130,33 @@ class ReplicaFailures(unittest.TestCase):
             self.cluster.processes[0].wait(timeout=15.0)
             self.assertLess(time.monotonic() - stopped_at, 10.0)  # --shutdown-grace (10 s by default)
 
+    def test_killed_replica_and_redis_lose_nothing(self) -> None:
+        # SIGKILL a replica right after its commit, then Redis; Redis restarted from its
+        # append-only file and a new replica: the robot, workcell and reservation are all there.
+        store = self.cluster.start_redis()
+        first = self.cluster.start_replica(store, threads=2)
+        example = json.loads((ROOT / "examples/requests/panda_table.json").read_text())
+        with Client(first, timeout=60.0) as client:
+            robot_id = client.upload_robot(ROOT / "examples/robots/panda.urdf", ROOT / "examples/robots/panda.srdf")
+            planned = client.plan(example["start"]["positions"], example["goal"]["positions"], robot_id=robot_id)
+            client.stub.CreateWorkcell(pb.CreateWorkcellRequest(name="survivor"), timeout=30)
+            client.stub.CommitTrajectory(pb.CommitTrajectoryRequest(
+                workcell="survivor", robot_name="left", robot_id=robot_id,
+                trajectory=planned.trajectory.to_message(), start_time=4.0e9, hold=600.0), timeout=30)
+        replica = self.cluster.processes[-1]
+        replica.kill()
+        replica.wait()
+        self.cluster.redis.kill()
+        self.cluster.redis.wait()
+        self.cluster.restart_redis()
+        second = self.cluster.start_replica(store, threads=2)
+        with Client(second, timeout=60.0) as client:
+            created = client.stub.CreateWorkcell(pb.CreateWorkcellRequest(name="survivor"), timeout=30)
+            self.assertFalse(created.created)
+            self.assertEqual(created.active_reservations, 1)
+            again = client.plan(example["start"]["positions"], example["goal"]["positions"], robot_id=robot_id)
+            self.assertTrue(again.success, again.message)
+
     def test_a_replica_killed_under_load_costs_no_call(self) -> None:
         import threading
         addresses = [self.start_replica(k) for k in range(3)]

@@ -89,6 +89,16 @@ class RedisServer {
     throw std::runtime_error("redis-server did not answer on port " + std::to_string(port_) + " within 10 s");
   }
 
+  /// SIGKILL, reaped: Redis gets no chance to flush anything (with appendfsync always every
+  /// acknowledged write is on disk already).
+  void Kill() {
+    if (pid_ <= 0) return;
+    ::kill(pid_, SIGKILL);
+    int status = 0;
+    ::waitpid(pid_, &status, 0);
+    pid_ = -1;
+  }
+
   /// SIGTERM (Redis flushes its append-only file and exits), reaped; SIGKILL after 10 s.
   void Stop() {
     if (pid_ <= 0) return;

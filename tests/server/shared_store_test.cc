@@ -160,7 +160,7 @@ TEST(SharedStore, RestartedReplicasAndRedisLoseNothing) {
              &v1::Planning::Stub::CommitTrajectory);
     ASSERT_TRUE(status.ok()) << status.error_message();
   }  // the replica stops
-  redis.Stop();
+  redis.Kill();   // SIGKILL: no shutdown save
   redis.Start();  // reads its append-only file back
   LoopbackServer c(SharedOptions(redis.url()));
   v1::CreateWorkcellResponse created;
