@@ -45,14 +45,6 @@ constexpr const char* kFleetsKey = "chasles:fleets";
 
 std::string FleetKey(const std::string& name, const std::string& what) { return "chasles:fleet:" + name + ":" + what; }
 
-/// `reply`, or Error(kUnavailable) for a Redis error reply.
-const RedisReply& Reply(const RedisReply& reply) {
-  if (reply.type == RedisReply::Type::kError) {
-    throw Error(ErrorCode::kUnavailable, "the shared store answered with an error: " + reply.str);
-  }
-  return reply;
-}
-
 }  // namespace
 
 void FleetSessionStore::UseShared(std::shared_ptr<RedisClient> redis, Rebuild rebuild) {
@@ -66,17 +58,17 @@ void FleetSessionStore::Add(const std::string& name, std::shared_ptr<OpenFleet> 
   const std::string already =
       "fleet session '" + name + "' is open already; close it first (CloseFleetSession) or use another name";
   if (redis_ != nullptr) {
-    const long long open = Reply(redis_->Command({"SCARD", kFleetsKey})).integer;
+    const long long open = redis_->Command({"SCARD", kFleetsKey}).integer;
     if (static_cast<std::size_t>(open) >= max_sessions_) {
       ThrowResourceExhausted("the shared store holds " + std::to_string(open) +
                              " fleet sessions already, the server's cap; close one (CloseFleetSession)");
     }
     fleet->record = record.SerializeAsString();
     fleet->applied = 0;
-    if (Reply(redis_->Command({"SET", FleetKey(name, "open"), fleet->record, "NX"})).nil()) {
+    if (redis_->Command({"SET", FleetKey(name, "open"), fleet->record, "NX"}).nil()) {
       throw Error(ErrorCode::kFailedPrecondition, already);
     }
-    Reply(redis_->Command({"SADD", kFleetsKey, name}));
+    redis_->Command({"SADD", kFleetsKey, name});
     std::lock_guard<std::mutex> lock(mutex_);
     sessions_[name] = std::move(fleet);
     return;
@@ -102,15 +94,15 @@ std::shared_ptr<OpenFleet> FleetSessionStore::Find(const std::string& name) {
 }
 
 std::shared_ptr<OpenFleet> FleetSessionStore::FindShared(const std::string& name) {
-  const RedisReply record = Reply(redis_->Command({"GET", FleetKey(name, "open")}));
+  const RedisReply record = redis_->Command({"GET", FleetKey(name, "open")});
   if (record.nil()) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       sessions_.erase(name);
     }
     std::string known;
-    const RedisReply members = redis_->Command({"SMEMBERS", kFleetsKey});  // kept: the loop reads it
-    for (const RedisReply& open : Reply(members).elements) {
+    const RedisReply members = redis_->Command({"SMEMBERS", kFleetsKey});
+    for (const RedisReply& open : members.elements) {
       known += (known.empty() ? "" : ", ") + open.str;
     }
     throw Error(ErrorCode::kNotFound, "fleet session '" + name + "' is not open (open: " +
@@ -149,17 +141,16 @@ void FleetSessionStore::AssignShared(const std::string& name, OpenFleet& fleet, 
   const std::string log = FleetKey(name, "log");
   for (int attempt = 0; attempt < 50; ++attempt) {
     bool done = false;
-    redis_->Transaction([&](const std::function<RedisReply(const std::vector<std::string>&)>& send) {
-      Reply(send({"WATCH", log}));
-      const std::vector<RedisReply> state =
-          redis_->PipelineHeld({{"GET", FleetKey(name, "open")}, {"LLEN", log}});
-      if (Reply(state[0]).nil() || state[0].str != fleet.record) {
+    redis_->Transaction([&](RedisClient::Held& redis) {
+      redis.Send({"WATCH", log});
+      const std::vector<RedisReply> state = redis.Pipeline({{"GET", FleetKey(name, "open")}, {"LLEN", log}});
+      if (state[0].nil() || state[0].str != fleet.record) {
         throw Error(ErrorCode::kNotFound, "fleet session '" + name + "' was closed meanwhile; open it again");
       }
-      const std::uint64_t length = static_cast<std::uint64_t>(Reply(state[1]).integer);
+      const std::uint64_t length = static_cast<std::uint64_t>(state[1].integer);
       if (length > fleet.applied) {
         // Catch up with the batches other replicas appended.
-        const RedisReply batches = Reply(send({"LRANGE", log, std::to_string(fleet.applied), std::to_string(length - 1)}));
+        const RedisReply batches = redis.Send({"LRANGE", log, std::to_string(fleet.applied), std::to_string(length - 1)});
         for (const RedisReply& batch : batches.elements) {
           ReplayFleetGoals(fleet, batch.str);
           ++fleet.applied;
@@ -181,8 +172,8 @@ void FleetSessionStore::AssignShared(const std::string& name, OpenFleet& fleet, 
         if (response->results(k).outcome() == v1::SUCCESS) *goal->mutable_positions() = request.goals(k).positions();
       }
       const std::vector<RedisReply> replies =
-          redis_->PipelineHeld({{"MULTI"}, {"RPUSH", log, batch.SerializeAsString()}, {"EXEC"}});
-      if (Reply(replies.back()).nil()) return;  // another replica appended first: start over
+          redis.Pipeline({{"MULTI"}, {"RPUSH", log, batch.SerializeAsString()}, {"EXEC"}});
+      if (replies.back().nil()) return;  // another replica appended first: start over
       fleet.session = std::move(trial.session);
       ++fleet.applied;
       done = true;
@@ -195,8 +186,8 @@ void FleetSessionStore::AssignShared(const std::string& name, OpenFleet& fleet, 
 bool FleetSessionStore::Close(const std::string& name) {
   bool closed = false;
   if (redis_ != nullptr) {
-    closed = Reply(redis_->Command({"DEL", FleetKey(name, "open"), FleetKey(name, "log")})).integer > 0;
-    Reply(redis_->Command({"SREM", kFleetsKey, name}));
+    closed = redis_->Command({"DEL", FleetKey(name, "open"), FleetKey(name, "log")}).integer > 0;
+    redis_->Command({"SREM", kFleetsKey, name});
   }
   std::lock_guard<std::mutex> lock(mutex_);
   closed = sessions_.erase(name) > 0 || closed;

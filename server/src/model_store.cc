@@ -132,19 +132,11 @@ std::shared_ptr<const CollisionChecker> ModelStore::Checker(const StoredRobot& r
 
 void ModelStore::UseShared(std::shared_ptr<RedisClient> redis) { redis_ = std::move(redis); }
 
-void ModelStore::Share(const std::string& key, const std::string& bytes) {
-  const RedisReply reply = redis_->Command({"SET", key, bytes, "NX"});
-  if (reply.type == RedisReply::Type::kError) {
-    throw Error(ErrorCode::kUnavailable, "the shared store refused to keep " + key + ": " + reply.str);
-  }
-}
+void ModelStore::Share(const std::string& key, const std::string& bytes) { redis_->Command({"SET", key, bytes, "NX"}); }
 
 bool ModelStore::Fetch(const std::string& key, google::protobuf::Message* message) {
   if (redis_ == nullptr) return false;
   const RedisReply reply = redis_->Command({"GET", key});
-  if (reply.type == RedisReply::Type::kError) {
-    throw Error(ErrorCode::kUnavailable, "the shared store failed to read " + key + ": " + reply.str);
-  }
   if (reply.type != RedisReply::Type::kString) return false;
   if (!message->ParseFromString(reply.str)) {
     throw Error(ErrorCode::kFailedPrecondition, "the shared store holds an unreadable " + key);

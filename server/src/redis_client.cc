@@ -12,6 +12,20 @@
 namespace chasles {
 namespace {
 
+/// `reply` when it holds no error reply (EXEC's results included); \throws Error(kUnavailable)
+/// naming the command and what Redis said.
+RedisReply Checked(RedisReply reply, const std::string& command, const std::string& address) {
+  const auto fail = [&](const std::string& what) {
+    throw Error(ErrorCode::kUnavailable, "the shared store Redis at " + address + " answered " + command +
+                                             " with an error: " + what);
+  };
+  if (reply.type == RedisReply::Type::kError) fail(reply.str);
+  for (const RedisReply& element : reply.elements) {
+    if (element.type == RedisReply::Type::kError) fail(element.str);
+  }
+  return reply;
+}
+
 RedisReply Convert(const redisReply* r) {
   RedisReply out;
   if (r == nullptr) return out;
@@ -78,10 +92,7 @@ RedisClient::RedisClient(RedisAddress address, double timeout_seconds)
   std::lock_guard<std::mutex> lock(mutex_);
   try {
     Connect();
-    const RedisReply pong = Send({"PING"});
-    if (pong.type == RedisReply::Type::kError) {  // e.g. LOADING while it reads its append-only file
-      throw Error(ErrorCode::kUnavailable, "Redis at " + address_.text() + " answered PING with: " + pong.str);
-    }
+    Send({"PING"});  // an error reply (LOADING while it reads its append-only file) throws
   } catch (...) {
     // No destructor runs for a constructor that throws: free the connection here.
     if (context_ != nullptr) redisFree(context_);
@@ -110,12 +121,7 @@ void RedisClient::Connect() {
   }
   redisSetTimeout(c, tv);
   context_ = c;
-  if (address_.db != 0) {
-    const RedisReply selected = Send({"SELECT", std::to_string(address_.db)});
-    if (selected.type == RedisReply::Type::kError) {
-      throw Error(ErrorCode::kUnavailable, "Redis at " + address_.text() + " refused SELECT: " + selected.str);
-    }
-  }
+  if (address_.db != 0) Send({"SELECT", std::to_string(address_.db)});
 }
 
 RedisReply RedisClient::Send(const std::vector<std::string>& args) {
@@ -136,10 +142,10 @@ RedisReply RedisClient::Send(const std::vector<std::string>& args) {
   }
   RedisReply out = Convert(reply);
   freeReplyObject(reply);
-  return out;
+  return Checked(std::move(out), args.empty() ? "" : args[0], address_.text());
 }
 
-std::vector<RedisReply> RedisClient::PipelineHeld(const std::vector<std::vector<std::string>>& commands) {
+std::vector<RedisReply> RedisClient::Pipeline(const std::vector<std::vector<std::string>>& commands) {
   if (context_ == nullptr) Connect();
   for (const std::vector<std::string>& args : commands) {
     std::vector<const char*> argv;
@@ -162,8 +168,12 @@ std::vector<RedisReply> RedisClient::PipelineHeld(const std::vector<std::vector<
       context_ = nullptr;
       throw Error(ErrorCode::kUnavailable, "the shared store Redis at " + address_.text() + " failed: " + why);
     }
-    replies.push_back(Convert(static_cast<redisReply*>(raw)));
+    RedisReply reply = Convert(static_cast<redisReply*>(raw));
     freeReplyObject(raw);
+    replies.push_back(std::move(reply));
+  }
+  for (std::size_t k = 0; k < commands.size(); ++k) {
+    Checked(replies[k], commands[k].empty() ? "" : commands[k][0], address_.text());
   }
   return replies;
 }
@@ -173,16 +183,17 @@ RedisReply RedisClient::Command(const std::vector<std::string>& args) {
   try {
     return Send(args);
   } catch (const Error&) {
-    return Send(args);  // once more on a fresh connection (Send dropped the broken one)
+    if (context_ != nullptr) throw;  // an error reply: the connection is fine, the command is not
+    return Send(args);               // once more on a fresh connection (Send dropped the broken one)
   }
 }
 
-void RedisClient::Transaction(
-    const std::function<void(const std::function<RedisReply(const std::vector<std::string>&)>&)>& body) {
+void RedisClient::Transaction(const std::function<void(Held&)>& body) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (context_ == nullptr) Connect();
   try {
-    body([this](const std::vector<std::string>& args) { return Send(args); });
+    Held held(*this);
+    body(held);
   } catch (...) {
     // Leave no WATCH or MULTI behind on the connection.
     if (context_ != nullptr) {

@@ -58,7 +58,7 @@ bool WorkcellStore::Create(const std::string& name) {
       ThrowResourceExhausted("the shared store holds " + std::to_string(count) +
                              " workcells already, the server's cap; reuse one (workcells live as long as the store)");
     }
-    return Reply(redis_->Command({"SADD", kWorkcellsKey, name})).integer == 1;
+    return redis_->Command({"SADD", kWorkcellsKey, name}).integer == 1;
   }
   std::lock_guard<std::mutex> lock(mutex_);
   if (cells_.count(name) == 0 && cells_.size() >= limits_.max_workcells) {
@@ -89,7 +89,7 @@ void WorkcellStore::DropExpired(Cell& cell, double now) {
 std::vector<Reservation> WorkcellStore::Active(const std::string& workcell) {
   if (redis_ != nullptr) {
     std::vector<Reservation> active;
-    redis_->Transaction([&](const RedisSend& send) { active = ReadShared(workcell, send); });
+    redis_->Transaction([&](RedisClient::Held& redis) { active = ReadShared(workcell, redis); });
     return active;
   }
   Cell& cell = Find(workcell);
@@ -212,36 +212,29 @@ std::uint64_t NumberOf(const std::string& id) {
 
 }  // namespace
 
-const RedisReply& WorkcellStore::Reply(const RedisReply& reply) {
-  if (reply.type == RedisReply::Type::kError) {
-    throw Error(ErrorCode::kUnavailable, "the shared store answered with an error: " + reply.str);
-  }
-  return reply;
-}
-
 void WorkcellStore::UseShared(std::shared_ptr<RedisClient> redis, ReservationLoader load) {
   redis_ = std::move(redis);
   load_ = std::move(load);
 }
 
-std::vector<Reservation> WorkcellStore::ReadShared(const std::string& workcell, const RedisSend& send) {
+std::vector<Reservation> WorkcellStore::ReadShared(const std::string& workcell, RedisClient::Held& redis) {
   const std::vector<RedisReply> first =
-      redis_->PipelineHeld({{"SISMEMBER", kWorkcellsKey, workcell}, {"SMEMBERS", CellKey(workcell, "ids")}});
-  if (Reply(first[0]).integer != 1) {
+      redis.Pipeline({{"SISMEMBER", kWorkcellsKey, workcell}, {"SMEMBERS", CellKey(workcell, "ids")}});
+  if (first[0].integer != 1) {
     std::string known;
-    const RedisReply members = send({"SMEMBERS", kWorkcellsKey});  // kept: the loop reads it
-    for (const RedisReply& name : Reply(members).elements) {
+    const RedisReply members = redis.Send({"SMEMBERS", kWorkcellsKey});
+    for (const RedisReply& name : members.elements) {
       known += (known.empty() ? "" : ", ") + name.str;
     }
     throw Error(ErrorCode::kNotFound, "workcell '" + workcell + "' is unknown (known: " +
                                           (known.empty() ? "none" : known) + "); create it with CreateWorkcell");
   }
-  const RedisReply& ids = Reply(first[1]);
+  const RedisReply& ids = first[1];
   std::vector<Reservation> active;
   if (ids.elements.empty()) return active;
   std::vector<std::string> get = {"MGET"};
   for (const RedisReply& id : ids.elements) get.push_back(CellKey(workcell, "r:" + id.str));
-  const RedisReply records = Reply(send(get));
+  const RedisReply records = redis.Send(get);
   const double now = Now();
   std::lock_guard<std::mutex> lock(loaded_mutex_);
   for (std::size_t k = 0; k < ids.elements.size() && k < records.elements.size(); ++k) {
@@ -266,19 +259,19 @@ Reservation WorkcellStore::CommitShared(const std::string& workcell, Reservation
   for (int attempt = 0; attempt < 100; ++attempt) {
     bool committed = false;
     Reservation candidate = reservation;
-    redis_->Transaction([&](const RedisSend& send) {
-      Reply(send({"WATCH", CellKey(workcell, "version")}));
-      const std::vector<Reservation> others = ReadShared(workcell, send);
-      const std::uint64_t number = static_cast<std::uint64_t>(Reply(send({"INCR", CellKey(workcell, "next")})).integer);
+    redis_->Transaction([&](RedisClient::Held& redis) {
+      redis.Send({"WATCH", CellKey(workcell, "version")});
+      const std::vector<Reservation> others = ReadShared(workcell, redis);
+      const std::uint64_t number = static_cast<std::uint64_t>(redis.Send({"INCR", CellKey(workcell, "next")}).integer);
       CheckCommit(workcell, others, number, hold, padding, &candidate);
       const long long expires_ms = static_cast<long long>(std::ceil(candidate.expires_at * 1e3));
-      const std::vector<RedisReply> replies = redis_->PipelineHeld(
+      const std::vector<RedisReply> replies = redis.Pipeline(
           {{"MULTI"},
            {"SET", CellKey(workcell, "r:" + candidate.id), candidate.record, "PXAT", std::to_string(expires_ms)},
            {"SADD", CellKey(workcell, "ids"), candidate.id},
            {"INCR", CellKey(workcell, "version")},
            {"EXEC"}});
-      committed = !Reply(replies.back()).nil();  // nil: the version changed since WATCH
+      committed = !replies.back().nil();  // nil: the version changed since WATCH
     });
     if (committed) {
       std::lock_guard<std::mutex> lock(loaded_mutex_);
@@ -294,9 +287,9 @@ int WorkcellStore::ReleaseShared(const std::string& workcell, const std::string&
                                  const std::string& robot_name) {
   for (int attempt = 0; attempt < 100; ++attempt) {
     int released = -1;
-    redis_->Transaction([&](const RedisSend& send) {
-      Reply(send({"WATCH", CellKey(workcell, "version")}));
-      const std::vector<Reservation> active = ReadShared(workcell, send);
+    redis_->Transaction([&](RedisClient::Held& redis) {
+      redis.Send({"WATCH", CellKey(workcell, "version")});
+      const std::vector<Reservation> active = ReadShared(workcell, redis);
       std::vector<std::string> ids;
       for (const Reservation& r : active) {
         if (reservation_id.empty() ? r.robot_name == robot_name : r.id == reservation_id) ids.push_back(r.id);
@@ -313,7 +306,7 @@ int WorkcellStore::ReleaseShared(const std::string& workcell, const std::string&
       }
       commands.push_back({"INCR", CellKey(workcell, "version")});
       commands.push_back({"EXEC"});
-      if (!Reply(redis_->PipelineHeld(commands).back()).nil()) released = static_cast<int>(ids.size());
+      if (!redis.Pipeline(commands).back().nil()) released = static_cast<int>(ids.size());
     });
     if (released >= 0) return released;
   }

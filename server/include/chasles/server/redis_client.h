@@ -47,23 +47,36 @@ class RedisClient {
   RedisClient(const RedisClient&) = delete;
   RedisClient& operator=(const RedisClient&) = delete;
 
-  /// One command. \throws Error(kUnavailable) when the connection fails twice; a Redis error
-  /// reply is returned as kError (not thrown).
+  /// One command. \throws Error(kUnavailable) when the connection fails twice, or when Redis
+  /// answers with an error reply (naming the command and Redis's message).
   RedisReply Command(const std::vector<std::string>& args);
 
-  /// Runs `body` with the connection held: commands it sends through the given function go to
-  /// one connection with no other caller's in between (WATCH / MULTI / EXEC). No reconnect
-  /// inside: a failure is Error(kUnavailable).
-  void Transaction(const std::function<void(const std::function<RedisReply(const std::vector<std::string>&)>&)>& body);
+  /// The connection while Transaction holds it: commands go to it with no other caller's in
+  /// between (WATCH / MULTI / EXEC). No reconnect: a failure is Error(kUnavailable), as is an
+  /// error reply.
+  class Held {
+   public:
+    RedisReply Send(const std::vector<std::string>& args) { return client_.Send(args); }
+    /// Several commands sent at once and their replies read in order: one round trip.
+    std::vector<RedisReply> Pipeline(const std::vector<std::vector<std::string>>& commands) {
+      return client_.Pipeline(commands);
+    }
 
-  /// Inside Transaction's body (the connection held): several commands sent at once and their
-  /// replies read in order — one round trip, e.g. MULTI … EXEC. \throws Error(kUnavailable).
-  std::vector<RedisReply> PipelineHeld(const std::vector<std::vector<std::string>>& commands);
+   private:
+    friend class RedisClient;
+    explicit Held(RedisClient& client) : client_(client) {}
+    RedisClient& client_;
+  };
+
+  /// Runs `body` with the connection held (see Held); a WATCH or MULTI it leaves open when it
+  /// throws is discarded.
+  void Transaction(const std::function<void(Held&)>& body);
 
   const RedisAddress& address() const { return address_; }
 
  private:
   RedisReply Send(const std::vector<std::string>& args);  ///< mutex held
+  std::vector<RedisReply> Pipeline(const std::vector<std::vector<std::string>>& commands);  ///< mutex held
   void Connect();                                         ///< mutex held
 
   RedisAddress address_;

@@ -88,14 +88,11 @@ class WorkcellStore {
   void UseShared(std::shared_ptr<RedisClient> redis, ReservationLoader load);
 
  private:
-  using RedisSend = std::function<RedisReply(const std::vector<std::string>&)>;
   void CheckCommit(const std::string& workcell, const std::vector<Reservation>& others, std::uint64_t number,
                    double hold, double padding, Reservation* reservation) const;
-  std::vector<Reservation> ReadShared(const std::string& workcell, const RedisSend& send);
+  std::vector<Reservation> ReadShared(const std::string& workcell, RedisClient::Held& redis);
   Reservation CommitShared(const std::string& workcell, Reservation reservation, double hold, double padding);
   int ReleaseShared(const std::string& workcell, const std::string& reservation_id, const std::string& robot_name);
-  /// `reply`, or Error(kUnavailable) for a Redis error reply.
-  static const RedisReply& Reply(const RedisReply& reply);
 
   struct Cell {
     std::mutex mutex;  ///< serialises commits, so two conflicting commits cannot both succeed
