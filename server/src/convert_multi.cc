@@ -339,6 +339,13 @@ TimedTrajectory TrajectoryFromPoints(const v1::JointTrajectory& trajectory, cons
   return TimedTrajectory(std::move(pieces), q.back());
 }
 
+double ClockTimeFromProto(double value, double now, const std::string& field) {
+  if (!std::isfinite(value) || value < 0.0) {
+    ThrowInvalid(field + " = " + FormatNumber(value) + " must be finite and >= 0 s since the Unix epoch (0 = now)");
+  }
+  return value == 0.0 ? now : value;
+}
+
 Reservation ReservationFromCommit(const v1::CommitTrajectoryRequest& request, ModelStore& store, double now) {
   const StoredRobot described = RobotOfRequest(store, request);
   StoredRobot robot = described;
@@ -354,11 +361,7 @@ Reservation ReservationFromCommit(const v1::CommitTrajectoryRequest& request, Mo
   reservation.placement.model = robot.model;
   if (request.has_base_pose()) reservation.placement.base_pose = PoseFromProto(request.base_pose(), "base_pose");
   reservation.trajectory = TrajectoryFromPoints(request.trajectory(), *robot.model, "trajectory");
-  const double start_time = request.start_time();
-  if (!std::isfinite(start_time) || start_time < 0.0) {
-    ThrowInvalid("start_time = " + FormatNumber(start_time) + " must be finite and >= 0 s since the Unix epoch (0 = now)");
-  }
-  reservation.start_time = start_time == 0.0 ? now : start_time;
+  reservation.start_time = ClockTimeFromProto(request.start_time(), now, "start_time");
   reservation.end_time = reservation.start_time + reservation.trajectory.duration();
   reservation.expires_at = reservation.end_time + request.hold();
   // What another replica rebuilds it from: the robot by id, the start resolved.

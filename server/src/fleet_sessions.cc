@@ -54,7 +54,7 @@ void FleetSessionStore::UseShared(std::shared_ptr<RedisClient> redis, Rebuild re
 
 void FleetSessionStore::Add(const std::string& name, std::shared_ptr<OpenFleet> fleet,
                             const v1::OpenFleetSessionRequest& record) {
-  if (!ValidWorkcellName(name)) ThrowInvalid("name = '" + name + "' must be 1 to 64 characters of [A-Za-z0-9_.-]");
+  CheckName("name", name);
   const std::string already =
       "fleet session '" + name + "' is open already; close it first (CloseFleetSession) or use another name";
   if (redis_ != nullptr) {
@@ -236,9 +236,7 @@ std::shared_ptr<OpenFleet> OpenFleetFromProto(const v1::OpenFleetSessionRequest&
   for (int k = 0; k < n; ++k) {
     const v1::TeamRobot& r = request.robots(k);
     const std::string field = "robots[" + std::to_string(k) + "]";
-    if (!ValidWorkcellName(r.name())) {
-      ThrowInvalid(field + ".name = '" + r.name() + "' must be 1 to 64 characters of [A-Za-z0-9_.-]");
-    }
+    CheckName(field + ".name", r.name());
     if (!fleet->index.emplace(r.name(), k).second) {
       ThrowInvalid(field + ".name = '" + r.name() + "' repeats robots[" + std::to_string(fleet->index[r.name()]) +
                    "].name; names must be unique");

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <new>
 #include <optional>
@@ -540,18 +541,15 @@ class PlanningService final : public RawService {
         "OpenFleetSession", context, in, out, Where::kPool, [this](auto& call) {
           const v1::OpenFleetSessionRequest& request = call.request;
           call.record.request_id = RequestId(request.request_id(), "fleet");
-          if (!ValidWorkcellName(request.name())) {
-            ThrowInvalid("name = '" + request.name() + "' must be 1 to 64 characters of [A-Za-z0-9_.-]");
-          }
+          CheckName("name", request.name());  // before the lattice is built
           const StoredScene scene = SceneOfRequest(*store_, request);
-          const double start_time = request.start_time() == 0.0 ? workcells_->Now() : request.start_time();
-          if (!std::isfinite(start_time) || start_time < 0.0) {
-            ThrowInvalid("start_time = " + FormatNumber(request.start_time()) +
-                         " must be finite and >= 0 s since the Unix epoch (0 = now)");
-          }
+          const double start_time = ClockTimeFromProto(request.start_time(), workcells_->Now(), "start_time");
+          std::map<std::string, StoredRobot> resolved;  // by field, each robot resolved once
           std::shared_ptr<OpenFleet> fleet = OpenFleetFromProto(
               request, scene.scene, scene.id,
-              [this](const v1::TeamRobot& robot, const std::string& field) { return TeamRobotOf(robot, field).model; },
+              [this, &resolved](const v1::TeamRobot& robot, const std::string& field) {
+                return (resolved[field] = TeamRobotOf(robot, field)).model;
+              },
               start_time, options_.max_team_robots, &fleet_lattices_, &call.response);
           // The record another replica rebuilds the session from: robots and scene by id.
           v1::OpenFleetSessionRequest record = request;
@@ -559,9 +557,10 @@ class PlanningService final : public RawService {
           record.set_start_time(start_time);
           for (int k = 0; k < request.robots_size(); ++k) {
             if (!request.robots(k).has_robot()) continue;  // an uploaded robot reported them at upload
-            const std::string field = "robots[" + std::to_string(k) + "].robot";
-            const StoredRobot stored = TeamRobotOf(request.robots(k), "robots[" + std::to_string(k) + "]");
-            for (const std::string& w : RobotWarnings(*stored.model, field)) call.response.add_warnings(w);
+            const StoredRobot& stored = resolved.at("robots[" + std::to_string(k) + "]");
+            for (const std::string& w : RobotWarnings(*stored.model, "robots[" + std::to_string(k) + "].robot")) {
+              call.response.add_warnings(w);
+            }
             record.mutable_robots(k)->set_robot_id(stored.id);
           }
           fleet_sessions_.Add(request.name(), std::move(fleet), record);

@@ -26,13 +26,6 @@ std::string EpochText(double seconds) {
 
 }  // namespace
 
-bool ValidWorkcellName(const std::string& name) {
-  if (name.empty() || name.size() > 64) return false;
-  return std::all_of(name.begin(), name.end(), [](char c) {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '.' ||
-           c == '-';
-  });
-}
 
 CommittedMotion MotionOf(const Reservation& reservation, double origin) {
   CommittedMotion motion;
@@ -48,9 +41,7 @@ WorkcellStore::WorkcellStore(Clock clock, WorkcellLimits limits)
     : clock_(clock ? std::move(clock) : Clock(SystemNow)), limits_(limits) {}
 
 bool WorkcellStore::Create(const std::string& name) {
-  if (!ValidWorkcellName(name)) {
-    ThrowInvalid("name = '" + name + "' must be 1 to 64 characters of [A-Za-z0-9_.-]");
-  }
+  CheckName("name", name);
   if (redis_ != nullptr) {
     if (redis_->Command({"SISMEMBER", kWorkcellsKey, name}).integer == 1) return false;
     const long long count = redis_->Command({"SCARD", kWorkcellsKey}).integer;

@@ -68,14 +68,6 @@ void CheckRange(double value, double lo, double hi, const std::string& field) {
   }
 }
 
-bool ValidName(const std::string& name) {
-  if (name.empty() || name.size() > 64) return false;
-  return std::all_of(name.begin(), name.end(), [](char c) {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '.' ||
-           c == '-';
-  });
-}
-
 /// ResolveLimits names `trajectory.max_velocity[i]`; in a team the field is `robots[k].max_velocity[i]`.
 KinematicLimits ResolveRobotLimits(const TeamRobotSpec& robot, int index) {
   TrajectorySpec spec;
@@ -975,9 +967,7 @@ void CoordinationQuery::Validate(const PlannerRegistry& registry) const {
   for (std::size_t k = 0; k < robots.size(); ++k) {
     const TeamRobotSpec& r = robots[k];
     const std::string field = "robots[" + std::to_string(k) + "]";
-    if (!ValidName(r.placement.name)) {
-      ThrowInvalid(field + ".name = '" + r.placement.name + "' must be 1 to 64 characters of [A-Za-z0-9_.-]");
-    }
+    CheckName(field + ".name", r.placement.name);
     const auto [it, inserted] = names.emplace(r.placement.name, static_cast<int>(k));
     if (!inserted) {
       ThrowInvalid(field + ".name = '" + r.placement.name + "' is already the name of robots[" +
@@ -1070,6 +1060,14 @@ CoordinationOutcome Coordinate(const CoordinationQuery& query, const PlannerRegi
   const Termination bounded = termination.WithBudget(std::chrono::duration<double>(query.time_budget));
   Coordinator coordinator(query, registry, bounded);
   return coordinator.Run();
+}
+
+void CheckName(const std::string& field, const std::string& name) {
+  const bool valid = !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '.' ||
+           c == '-';
+  });
+  if (!valid) ThrowInvalid(field + " = '" + name + "' must be 1 to 64 characters of [A-Za-z0-9_.-]");
 }
 
 }  // namespace chasles

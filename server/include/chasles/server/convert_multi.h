@@ -64,6 +64,10 @@ void WorkcellPlanToProto(const CoordinationOutcome& outcome, const CoordinationQ
 TimedTrajectory TrajectoryFromPoints(const v1::JointTrajectory& trajectory, const RobotModel& robot,
                                      const std::string& field);
 
+/// A workcell-clock time field [s since the Unix epoch]: `value`, or `now` for 0.
+/// \throws Error(kInvalidArgument) naming `field` when it is not finite or negative.
+double ClockTimeFromProto(double value, double now, const std::string& field);
+
 /// The reservation a CommitTrajectoryRequest asks for: the robot resolved (inline, by id — from
 /// the shared store when this replica lacks it — or the default) and narrowed to `group`, the
 /// trajectory rebuilt from its points, start_time resolved (0 = `now`), end_time and expires_at

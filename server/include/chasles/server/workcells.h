@@ -31,9 +31,6 @@ struct Reservation {
   double expires_at = 0.0;  ///< end_time + hold: the robot occupies its final configuration until then
 };
 
-/// 1 to 64 characters of [A-Za-z0-9_.-]: a workcell's or fleet session's name.
-bool ValidWorkcellName(const std::string& name);
-
 /// How much a WorkcellStore may hold (each committed trajectory piece costs about 1 KB).
 struct WorkcellLimits {
   std::size_t max_workcells = 1024;

@@ -156,6 +156,11 @@ struct CoordinationOutcome {
 std::string FindMotionConflict(const CommittedMotion& a, const CommittedMotion& b, double padding,
                                double time_step = 1e-3, double max_joint_step = 0.005);
 
+/// The rule for names clients give robots of a team, workcells and fleet sessions: 1 to 64
+/// characters of [A-Za-z0-9_.-]. \throws Error(kInvalidArgument) "`field` = 'name' must be 1 to
+/// 64 characters of [A-Za-z0-9_.-]".
+void CheckName(const std::string& field, const std::string& name);
+
 /// Runs the query: validation, starts/goals (scene, self, pairwise: the named conflict
 /// outcomes), the method(s), then VerifyTeam of the result (nothing unverified is returned).
 /// \throws Error for invalid input (Validate).
