@@ -293,7 +293,6 @@ std::shared_ptr<OpenFleet> OpenFleetFromProto(const v1::OpenFleetSessionRequest&
 void AssignFleetGoalsFromProto(OpenFleet& fleet, const v1::AssignFleetGoalsRequest& request, double now,
                                const Termination& termination, v1::AssignFleetGoalsResponse* response) {
   FleetSession& session = *fleet.session;
-  const LatticeGeometry& g = session.lattice().geometry();
   // Every goal validated before any is planned, so a bad one changes nothing.
   std::vector<std::pair<int, Eigen::Vector3d>> goals;
   for (int k = 0; k < request.goals_size(); ++k) {
@@ -313,11 +312,7 @@ void AssignFleetGoalsFromProto(OpenFleet& fleet, const v1::AssignFleetGoalsReque
         ThrowInvalid(field + ".positions[" + std::to_string(i) + "] = " + FormatNumber(target[i]) + " must be finite");
       }
     }
-    const GridCell cell = g.NodeAt(target.head<2>(), field + ".positions");
-    if (!session.lattice().node_free(cell)) {
-      ThrowInvalid(field + ".positions = (" + FormatNumber(target.x()) + ", " + FormatNumber(target.y()) +
-                   ") is on a blocked lattice node: the fleet's footprint there touches the scene");
-    }
+    session.GoalCell(target, field + ".positions");
     goals.emplace_back(it->second, target);
   }
   response->set_now(now);

@@ -235,6 +235,18 @@ TEST_F(FleetSessions, BadInputGetsNamedErrorsAndChangesNothing) {
   status = Call(bad, &opened, &v1::Planning::Stub::OpenFleetSession);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("robots[3].start.positions = (10.7, "), std::string::npos) << status.error_message();
+  bad = OpenRequest(example, "bad name");
+  status = Call(bad, &opened, &v1::Planning::Stub::OpenFleetSession);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message(), "name = 'bad name' must be 1 to 64 characters of [A-Za-z0-9_.-]");
+  bad = OpenRequest(example, "bad");
+  bad.mutable_robots(2)->set_name("");
+  status = Call(bad, &opened, &v1::Planning::Stub::OpenFleetSession);
+  EXPECT_EQ(status.error_message(), "robots[2].name = '' must be 1 to 64 characters of [A-Za-z0-9_.-]");
+  bad = OpenRequest(example, "bad");
+  bad.set_start_time(-1.0);
+  status = Call(bad, &opened, &v1::Planning::Stub::OpenFleetSession);
+  EXPECT_EQ(status.error_message(), "start_time = -1 must be finite and >= 0 s since the Unix epoch (0 = now)");
   bad = OpenRequest(example, "bad");
   bad.mutable_robots(1)->clear_robot();
   bad.mutable_robots(1)->mutable_robot()->mutable_urdf()->set_urdf(ReadText(ExamplePath("robots/panda.urdf")));
@@ -268,6 +280,12 @@ TEST_F(FleetSessions, BadInputGetsNamedErrorsAndChangesNothing) {
   unknown->add_positions(0.0);
   status = Call(goals, &response, &v1::Planning::Stub::AssignFleetGoals);
   EXPECT_EQ(status.error_message(), "goals[1].positions[1] = nan must be finite");
+  unknown->set_positions(0, 2.5);  // the centre of box cell_2_0
+  unknown->set_positions(1, 0.5);
+  status = Call(goals, &response, &v1::Planning::Stub::AssignFleetGoals);
+  EXPECT_NE(status.error_message().find("goals[1].positions = (2.5, 0.5) is on a blocked lattice node"),
+            std::string::npos)
+      << status.error_message();
   goals.set_now(10.0);
   goals.mutable_goals()->RemoveLast();
   status = Call(goals, &response, &v1::Planning::Stub::AssignFleetGoals);

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <deque>
 #include <queue>
 #include <unordered_map>
 #include <utility>
@@ -37,6 +36,28 @@ Eigen::Vector3d Unit(LatticeDirection direction) {
   return Eigen::Vector3d::Zero();
 }
 
+/// The nodes reachable from `from` along free edges, in breadth-first order (`from` first);
+/// *depth (optional) gets every cell's lattice distance from `from` [edges], -1 when unreachable.
+std::vector<GridCell> BreadthFirst(const FleetLattice& lattice, GridCell from, std::vector<int>* depth) {
+  const LatticeGeometry& g = lattice.geometry();
+  std::vector<int> local;
+  std::vector<int>& distance = depth != nullptr ? *depth : local;
+  distance.assign(static_cast<std::size_t>(g.num_cells()), -1);
+  std::vector<GridCell> order{from};
+  distance[static_cast<std::size_t>(from)] = 0;
+  for (std::size_t head = 0; head < order.size(); ++head) {
+    const GridCell c = order[head];
+    for (LatticeDirection d : kDirections) {
+      if (!lattice.edge_free(c, d)) continue;
+      const GridCell next = g.Neighbour(c, d);
+      if (distance[static_cast<std::size_t>(next)] >= 0) continue;
+      distance[static_cast<std::size_t>(next)] = distance[static_cast<std::size_t>(c)] + 1;
+      order.push_back(next);
+    }
+  }
+  return order;
+}
+
 std::string RobotField(int robot) { return "robots[" + std::to_string(robot) + "]"; }
 
 std::string PointText(const Eigen::Vector2d& p) { return "(" + FormatNumber(p.x()) + ", " + FormatNumber(p.y()) + ")"; }
@@ -51,13 +72,15 @@ void ValidateLimits(const Eigen::Vector3d& v, const std::string& field) {
 
 }  // namespace
 
-/// A found motion: cells[0] the anchor; run r goes cells[r] -> cells[r+1] leaving at departs[r],
-/// taking durations[r].
+/// A found motion: cells[0] the anchor; run r goes cells[r] -> cells[r+1] (edges[r] edges in
+/// directions[r]) leaving at departs[r], taking durations[r].
 struct FleetSession::SearchResult {
   bool found = false;
   bool stopped = false;
   std::vector<GridCell> cells;
   std::vector<double> departs, durations;
+  std::vector<LatticeDirection> directions;  ///< of run r
+  std::vector<int> edges;                    ///< lattice edges run r covers
   std::size_t expansions = 0;
 };
 
@@ -112,7 +135,8 @@ class FleetSession::Search {
   SearchResult Run(GridCell start, double t0, GridCell goal) {
     SearchResult result;
     const LatticeGeometry& g = session_.lattice_->geometry();
-    const std::vector<int> distance = Distances(goal);
+    std::vector<int> distance;
+    BreadthFirst(*session_.lattice_, goal, &distance);
     if (distance[static_cast<std::size_t>(start)] < 0) return result;
     const int first = IntervalAt(start, t0);
     if (first < 0) return result;  // someone else holds the start (cannot happen for a consistent session)
@@ -123,6 +147,8 @@ class FleetSession::Search {
       double arrival;
       int parent;
       double depart, duration;
+      LatticeDirection direction;
+      int edges;
     };
     std::vector<Node> nodes;
     std::unordered_map<std::uint64_t, int> index;
@@ -132,7 +158,7 @@ class FleetSession::Search {
     const auto heuristic = [&](GridCell c) {
       return Profile(distance[static_cast<std::size_t>(c)] * g.spacing, fastest_v_, fastest_a_).duration;
     };
-    nodes.push_back({start, first, t0, -1, 0.0, 0.0});
+    nodes.push_back({start, first, t0, -1, 0.0, 0.0, LatticeDirection::kEast, 0});
     index[key(start, first)] = 0;
     open.push({t0 + heuristic(start), 0});
     while (!open.empty()) {
@@ -156,6 +182,8 @@ class FleetSession::Search {
           if (k > 0) {
             result.departs.push_back(c.depart);
             result.durations.push_back(c.duration);
+            result.directions.push_back(c.direction);
+            result.edges.push_back(c.edges);
           }
         }
         result.found = true;
@@ -170,7 +198,7 @@ class FleetSession::Search {
           along.push_back(at);
           const double duration = durations_[d][static_cast<std::size_t>(k)];
           if (node.arrival + duration > here.end) break;  // cannot even leave now and arrive in time
-          Relax(node, n, here, along, duration, &nodes, &index, &open, key, heuristic);
+          Relax(node, n, here, kDirections[d], along, duration, &nodes, &index, &open, key, heuristic);
         }
       }
     }
@@ -179,8 +207,9 @@ class FleetSession::Search {
 
  private:
   template <typename Nodes, typename Index, typename Open, typename Key, typename Heuristic>
-  void Relax(const typename Nodes::value_type& node, int n, const Interval& here, const std::vector<GridCell>& along,
-             double duration, Nodes* nodes, Index* index, Open* open, const Key& key, const Heuristic& heuristic) {
+  void Relax(const typename Nodes::value_type& node, int n, const Interval& here, LatticeDirection direction,
+             const std::vector<GridCell>& along, double duration, Nodes* nodes, Index* index, Open* open,
+             const Key& key, const Heuristic& heuristic) {
     const GridCell target = along.back();
     const std::vector<Interval>& arrive = Safe(target);
     for (std::size_t j = 0; j < arrive.size(); ++j) {
@@ -212,7 +241,8 @@ class FleetSession::Search {
       const auto it = index->find(k);
       if (it != index->end() && (*nodes)[static_cast<std::size_t>(it->second)].arrival <= arrival) continue;
       const int id = static_cast<int>(nodes->size());
-      nodes->push_back({target, static_cast<int>(j), arrival, n, depart, duration});
+      nodes->push_back({target, static_cast<int>(j), arrival, n, depart, duration, direction,
+                        static_cast<int>(along.size())});
       (*index)[k] = id;
       open->push({arrival + heuristic(target), id});
     }
@@ -226,27 +256,6 @@ class FleetSession::Search {
       return std::max(depart, s.start);
     }
     return kInf;
-  }
-
-  /// Lattice distance [edges] of every cell to `goal` along free edges (-1: unreachable).
-  std::vector<int> Distances(GridCell goal) const {
-    const FleetLattice& lattice = *session_.lattice_;
-    const LatticeGeometry& g = lattice.geometry();
-    std::vector<int> distance(static_cast<std::size_t>(g.num_cells()), -1);
-    std::deque<GridCell> queue{goal};
-    distance[static_cast<std::size_t>(goal)] = 0;
-    while (!queue.empty()) {
-      const GridCell c = queue.front();
-      queue.pop_front();
-      for (LatticeDirection d : kDirections) {
-        if (!lattice.edge_free(c, d)) continue;
-        const GridCell next = g.Neighbour(c, d);
-        if (distance[static_cast<std::size_t>(next)] >= 0) continue;
-        distance[static_cast<std::size_t>(next)] = distance[static_cast<std::size_t>(c)] + 1;
-        queue.push_back(next);
-      }
-    }
-    return distance;
   }
 
   const FleetSession& session_;
@@ -400,17 +409,9 @@ FleetSession::RobotState FleetSession::Replanned(int robot, const Visit& anchor,
     const double depart = result.departs[r], duration = result.durations[r];
     const double end = depart + duration;
     // Cells along the run, the end node until it leaves again.
-    const Eigen::Vector2d a = g.Position(from), b = g.Position(to);
-    const double length = (b - a).norm();
-    const int steps = static_cast<int>(std::lround(length / g.spacing));
-    const Eigen::Vector2d unit2 = (b - a) / length;
     GridCell cell = from;
-    LatticeDirection direction = LatticeDirection::kEast;
-    for (LatticeDirection d : kDirections) {
-      if (Unit(d).head<2>().dot(unit2) > 0.5) direction = d;
-    }
-    for (int k = 1; k < steps; ++k) {
-      cell = g.Neighbour(cell, direction);
+    for (int k = 1; k < result.edges[r]; ++k) {
+      cell = g.Neighbour(cell, result.directions[r]);
       state.visits.push_back({cell, depart, end});
     }
     const double leave = r + 1 < runs ? result.departs[r + 1] + result.durations[r + 1] : kInf;
@@ -418,13 +419,13 @@ FleetSession::RobotState FleetSession::Replanned(int robot, const Visit& anchor,
 
     if (depart - t0 > t) pieces.push_back(LinePiece(t, depart - t0 - t, at, Eigen::VectorXd::Zero(3), 0.0, 0.0, 0.0));
     t = depart - t0;
-    Eigen::VectorXd unit(3);
-    unit << unit2.x(), unit2.y(), 0.0;
-    const Profile profile(length, AlongLimit(unit.head<3>(), state.limits.max_velocity),
-                          AlongLimit(unit.head<3>(), state.limits.max_acceleration));
-    profile.AppendPieces(t, at, unit, &pieces);
+    // The run the search timed: edges × spacing along its direction, at the robot's limits.
+    const Eigen::Vector3d unit = Unit(result.directions[r]);
+    const Profile profile(result.edges[r] * g.spacing, AlongLimit(unit, state.limits.max_velocity),
+                          AlongLimit(unit, state.limits.max_acceleration));
+    profile.AppendPieces(t, at, Eigen::VectorXd(unit), &pieces);
     t += profile.duration;
-    at << b.x(), b.y(), heading;
+    at << g.Position(to).x(), g.Position(to).y(), heading;
     state.plan.runs.push_back({static_cast<int>(r), static_cast<int>(r), from, to, depart, t0 + t});
   }
   state.plan.start_time = t0;
@@ -451,25 +452,12 @@ std::string FleetSession::Name(int robot) const {
 }
 
 GridCell FleetSession::Refuge(int robot, const std::vector<char>& avoid, GridCell goal, double now) const {
-  const LatticeGeometry& g = lattice_->geometry();
   const GridCell from = robots_[static_cast<std::size_t>(robot)].visits.back().cell;
-  std::vector<char> seen(static_cast<std::size_t>(g.num_cells()), 0);
-  std::deque<GridCell> queue{from};
-  seen[static_cast<std::size_t>(from)] = 1;
-  while (!queue.empty()) {
-    const GridCell c = queue.front();
-    queue.pop_front();
+  for (const GridCell c : BreadthFirst(*lattice_, from, nullptr)) {
     const auto& here = occupancy_[static_cast<std::size_t>(c)];
     const bool untouched =
         std::none_of(here.begin(), here.end(), [&](const Occupancy& o) { return o.robot != robot && o.leave > now; });
     if (c != goal && !avoid[static_cast<std::size_t>(c)] && untouched) return c;
-    for (LatticeDirection d : kDirections) {
-      if (!lattice_->edge_free(c, d)) continue;
-      const GridCell next = g.Neighbour(c, d);
-      if (seen[static_cast<std::size_t>(next)]) continue;
-      seen[static_cast<std::size_t>(next)] = 1;
-      queue.push_back(next);
-    }
   }
   return -1;
 }
@@ -493,6 +481,16 @@ std::vector<FleetSessionOrder> FleetSession::OrdersOf(int robot, double from) co
     if (after != nullptr) orders.push_back({robot, after->robot, v.cell, p.x(), p.y(), v.leave, after->enter});
   }
   return orders;
+}
+
+GridCell FleetSession::GoalCell(const Eigen::Vector3d& goal, const std::string& field) const {
+  if (!std::isfinite(goal.z())) ThrowInvalid(field + " heading must be finite");
+  const GridCell cell = lattice_->geometry().NodeAt(goal.head<2>(), field);
+  if (!lattice_->node_free(cell)) {
+    ThrowInvalid(field + " = " + PointText(goal.head<2>()) + " is on a blocked lattice node (cell " +
+                 std::to_string(cell) + "): the footprint there touches the scene");
+  }
+  return cell;
 }
 
 void FleetSession::CheckNow(double now) const {
@@ -520,13 +518,8 @@ FleetGoalOutcome FleetSession::Assign(int robot, const Eigen::Vector3d& goal, do
   }
   CheckNow(now);
   now = std::max(now, latest_now_);  // the session's clock never goes back
-  if (!std::isfinite(goal.z())) ThrowInvalid("goal heading must be finite");
   const LatticeGeometry& g = lattice_->geometry();
-  const GridCell goal_cell = g.NodeAt(goal.head<2>(), "goal");
-  if (!lattice_->node_free(goal_cell)) {
-    ThrowInvalid("goal = " + PointText(goal.head<2>()) + " is on a blocked lattice node (cell " +
-                 std::to_string(goal_cell) + "): the footprint there touches the scene");
-  }
+  const GridCell goal_cell = GoalCell(goal, "goal");
   Advance(now);
 
   FleetGoalOutcome outcome;

@@ -111,6 +111,11 @@ class FleetSession {
   /// `termination` stops a search, which then changes nothing).
   FleetGoalOutcome Assign(int robot, const Eigen::Vector3d& goal, double now, const Termination& termination = {});
 
+  /// The free lattice node of `goal` (x, y) — what Assign checks its goal with.
+  /// \throws Error(kInvalidArgument) naming `field`: a heading that is not finite, (x, y) off the
+  ///         lattice's nodes (NodeAt's message) or on a blocked node.
+  GridCell GoalCell(const Eigen::Vector3d& goal, const std::string& field) const;
+
   /// What an Assign that changed nothing leaves behind (its clock and bookkeeping), for a
   /// session replaying another's calls: every call that failed there is a Skip here.
   /// \throws what Assign throws for `now`.
