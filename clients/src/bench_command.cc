@@ -349,13 +349,9 @@ struct Shard {
   bool have_summary = false;
   grpc::Status status;
 
-  Shard() = default;
-  Shard(Shard&& other) noexcept
-      : connection(std::move(other.connection)), request(std::move(other.request)), first_run(other.first_run) {}
-
-  /// Streams the benchmark; `report` is called (under `mutex`'s protection of this shard's
-  /// progress) after every message.
-  void Run(double timeout, std::mutex& mutex, const std::function<void()>& report) {
+  /// Its channel and deadline, before any thread streams or stops it.
+  Shard(const ConnectionOptions& options, v1::BenchmarkRequest shard_request, std::uint32_t first, double timeout)
+      : connection(options), request(std::move(shard_request)), first_run(first) {
     grpc::ChannelArguments channel_args;
     channel_args.SetMaxReceiveMessageSize(-1);
     channel_args.SetMaxSendMessageSize(-1);
@@ -364,6 +360,11 @@ struct Shard {
       context.set_deadline(std::chrono::system_clock::now() + std::chrono::duration_cast<std::chrono::system_clock::duration>(
                                                                   std::chrono::duration<double>(timeout)));
     }
+  }
+
+  /// Streams the benchmark; `report` is called (under `mutex`'s protection of this shard's
+  /// progress) after every message.
+  void Run(std::mutex& mutex, const std::function<void()>& report) {
     auto reader = stub->Benchmark(&context, request);
     v1::BenchmarkResponse message;
     while (reader->Read(&message)) {
@@ -388,7 +389,6 @@ struct Shard {
 
   /// StopBenchmark for this shard (its server answers the summary of the finished runs).
   void Stop() {
-    if (stub == nullptr) return;
     grpc::ClientContext stop_context;
     stop_context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
     v1::StopBenchmarkRequest stop;
@@ -567,19 +567,17 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
   if (servers.empty()) servers.push_back(server);
   const std::uint32_t total_runs = request.runs() == 0 ? 10 : request.runs();
   const std::uint64_t first_seed = request.seed() == 0 ? 1 : request.seed();
-  std::vector<Shard> shards;
+  std::vector<std::unique_ptr<Shard>> shards;
   for (std::size_t k = 0, start = 0; k < servers.size(); ++k) {
     const std::uint32_t share = static_cast<std::uint32_t>(total_runs / servers.size() + (k < total_runs % servers.size()));
     if (share == 0) continue;
-    Shard shard;
-    shard.connection = connection;
-    shard.connection.server = servers[k];
-    shard.first_run = static_cast<std::uint32_t>(start);
-    shard.request = request;
-    shard.request.set_runs(share);
-    shard.request.set_seed(first_seed + start);
-    if (servers.size() > 1) shard.request.set_request_id(request.request_id() + "-" + std::to_string(k));
-    shards.push_back(std::move(shard));
+    ConnectionOptions one = connection;
+    one.server = servers[k];
+    v1::BenchmarkRequest part = request;
+    part.set_runs(share);
+    part.set_seed(first_seed + start);
+    if (servers.size() > 1) part.set_request_id(request.request_id() + "-" + std::to_string(k));
+    shards.push_back(std::make_unique<Shard>(one, std::move(part), static_cast<std::uint32_t>(start), timeout));
     start += share;
   }
   const std::uint32_t total = total_runs * static_cast<std::uint32_t>(request.problems_size() * request.configs_size());
@@ -597,9 +595,9 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
         handled = seen;
         if (handled == 1) {
           std::fprintf(stderr, "\nchasles: stopping the benchmark (finished runs are kept; Ctrl-C again to abandon it)\n");
-          for (Shard& shard : shards) shard.Stop();
+          for (const auto& shard : shards) shard->Stop();
         } else {
-          for (Shard& shard : shards) shard.context.TryCancel();
+          for (const auto& shard : shards) shard->context.TryCancel();
         }
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -613,11 +611,11 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
     v1::BenchmarkProgress p;
     std::uint32_t solved = 0;
     double eta = 0.0;
-    for (const Shard& shard : shards) {
-      p.set_done(p.done() + shard.progress.done());
-      p.set_running(p.running() + shard.progress.running());
-      eta = std::max(eta, shard.progress.eta());
-      solved += shard.solved;
+    for (const auto& shard : shards) {
+      p.set_done(p.done() + shard->progress.done());
+      p.set_running(p.running() + shard->progress.running());
+      eta = std::max(eta, shard->progress.eta());
+      solved += shard->solved;
     }
     p.set_total(total);
     p.set_elapsed(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
@@ -625,8 +623,8 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
     bar.Update(p, solved);
   };
   std::vector<std::thread> readers;
-  for (Shard& shard : shards) {
-    readers.emplace_back([&shard, &report, &progress_mutex, timeout] { shard.Run(timeout, progress_mutex, report); });
+  for (const auto& shard : shards) {
+    readers.emplace_back([&shard, &report, &progress_mutex] { shard->Run(progress_mutex, report); });
   }
   for (std::thread& reader : readers) reader.join();
   streaming = false;
@@ -640,13 +638,13 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
   grpc::Status status;
   bool have_summary = true;
   std::vector<const v1::BenchmarkSummary*> summaries;
-  for (const Shard& shard : shards) {
-    finished.insert(finished.end(), shard.finished.begin(), shard.finished.end());
-    if (!shard.status.ok() && status.ok()) {
-      status = grpc::Status(shard.status.error_code(), shard.connection.server + ": " + shard.status.error_message());
+  for (const auto& shard : shards) {
+    finished.insert(finished.end(), shard->finished.begin(), shard->finished.end());
+    if (!shard->status.ok() && status.ok()) {
+      status = grpc::Status(shard->status.error_code(), shard->connection.server + ": " + shard->status.error_message());
     }
-    if (shard.have_summary) {
-      summaries.push_back(&shard.summary);
+    if (shard->have_summary) {
+      summaries.push_back(&shard->summary);
     } else {
       have_summary = false;
     }
