@@ -22,6 +22,7 @@ NGINX = "/usr/sbin/nginx"
 
 
 def _stop_with_this_process() -> None:
+    """In a child process: SIGTERM when the test process dies (even by SIGKILL)."""
     if sys.platform.startswith("linux"):
         ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 

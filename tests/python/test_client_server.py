@@ -7,7 +7,6 @@ is stopped (SIGTERM, then SIGKILL after 10 s) at the end.
 from __future__ import annotations
 
 import csv
-import ctypes
 import json
 import math
 import os
@@ -28,6 +27,9 @@ from chasles_client import BenchmarkRun, ChaslesError, Client, Trajectory
 from chasles_client._stubs import pb
 from chasles_client.plots import plot_benchmark, plot_trajectory
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from local_cluster import LocalCluster, _stop_with_this_process  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[2]
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 EXAMPLE = json.loads((ROOT / "examples/requests/panda_table.json").read_text())
@@ -38,12 +40,6 @@ _server: Optional[subprocess.Popen] = None
 _server_log: Optional[Path] = None
 _address = ""
 _workdir: Optional[tempfile.TemporaryDirectory] = None
-
-
-def _stop_with_this_process() -> None:
-    """In the server's child process: SIGTERM when the test process dies (even by SIGKILL)."""
-    if sys.platform.startswith("linux"):
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 
 
 def setUpModule() -> None:  # noqa: N802 - unittest's name
@@ -296,39 +292,23 @@ class ServerTest(unittest.TestCase):
 
     def test_several_replicas_balanced_and_one_killed_costs_no_call(self) -> None:
         # Two more replicas; the client balances over all three and retries UNAVAILABLE.
-        binary = os.environ["CHASLES_SERVER_BIN"]
-        extra = []
+        cluster = LocalCluster(os.environ["CHASLES_SERVER_BIN"])
         try:
-            for k in range(2):
-                log = Path(_workdir.name) / f"replica{k}.log"
-                with log.open("w") as out:
-                    process = subprocess.Popen([binary, "--listen", "127.0.0.1:0", "--threads", "1"], stdout=out,
-                                               stderr=out, preexec_fn=_stop_with_this_process)
-                deadline = time.monotonic() + 30.0
-                port = None
-                while port is None and time.monotonic() < deadline:
-                    match = re.search(r"listening on \S+ \(port (\d+)\)", log.read_text())
-                    port = match.group(1) if match else None
-                    time.sleep(0.05)
-                self.assertIsNotNone(port, log.read_text())
-                extra.append((process, f"127.0.0.1:{port}"))
-            with Client(",".join([_address] + [a for _, a in extra]), timeout=30.0) as client:
+            extra = [cluster.start_replica(threads=1) for _ in range(2)]
+            with Client(",".join([_address] + extra), timeout=30.0) as client:
                 client.wait_until_serving(timeout=20.0)
                 for _ in range(6):
                     self.assertTrue(client.planners())
                 # Round-robin: every replica answered some of them.
-                for k in range(2):
-                    self.assertIn("ListPlanners request", (Path(_workdir.name) / f"replica{k}.log").read_text())
-                extra[0][0].kill()  # SIGKILL: its connections break
-                extra[0][0].wait()
+                for log in cluster.replica_logs:
+                    self.assertIn("ListPlanners request", log.read_text())
+                cluster.processes[0].kill()  # SIGKILL: its connections break
+                cluster.processes[0].wait()
                 results = [client.plan(START, GOAL, planner="rrt_connect", time_budget=2.0, seed=s)
                            for s in range(1, 13)]
                 self.assertTrue(all(r.success for r in results), [r.message for r in results])
         finally:
-            for process, _ in extra:
-                if process.poll() is None:
-                    process.kill()
-                    process.wait()
+            cluster.stop()
 
     def test_cli_plan_writes_a_plot(self) -> None:
         png = self.out / "cli.png"

@@ -9,6 +9,7 @@ import json
 import os
 import signal
 import sys
+import threading
 import time
 import unittest
 from pathlib import Path
@@ -96,11 +97,8 @@ class ReplicaFailures(unittest.TestCase):
     def tearDown(self) -> None:
         self.cluster.stop()
 
-    def start_replica(self, k: int) -> str:
-        return self.cluster.start_replica(threads=2)
-
     def test_sigterm_finishes_the_call_in_flight_and_refuses_new_ones(self) -> None:
-        address = self.start_replica(0)
+        address = self.cluster.start_replica(threads=2)
         example = json.loads((ROOT / "examples/requests/panda_table.json").read_text())
         with Client(address, timeout=30.0, retries=2) as client:
             client.wait_until_serving(timeout=20.0)
@@ -110,7 +108,6 @@ class ReplicaFailures(unittest.TestCase):
                 outcome.append(client.plan(example["start"]["positions"], example["goal"]["positions"],
                                            planner="rrt_star", time_budget=1.2))
 
-            import threading
             worker = threading.Thread(target=long_plan)
             worker.start()
             time.sleep(0.4)
@@ -158,8 +155,7 @@ class ReplicaFailures(unittest.TestCase):
             self.assertTrue(again.success, again.message)
 
     def test_a_replica_killed_under_load_costs_no_call(self) -> None:
-        import threading
-        addresses = [self.start_replica(k) for k in range(3)]
+        addresses = [self.cluster.start_replica(threads=2) for _ in range(3)]
         example = json.loads((ROOT / "examples/requests/panda_table.json").read_text())
         failures: List[str] = []
         done = [0]

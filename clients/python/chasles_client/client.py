@@ -6,6 +6,7 @@ import dataclasses
 import json
 import os
 import socket
+import threading
 import time
 import uuid
 from pathlib import Path
@@ -545,8 +546,6 @@ class Client:
                           on_progress: Optional[Callable[[BenchmarkProgress], Any]],
                           on_run: Optional[Callable[[BenchmarkRun], Any]],
                           timeout: Optional[float]) -> BenchmarkResult:
-        import threading
-
         total_runs = message.runs or 10
         first_seed = message.seed or 1
         shards = []
