@@ -486,6 +486,119 @@ v1::BenchmarkSummary MergeSummaries(const std::vector<const v1::BenchmarkSummary
   return merged;
 }
 
+/// The shards of `request` over the --server addresses: shard k runs its share of the runs from
+/// its first run on, seeded as those runs would be on one server.
+std::vector<std::unique_ptr<Shard>> MakeShards(const ConnectionOptions& connection, const v1::BenchmarkRequest& request,
+                                               double timeout) {
+  const std::vector<std::string> servers = ServerAddresses(connection.server);
+  const std::uint32_t total_runs = request.runs() == 0 ? 10 : request.runs();
+  const std::uint64_t first_seed = request.seed() == 0 ? 1 : request.seed();
+  std::vector<std::unique_ptr<Shard>> shards;
+  for (std::size_t k = 0, start = 0; k < servers.size(); ++k) {
+    const std::uint32_t share = static_cast<std::uint32_t>(total_runs / servers.size() + (k < total_runs % servers.size()));
+    if (share == 0) continue;
+    ConnectionOptions one = connection;
+    one.server = servers[k];
+    v1::BenchmarkRequest part = request;
+    part.set_runs(share);
+    part.set_seed(first_seed + start);
+    if (servers.size() > 1) part.set_request_id(request.request_id() + "-" + std::to_string(k));
+    shards.push_back(std::make_unique<Shard>(one, std::move(part), static_cast<std::uint32_t>(start), timeout));
+    start += share;
+  }
+  return shards;
+}
+
+/// Streams every shard at once, with one progress bar; Ctrl-C first stops them (their servers
+/// answer the summary of the finished runs), a second Ctrl-C cancels them.
+void StreamShards(const std::vector<std::unique_ptr<Shard>>& shards, const v1::BenchmarkRequest& request, bool quiet) {
+  const std::uint32_t total_runs = request.runs() == 0 ? 10 : request.runs();
+  const std::uint32_t total = total_runs * static_cast<std::uint32_t>(request.problems_size() * request.configs_size());
+  const auto started = std::chrono::steady_clock::now();
+  g_interrupts = 0;
+  std::signal(SIGINT, OnInterrupt);
+  std::atomic<bool> streaming{true};
+  std::thread watcher([&] {
+    int handled = 0;
+    while (streaming.load()) {
+      const int seen = g_interrupts.load();
+      if (seen > handled) {
+        handled = seen;
+        if (handled == 1) {
+          std::fprintf(stderr, "\nchasles: stopping the benchmark (finished runs are kept; Ctrl-C again to abandon it)\n");
+          for (const auto& shard : shards) shard->Stop();
+        } else {
+          for (const auto& shard : shards) shard->context.TryCancel();
+        }
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  });
+
+  ProgressBar bar(quiet);
+  std::mutex progress_mutex;
+  const auto report = [&] {  // the shards' progress together
+    std::lock_guard<std::mutex> lock(progress_mutex);
+    v1::BenchmarkProgress p;
+    std::uint32_t solved = 0;
+    double eta = 0.0;
+    for (const auto& shard : shards) {
+      p.set_done(p.done() + shard->progress.done());
+      p.set_running(p.running() + shard->progress.running());
+      eta = std::max(eta, shard->progress.eta());
+      solved += shard->solved;
+    }
+    p.set_total(total);
+    p.set_elapsed(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+    p.set_eta(eta);
+    bar.Update(p, solved);
+  };
+  std::vector<std::thread> readers;
+  for (const auto& shard : shards) {
+    readers.emplace_back([&shard, &report, &progress_mutex] { shard->Run(progress_mutex, report); });
+  }
+  for (std::thread& reader : readers) reader.join();
+  streaming = false;
+  watcher.join();
+  std::signal(SIGINT, SIG_DFL);
+  bar.End();
+}
+
+/// The shards' answers as one benchmark's.
+struct MergedRuns {
+  std::vector<v1::BenchmarkRun> finished;  ///< run numbers of the whole benchmark
+  v1::BenchmarkSummary summary;
+  bool have_summary = true;  ///< every shard answered its summary
+  grpc::Status status;       ///< the first shard's failure, naming its server
+};
+
+/// Runs renumbered from their shard's first run; summaries recomputed from all runs and each
+/// problem's OMPL log merged (MergeSummaries), or one shard's summary as it came.
+/// \throws ConfigError when the shards' logs do not fit together.
+MergedRuns MergeShards(const std::vector<std::unique_ptr<Shard>>& shards, const std::string& request_id,
+                       double wall_time) {
+  MergedRuns merged;
+  std::vector<const v1::BenchmarkSummary*> summaries;
+  for (const auto& shard : shards) {
+    merged.finished.insert(merged.finished.end(), shard->finished.begin(), shard->finished.end());
+    if (!shard->status.ok() && merged.status.ok()) {
+      merged.status =
+          grpc::Status(shard->status.error_code(), shard->connection.server + ": " + shard->status.error_message());
+    }
+    if (shard->have_summary) {
+      summaries.push_back(&shard->summary);
+    } else {
+      merged.have_summary = false;
+    }
+  }
+  if (merged.have_summary && summaries.size() == 1) {
+    merged.summary = *summaries[0];
+  } else if (merged.have_summary) {
+    merged.summary = MergeSummaries(summaries, merged.finished, request_id, wall_time);
+  }
+  return merged;
+}
+
 int BenchCommand(const ConnectionOptions& connection, double timeout, const std::vector<std::string>& args) {
   const std::string& server = connection.server;
   std::string config_path, out_dir;
@@ -557,110 +670,21 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
 
   // One shard per --server address: each runs its share of the runs (run r keeps seed + r), and
   // the answers are merged into one set of runs, summaries and OMPL logs.
-  std::vector<std::string> servers;
-  {
-    std::stringstream list(server);
-    for (std::string item; std::getline(list, item, ',');) {
-      if (item.find_first_not_of(" \t") != std::string::npos) servers.push_back(item);
-    }
-  }
-  if (servers.empty()) servers.push_back(server);
-  const std::uint32_t total_runs = request.runs() == 0 ? 10 : request.runs();
-  const std::uint64_t first_seed = request.seed() == 0 ? 1 : request.seed();
-  std::vector<std::unique_ptr<Shard>> shards;
-  for (std::size_t k = 0, start = 0; k < servers.size(); ++k) {
-    const std::uint32_t share = static_cast<std::uint32_t>(total_runs / servers.size() + (k < total_runs % servers.size()));
-    if (share == 0) continue;
-    ConnectionOptions one = connection;
-    one.server = servers[k];
-    v1::BenchmarkRequest part = request;
-    part.set_runs(share);
-    part.set_seed(first_seed + start);
-    if (servers.size() > 1) part.set_request_id(request.request_id() + "-" + std::to_string(k));
-    shards.push_back(std::make_unique<Shard>(one, std::move(part), static_cast<std::uint32_t>(start), timeout));
-    start += share;
-  }
-  const std::uint32_t total = total_runs * static_cast<std::uint32_t>(request.problems_size() * request.configs_size());
   const auto started = std::chrono::steady_clock::now();
-
-  // Ctrl-C: first StopBenchmark (the servers answer the summary of the finished runs), then cancel.
-  g_interrupts = 0;
-  std::signal(SIGINT, OnInterrupt);
-  std::atomic<bool> streaming{true};
-  std::thread watcher([&] {
-    int handled = 0;
-    while (streaming.load()) {
-      const int seen = g_interrupts.load();
-      if (seen > handled) {
-        handled = seen;
-        if (handled == 1) {
-          std::fprintf(stderr, "\nchasles: stopping the benchmark (finished runs are kept; Ctrl-C again to abandon it)\n");
-          for (const auto& shard : shards) shard->Stop();
-        } else {
-          for (const auto& shard : shards) shard->context.TryCancel();
-        }
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-  });
-
-  ProgressBar bar(quiet);
-  std::mutex progress_mutex;
-  const auto report = [&] {  // the shards' progress together
-    std::lock_guard<std::mutex> lock(progress_mutex);
-    v1::BenchmarkProgress p;
-    std::uint32_t solved = 0;
-    double eta = 0.0;
-    for (const auto& shard : shards) {
-      p.set_done(p.done() + shard->progress.done());
-      p.set_running(p.running() + shard->progress.running());
-      eta = std::max(eta, shard->progress.eta());
-      solved += shard->solved;
-    }
-    p.set_total(total);
-    p.set_elapsed(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
-    p.set_eta(eta);
-    bar.Update(p, solved);
-  };
-  std::vector<std::thread> readers;
-  for (const auto& shard : shards) {
-    readers.emplace_back([&shard, &report, &progress_mutex] { shard->Run(progress_mutex, report); });
+  const std::vector<std::unique_ptr<Shard>> shards = MakeShards(connection, request, timeout);
+  StreamShards(shards, request, quiet);
+  MergedRuns merged;
+  try {
+    merged = MergeShards(shards, request.request_id(),
+                         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+  } catch (const ConfigError& e) {
+    std::cerr << "chasles: " << e.message << "\n";
+    return kExitFailed;
   }
-  for (std::thread& reader : readers) reader.join();
-  streaming = false;
-  watcher.join();
-  std::signal(SIGINT, SIG_DFL);
-  bar.End();
-
-  // Merge: runs renumbered from their shard's first run; summaries from all runs; each problem's
-  // OMPL log with every shard's runs.
-  std::vector<v1::BenchmarkRun> finished;
-  grpc::Status status;
-  bool have_summary = true;
-  std::vector<const v1::BenchmarkSummary*> summaries;
-  for (const auto& shard : shards) {
-    finished.insert(finished.end(), shard->finished.begin(), shard->finished.end());
-    if (!shard->status.ok() && status.ok()) {
-      status = grpc::Status(shard->status.error_code(), shard->connection.server + ": " + shard->status.error_message());
-    }
-    if (shard->have_summary) {
-      summaries.push_back(&shard->summary);
-    } else {
-      have_summary = false;
-    }
-  }
-  v1::BenchmarkSummary summary;
-  if (have_summary && summaries.size() == 1) {
-    summary = *summaries[0];
-  } else if (have_summary) {
-    try {
-      summary = MergeSummaries(summaries, finished, request.request_id(),
-                               std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
-    } catch (const ConfigError& e) {
-      std::cerr << "chasles: " << e.message << "\n";
-      return kExitFailed;
-    }
-  }
+  const std::vector<v1::BenchmarkRun>& finished = merged.finished;
+  const v1::BenchmarkSummary& summary = merged.summary;
+  const bool have_summary = merged.have_summary;
+  const grpc::Status& status = merged.status;
   std::vector<std::string> problem_names, config_names;
   if (have_summary) {
     problem_names.assign(summary.problem_names().begin(), summary.problem_names().end());

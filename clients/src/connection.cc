@@ -73,13 +73,7 @@ std::string ServiceConfig() {
 /// The channel target of --server: one address as given, or several (comma-separated) resolved
 /// here into one static list (ipv4:a,b or ipv6:[a],[b]).
 std::string Target(const std::string& server) {
-  std::vector<std::string> addresses;
-  std::stringstream list(server);
-  for (std::string item; std::getline(list, item, ',');) {
-    item = Trim(item);
-    if (!item.empty()) addresses.push_back(item);
-  }
-  if (addresses.empty()) ConnectionError("--server is empty: give HOST:PORT, or several separated by commas");
+  const std::vector<std::string> addresses = ServerAddresses(server);
   if (addresses.size() == 1) return addresses[0];
   std::vector<std::string> resolved;
   bool v4 = false, v6 = false;
@@ -120,6 +114,17 @@ std::string Target(const std::string& server) {
 }
 
 }  // namespace
+
+std::vector<std::string> ServerAddresses(const std::string& server) {
+  std::vector<std::string> addresses;
+  std::stringstream list(server);
+  for (std::string item; std::getline(list, item, ',');) {
+    item = Trim(item);
+    if (!item.empty()) addresses.push_back(item);
+  }
+  if (addresses.empty()) ConnectionError("--server is empty: give HOST:PORT, or several separated by commas");
+  return addresses;
+}
 
 const char kConnectionUsage[] =
     "  --server ADDR          server address, or several replicas separated by commas: calls are\n"

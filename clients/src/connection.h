@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <grpcpp/grpcpp.h>
 
@@ -26,6 +27,10 @@ extern const char kConnectionUsage[];
 /// When argv[*i] is a connection flag, stores it with its value, advances *i past the value and
 /// returns true; a flag without a value exits with status 2.
 bool ParseConnectionFlag(int argc, char** argv, int* i, ConnectionOptions* options);
+
+/// The addresses of --server: one, or several separated by commas (blanks trimmed). Exits with
+/// status 2 and a message when none is given.
+std::vector<std::string> ServerAddresses(const std::string& server);
 
 /// The channel the flags describe: TLS when --tls-ca is set (mutual with --tls-cert/--tls-key),
 /// plaintext otherwise; with a token every call carries `authorization: Bearer TOKEN` (over
