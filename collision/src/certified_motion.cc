@@ -118,6 +118,13 @@ constexpr int kMaxCertifiedStates = 20000;
 constexpr double kProbeSpacing = 0.25;       // [rad] probe states before advancing, at most this apart
 constexpr int kMaxProbeDepth = 10;           // (at most 1023 of them)
 constexpr double kMinCertifiedStep = 1e-7;   // in s
+// A step is at most this times the one before it. Any shorter step is as safe, and the cap lets
+// the pairs whose cached free-until already covers it be skipped before the pair that limits the
+// step has been evaluated (without it, a state evaluates every pair until one shortens the step
+// from the whole rest of the curve). Measured by callgrind on 20 shelf queries: 1 (never grow)
+// 555M instructions, none 490M, 2 426M, 1.25 419M, 1.1 418M with 3 % more states; 1.25 keeps the
+// states' median.
+constexpr double kMaxStepGrowth = 1.25;
 constexpr double kChunkReach = 0.2;          // [m] broad phase: sweep bound of one chunk of a curve
 constexpr double kMinGridMargin = 1e-5;      // [m]
 constexpr double kMaxLinkGridMargin = 0.1;   // [m]
@@ -286,6 +293,7 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
   };
   const auto place = [&](std::size_t li) { PlaceLinkSpheres(frames, li, w, m.placed.data()); };
 
+  double last_step = kInf;  // the step taken from the previous state
   double s = 0.0;
   for (int state = 0;; ++state) {
     if (state >= kMaxCertifiedStates) return false;
@@ -298,7 +306,8 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
     if (prim_broad_phase && (state == 0 || s >= chunk_end - 2.0 * kMinCertifiedStep)) start_chunk(s);
     std::fill(m.placed.begin(), m.placed.end(), 0);
     std::fill(m.bound_placed.begin(), m.bound_placed.end(), 0);
-    double step = (prim_broad_phase ? chunk_end : 1.0) - s;
+    const double limit = (prim_broad_phase ? chunk_end : 1.0) - s;
+    double step = std::min(limit, kMaxStepGrowth * last_step);
     // Scene primitives: exact clearances; a link whose bounding sphere is clear by more than
     // step·(its fastest sphere's bound) cannot shorten the step.
     for (std::size_t oi = 0; oi < nprims; ++oi) {
@@ -422,6 +431,9 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
     }
     if (step >= 1.0 - s) return true;  // [s, 1] is clear (the last chunk ends at 1)
     if (!(step >= kMinCertifiedStep)) return false;  // grazing (or NaN): reject conservatively
+    // A step cut at the chunk's end says nothing of the clearance: the next may grow from the
+    // larger of it and the step before.
+    last_step = step < limit ? step : std::max(step, last_step);
     s += step;
     if (s >= 1.0) return true;
   }
