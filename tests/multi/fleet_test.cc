@@ -1067,10 +1067,11 @@ std::shared_ptr<const FleetLattice> SceneLattice(const GridMap& map, double s, d
   return std::make_shared<const FleetLattice>(BuildFleetLattice(*scene, request));
 }
 
-TEST(FleetSession, GoalsKeepComingAndEveryRobotStaysApart) {
-  // 100 robots in a warehouse of shelf rows; 400 goals, each to the robot that is idle first (and
-  // every fourth to a robot still on its way, which finishes its run and turns to the new goal).
-  // Every executed trajectory is then certified independently at 1 ms: pairs, shelves, limits.
+/// 100 robots in a warehouse of shelf rows; 400 goals, each to the robot that is idle first (and
+/// every fourth to a robot still on its way, which finishes its run and turns to the new goal);
+/// with `report_late`, after every third goal a robot on its way reports being late. Every
+/// executed trajectory is then certified independently at 1 ms: pairs, shelves, limits.
+void RunWarehouseSession(bool report_late) {
   const GridMap map = WarehouseGridMap(60, 30, 8, 2, 8);
   const double s = 1.0, radius = 0.3, padding = 0.3;
   Scene scene;
@@ -1093,7 +1094,8 @@ TEST(FleetSession, GoalsKeepComingAndEveryRobotStaysApart) {
   for (GridCell c = 0; c < lattice->geometry().num_cells(); ++c) {
     if (lattice->node_free(c)) free_cells.push_back(c);
   }
-  int solved = 0, moved_aside = 0, orders = 0, deferred = 0;
+  std::mt19937_64 late_rng(7);
+  int solved = 0, moved_aside = 0, orders = 0, deferred = 0, reported_late = 0, delayed = 0;
   double now = 0.0, slowest = 0.0;
   const int goals_total = 400;
   for (int k = 0; k < goals_total; ++k) {
@@ -1145,9 +1147,33 @@ TEST(FleetSession, GoalsKeepComingAndEveryRobotStaysApart) {
     }
     const Eigen::Vector3d end = session.plan(robot).trajectory.Evaluate(kInf).q;
     EXPECT_EQ(end.head<2>(), xy);
+    if (report_late && k % 3 == 1) {
+      // A robot on its way reports being where its plan had it 0.7 s ago: late. Its plan and
+      // those ordered after it are delayed; the certificate below checks them all.
+      const int r = static_cast<int>(unit(late_rng) * n);
+      const FleetSessionPlan& plan = session.plan(r);
+      if (plan.runs.empty() || now - 0.7 <= plan.runs.front().start_time || now >= plan.arrival_time) continue;
+      const Eigen::Vector2d seen = session.PoseAt(r, now - 0.7).head<2>();
+      const FleetStateOutcome late = session.Report(r, seen, now, 1e-3);
+      if (late.status != FleetStateStatus::kLate) {
+        EXPECT_EQ(late.status, FleetStateStatus::kOnPlan) << late.message;  // it stood still then
+        continue;
+      }
+      ++reported_late;
+      delayed += static_cast<int>(late.robots.size()) - 1;
+      // (Within the report's tolerance: a point that close to a node may be taken as the start
+      // of the run from it.)
+      EXPECT_LE((session.PoseAt(r, now).head<2>() - seen).norm(), 1e-3);
+      for (int d : late.robots) executed.Record(session, d);
+    }
   }
   EXPECT_EQ(solved, goals_total);
-  EXPECT_GT(moved_aside, 0);
+  if (report_late) {
+    EXPECT_GT(reported_late, 20);
+    EXPECT_GT(delayed, 0);
+  } else {
+    EXPECT_GT(moved_aside, 0);
+  }
   EXPECT_GT(orders, 0);
   std::vector<TimedTrajectory> trajectories;
   std::vector<Body> bodies;
@@ -1171,9 +1197,14 @@ TEST(FleetSession, GoalsKeepComingAndEveryRobotStaysApart) {
   EXPECT_GE(certificate.min_pair_gap, 0.0);
   EXPECT_GE(certificate.min_obstacle_gap, 0.0);
   std::cout << "[ session  ] " << solved << "/" << goals_total << " goals (" << deferred << " deferred), " << moved_aside
-            << " idle robots moved aside, slowest goal " << slowest * 1e3 << " ms, horizon " << now << " s, "
+            << " idle robots moved aside, " << reported_late << " robots reported late (" << delayed
+            << " others delayed after them), slowest goal " << slowest * 1e3 << " ms, horizon " << now << " s, "
             << certificate.samples << " samples, min pair gap " << certificate.min_pair_gap << " m\n";
 }
+
+TEST(FleetSession, GoalsKeepComingAndEveryRobotStaysApart) { RunWarehouseSession(false); }
+
+TEST(FleetSession, RobotsReportedLateAreDelayedWithThoseOrderedAfterThemAndStayApart) { RunWarehouseSession(true); }
 
 TEST(FleetSession, AnIdleRobotInTheWayStepsAsideAndFailuresChangeNothing) {
   // A corridor one node wide with a bay (cells 0..7, bay 11 above 3): robot 1 idles in the
@@ -1239,6 +1270,87 @@ TEST(FleetSession, AnIdleRobotInTheWayStepsAsideAndFailuresChangeNothing) {
             std::string::npos);
   robots[1].pose = Eigen::Vector3d(0, 0, 0);
   EXPECT_NE(ErrorOf([&] { FleetSession(lattice, robots, 0.0); }).find("robots[1].pose = (0, 0) is on the node of robots[0]"),
+            std::string::npos);
+}
+
+TEST(FleetSession, ALateRobotDelaysItsPlanAndTheRobotsOrderedAfterIt) {
+  // A corridor (y = 1, x = 0..10) crossed by a passage at x = 4. Robot 0 runs the corridor in one
+  // straight run (8 m at 1 m/s, 1 m/s²: x = 0.5 at t = 1, then 1 m/s, 9 s in all); robot 1,
+  // sent across at t = 3, waits below the crossing until robot 0's run has ended.
+  GridMap map;
+  map.width = 11;
+  map.height = 3;
+  map.blocked.assign(33, 1);
+  for (int x = 0; x < 11; ++x) map.blocked[11 + x] = 0;
+  map.blocked[4] = map.blocked[26] = 0;
+  Scene scene;
+  std::vector<UprightBox> boxes;
+  const auto lattice = SceneLattice(map, 1.0, 0.3, &scene, &boxes);
+  std::vector<FleetSessionRobot> robots(3);
+  robots[0].pose = Eigen::Vector3d(0, 1, 0);
+  robots[1].pose = Eigen::Vector3d(4, 0, 0);
+  robots[2].pose = Eigen::Vector3d(10, 1, 0);  // idle beyond robot 0's goal
+  FleetSession session(lattice, robots, 0.0);
+  Executed executed(session);
+  ASSERT_EQ(session.Assign(0, Eigen::Vector3d(8, 1, 0), 0.0).code, FleetGoalCode::kSuccess);
+  executed.Record(session, 0);
+  const FleetGoalOutcome crossing = session.Assign(1, Eigen::Vector3d(4, 2, 0), 3.0);
+  ASSERT_EQ(crossing.code, FleetGoalCode::kSuccess) << crossing.message;
+  for (int r : crossing.robots) executed.Record(session, r);
+  bool after_robot_0 = false;
+  for (const FleetSessionOrder& order : crossing.orders) after_robot_0 |= order.before_robot == 0 && order.after_robot == 1;
+  ASSERT_TRUE(after_robot_0);
+  ASSERT_NEAR(session.PoseAt(0, 5.0).x(), 4.5, 1e-9);
+  const double robot_1_departs = session.plan(1).runs.front().start_time;
+  EXPECT_GE(robot_1_departs, 9.0);
+
+  // On plan, ahead, off plan: nothing changes.
+  const FleetStateOutcome on = session.Report(0, Eigen::Vector2d(4.52, 1.0), 5.0, 0.05);
+  EXPECT_EQ(on.status, FleetStateStatus::kOnPlan);
+  EXPECT_NEAR(on.deviation, 0.02, 1e-9);
+  const FleetStateOutcome ahead = session.Report(0, Eigen::Vector2d(6.0, 1.0), 5.0, 0.05);
+  EXPECT_EQ(ahead.status, FleetStateStatus::kAhead) << ahead.message;
+  EXPECT_NEAR(ahead.delay, -1.5, 1e-6);
+  const FleetStateOutcome off = session.Report(0, Eigen::Vector2d(4.0, 1.5), 5.0, 0.05);
+  EXPECT_EQ(off.status, FleetStateStatus::kOffPlan) << off.message;
+  EXPECT_NE(off.message.find("off every run of its plan"), std::string::npos) << off.message;
+  EXPECT_NEAR(session.PoseAt(0, 5.0).x(), 4.5, 1e-9);
+
+  // Late: at x = 2 at t = 5, where the plan was at t = 2.5. Robot 0 waits 2.5 s at its start,
+  // robot 1 until robot 0 has left the crossing again; robot 2 (nothing after robot 0) keeps
+  // its plan.
+  const FleetStateOutcome late = session.Report(0, Eigen::Vector2d(2.0, 1.0), 5.0, 0.05);
+  ASSERT_EQ(late.status, FleetStateStatus::kLate) << late.message;
+  EXPECT_NEAR(late.delay, 2.5, 1e-6);
+  EXPECT_EQ(late.robots, (std::vector<int>{0, 1}));
+  EXPECT_NEAR(session.PoseAt(0, 5.0).x(), 2.0, 1e-6);
+  EXPECT_NEAR(session.plan(0).arrival_time, 9.0 + 2.5, 1e-6);
+  EXPECT_NEAR(session.plan(1).runs.front().start_time, robot_1_departs + 2.5, 1e-5);
+  EXPECT_FALSE(late.orders.empty());
+  for (const FleetSessionOrder& order : late.orders) EXPECT_LE(order.leaves, order.enters + 1e-9);
+  for (int r : late.robots) executed.Record(session, r);
+  double gap = 0.0;
+  std::vector<TimedTrajectory> trajectories;
+  std::vector<Body> bodies(3);
+  for (int i = 0; i < 3; ++i) {
+    trajectories.push_back(executed.Of(i, &gap));
+    bodies[i].radius = 0.3;
+    bodies[i].start = robots[i].pose;
+    bodies[i].goal = trajectories[i].Evaluate(kInf).q;
+  }
+  EXPECT_LE(gap, 1e-9);
+  const Certificate certificate =
+      CertifyFleet(trajectories, bodies, 0.3, boxes, 0.0, 0.5, Eigen::Vector2d(0, 0), Eigen::Vector2d(10, 2));
+  EXPECT_TRUE(certificate.ok) << certificate.failure;
+
+  // Named errors.
+  EXPECT_NE(ErrorOf([&] { session.Report(3, Eigen::Vector2d(0, 0), 6.0, 0.05); }).find("robot = 3 must be in [0, 3)"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { session.Report(0, Eigen::Vector2d(std::numeric_limits<double>::quiet_NaN(), 0), 6.0, 0.05); }).find("must be finite"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { session.Report(0, Eigen::Vector2d(0, 0), 6.0, 0.0); }).find("tolerance = 0 must be finite and > 0"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { session.Report(0, Eigen::Vector2d(0, 0), -1.0, 0.05); }).find("before the session's start"),
             std::string::npos);
 }
 

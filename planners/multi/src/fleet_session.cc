@@ -4,7 +4,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <deque>
 #include <queue>
+#include <stdexcept>
 #include <unordered_map>
 #include <utility>
 
@@ -460,6 +462,175 @@ GridCell FleetSession::Refuge(int robot, const std::vector<char>& avoid, GridCel
     if (c != goal && !avoid[static_cast<std::size_t>(c)] && untouched) return c;
   }
   return -1;
+}
+
+void FleetSession::Shift(int robot, double from, double delta) {
+  RobotState& state = robots_[static_cast<std::size_t>(robot)];
+  Unindex(robot);
+  for (Visit& v : state.visits) {
+    if (v.enter >= from) v.enter += delta;
+    if (v.leave > from) v.leave += delta;  // +inf stays
+  }
+  Index(robot);
+  FleetSessionPlan& p = state.plan;
+  for (FleetRun& run : p.runs) {
+    if (run.start_time >= from) {
+      run.start_time += delta;
+      run.end_time += delta;
+    }
+  }
+  if (p.arrival_time >= from) p.arrival_time += delta;
+  if (p.finish_time >= from) p.finish_time += delta;
+  // The trajectory: at rest where it stands at `from` for delta, every later piece delta later.
+  // `from` is a piece boundary (a run starts there, at rest), up to the rounding of times
+  // shifted before: the boundary nearest it is taken.
+  const double local = std::max(0.0, from - p.start_time);
+  const auto& old = p.trajectory.pieces();
+  std::size_t split = old.size();
+  for (std::size_t i = 0; i < old.size(); ++i) {
+    if (old[i].t0 >= local - 1e-9 * std::max(1.0, std::abs(local))) {
+      split = i;
+      break;
+    }
+  }
+  const double at = split < old.size() ? old[split].t0 : p.trajectory.duration();
+  std::vector<TimedTrajectory::Piece> pieces(old.begin(), old.begin() + static_cast<std::ptrdiff_t>(split));
+  pieces.push_back(LinePiece(at, delta, p.trajectory.Evaluate(at).q, Eigen::VectorXd::Zero(3), 0.0, 0.0, 0.0));
+  for (std::size_t i = split; i < old.size(); ++i) {
+    pieces.push_back(old[i]);
+    pieces.back().t0 = at + delta + (old[i].t0 - at);
+  }
+  const Eigen::VectorXd end = p.trajectory.Evaluate(p.trajectory.duration()).q;
+  p.trajectory = TimedTrajectory(std::move(pieces), end);
+}
+
+FleetStateOutcome FleetSession::Report(int robot, const Eigen::Vector2d& position, double time, double tolerance) {
+  if (robot < 0 || robot >= num_robots()) {
+    ThrowInvalid("robot = " + std::to_string(robot) + " must be in [0, " + std::to_string(num_robots()) + ")");
+  }
+  if (!position.allFinite()) ThrowInvalid("position = " + PointText(position) + " must be finite");
+  if (!std::isfinite(tolerance) || !(tolerance > 0.0)) {
+    ThrowInvalid("tolerance = " + FormatNumber(tolerance) + " must be finite and > 0");
+  }
+  CheckNow(time);
+  time = std::max(time, latest_now_);
+  Advance(time);
+  FleetStateOutcome out;
+  const RobotState& state = robots_[static_cast<std::size_t>(robot)];
+  const FleetSessionPlan& p = state.plan;
+  out.planned = PoseAt(robot, time);
+  out.deviation = (position - out.planned.head<2>()).norm();
+  if (out.deviation <= tolerance) {
+    out.message = Name(robot) + " is on its plan (" + FormatNumber(out.deviation) + " m from it)";
+    return out;
+  }
+  // The runs the point lies on (within the tolerance), and the plan's time there: the run is
+  // straight and rest to rest, so its progress along the run grows with time (bisection).
+  const LatticeGeometry& g = lattice_->geometry();
+  const FleetRun* on = nullptr;
+  double at_time = 0.0;
+  for (const FleetRun& run : p.runs) {
+    const Eigen::Vector2d a = g.Position(run.from), b = g.Position(run.to);
+    const Eigen::Vector2d ab = b - a;
+    const double u = std::clamp((position - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+    if ((a + u * ab - position).norm() > tolerance) continue;
+    const auto progress = [&](double t) {
+      return (p.trajectory.Evaluate(t - p.start_time).q.head<2>() - a).dot(ab) / ab.squaredNorm();
+    };
+    double lo = run.start_time, hi = run.end_time;
+    if (u <= 0.0) {
+      hi = lo;
+    } else {
+      for (int k = 0; k < 60; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (progress(mid) < u ? lo : hi) = mid;
+      }
+    }
+    // Of several runs through the point (a path crossing itself), the one nearest in time.
+    if (on == nullptr || std::abs(time - hi) < std::abs(time - at_time)) {
+      on = &run;
+      at_time = hi;
+    }
+  }
+  if (on == nullptr) {
+    out.status = FleetStateStatus::kOffPlan;
+    out.message = Name(robot) + " is at " + PointText(position) + ", " + FormatNumber(out.deviation) +
+                  " m from its planned position " + PointText(out.planned.head<2>()) +
+                  " and off every run of its plan: nothing changed";
+    return out;
+  }
+  out.delay = time - at_time;
+  if (out.delay <= 0.0) {
+    out.status = FleetStateStatus::kAhead;
+    out.message = Name(robot) + " is " + FormatNumber(-out.delay) + " s ahead of its plan: nothing changed";
+    return out;
+  }
+  out.status = FleetStateStatus::kLate;
+  // Delay it from the start of its run; then, robot by robot, wherever a delayed robot now
+  // overlaps another at a node, the later of the two (by entry) waits until the earlier has left,
+  // until no two occupy a node at once. Each conflict is measured on the plans as they are
+  // then, and delays only grow, so it ends.
+  std::vector<char> delayed(robots_.size(), 0);
+  // The order at each node is the plans' before any delay: each visit's entry then, per robot
+  // (visits keep their indices while delays shift them).
+  std::vector<std::vector<double>> entered(robots_.size());
+  const auto original_entry = [&](int r, GridCell cell, double enter) {
+    const auto& visits = robots_[static_cast<std::size_t>(r)].visits;
+    for (std::size_t i = 0; i < visits.size(); ++i) {
+      if (visits[i].cell == cell && visits[i].enter == enter) {
+        return delayed[static_cast<std::size_t>(r)] ? entered[static_cast<std::size_t>(r)][i] : enter;
+      }
+    }
+    return enter;  // (not reached: every occupancy is a visit)
+  };
+  const auto delay = [&](int r, double from, double delta) {
+    if (!(delta > 0.0) || !std::isfinite(delta)) {
+      throw std::logic_error("FleetSession::Report: a delay of " + FormatNumber(delta) + " s");
+    }
+    if (!delayed[static_cast<std::size_t>(r)]) {
+      delayed[static_cast<std::size_t>(r)] = 1;
+      for (const Visit& v : robots_[static_cast<std::size_t>(r)].visits) entered[static_cast<std::size_t>(r)].push_back(v.enter);
+      out.robots.push_back(r);
+    }
+    Shift(r, from, delta);
+  };
+  delay(robot, on->start_time, out.delay);
+  std::deque<int> queue{robot};
+  constexpr std::size_t kMaxShifts = 1000000;
+  std::size_t shifts = 0;
+  while (!queue.empty()) {
+    const int r = queue.front();
+    queue.pop_front();
+    for (;;) {
+      // Of the nodes where a delayed robot now overlaps another, the earliest: whichever of the
+      // two came second there waits until the first has left.
+      int later = -1;
+      double from = kInf, delta = 0.0;
+      for (const Visit& v : robots_[static_cast<std::size_t>(r)].visits) {
+        for (const Occupancy& o : occupancy_[static_cast<std::size_t>(v.cell)]) {
+          if (o.robot == r || o.leave + kGuard <= v.enter || v.leave + kGuard <= o.enter) continue;
+          const bool other_later = original_entry(o.robot, v.cell, o.enter) > original_entry(r, v.cell, v.enter);
+          const double enter = other_later ? o.enter : v.enter;
+          if (enter < from) {
+            later = other_later ? o.robot : r;
+            from = enter;
+            delta = (other_later ? v.leave : o.leave) + kGuard - enter;
+          }
+        }
+      }
+      if (later < 0) break;
+      if (++shifts > kMaxShifts) throw std::logic_error("FleetSession::Report: delay propagation did not settle");
+      delay(later, from, delta);  // (Shift changes occupancy_: the scan starts over)
+      queue.push_back(later);
+    }
+  }
+  for (int r : out.robots) {
+    std::vector<FleetSessionOrder> orders = OrdersOf(r, time);
+    out.orders.insert(out.orders.end(), orders.begin(), orders.end());
+  }
+  out.message = Name(robot) + " is " + FormatNumber(out.delay) + " s behind its plan: delayed, with " +
+                std::to_string(out.robots.size() - 1) + " robots ordered after it";
+  return out;
 }
 
 std::vector<FleetSessionOrder> FleetSession::OrdersOf(int robot, double from) const {

@@ -81,6 +81,26 @@ struct FleetSessionOrder {
 
 enum class FleetGoalCode { kSuccess, kNoPath, kStopped };
 
+/// Where a reported robot stands against its plan (FleetSession::Report).
+enum class FleetStateStatus {
+  kOnPlan,   ///< within the tolerance of its planned (x, y) at the report's time
+  kLate,     ///< on its planned path, behind: its plan and those ordered after it were delayed
+  kAhead,    ///< on its planned path, ahead: nothing changes (the orders hold it back)
+  kOffPlan,  ///< farther than the tolerance from every straight run of its plan: nothing changes
+};
+
+struct FleetStateOutcome {
+  FleetStateStatus status = FleetStateStatus::kOnPlan;
+  double deviation = 0.0;  ///< [m] from the planned (x, y) at the report's time
+  /// [s] the report's time minus the plan's time at the reported point: > 0 late, < 0 ahead
+  /// (kLate and kAhead only).
+  double delay = 0.0;
+  Eigen::Vector3d planned = Eigen::Vector3d::Zero();  ///< the planned pose at the report's time
+  std::vector<int> robots;                ///< kLate: robots whose plans were delayed, the reporting robot first
+  std::vector<FleetSessionOrder> orders;  ///< kLate: the orders the delayed plans take part in
+  std::string message;                    ///< what was found, one sentence
+};
+
 struct FleetGoalOutcome {
   FleetGoalCode code = FleetGoalCode::kNoPath;
   std::string message;                ///< why, when not kSuccess
@@ -110,6 +130,21 @@ class FleetSession {
   /// Deterministic: the same calls on two sessions made alike give the same plans (unless
   /// `termination` stops a search, which then changes nothing).
   FleetGoalOutcome Assign(int robot, const Eigen::Vector3d& goal, double now, const Termination& termination = {});
+
+  /// A robot's observed position (x, y) at session time `time` (its execution state, as a fleet
+  /// manager streams it). Within `tolerance` [m] of the planned position: on plan. Otherwise the
+  /// plan's straight runs are searched for the point: a robot found there behind its plan is
+  /// late by δ = time − (the plan's time at that point), and its plan is delayed by δ from the
+  /// start of the run it is on (it waits δ longer at the node before, so the new plan has it at
+  /// the reported point at `time`); every robot ordered after it at a node it now leaves later is
+  /// delayed as much as needed, and so on (the delays an action-dependency-graph executor would
+  /// impose, applied to the plans, so later goals are planned around where the robots will
+  /// actually be). Node occupancy stays exclusive. A robot ahead of its plan, or off it, changes
+  /// nothing (the orders hold an early robot back; an off-plan robot is for its executor to
+  /// stop). Deterministic like Assign; `time` moves the session's clock like Assign's `now`.
+  /// 	hrows Error(kInvalidArgument) for a robot out of range, a position not finite, a
+  ///         tolerance not finite and > 0, or `time` as Assign's `now`.
+  FleetStateOutcome Report(int robot, const Eigen::Vector2d& position, double time, double tolerance);
 
   /// The free lattice node of `goal` (x, y) — what Assign checks its goal with.
   /// \throws Error(kInvalidArgument) naming `field`: a heading that is not finite, (x, y) off the
@@ -163,6 +198,8 @@ class FleetSession {
   RobotState Replanned(int robot, const Visit& anchor, const SearchResult& result, double goal_heading) const;
   std::vector<FleetSessionOrder> OrdersOf(int robot, double from) const;
   std::string Name(int robot) const;
+  /// Delays robot's plan by `delta` > 0 from session time `from` (a run's start: it waits there).
+  void Shift(int robot, double from, double delta);
   /// The nearest node (along free edges) from where idle `robot` stands that is not marked in
   /// `avoid`, is not `goal` and that no other robot occupies after `now`; -1 when none.
   GridCell Refuge(int robot, const std::vector<char>& avoid, GridCell goal, double now) const;
