@@ -16,6 +16,16 @@
 namespace chasles {
 namespace {
 
+/// AssignFleetGoalsRequest.state_tolerance [m], its default for 0.
+/// \throws Error(kInvalidArgument) when it is negative or not finite.
+double StateTolerance(const v1::AssignFleetGoalsRequest& request) {
+  const double t = request.state_tolerance();
+  if (!std::isfinite(t) || t < 0.0) {
+    ThrowInvalid("state_tolerance = " + FormatNumber(t) + " must be finite and > 0 m (0 = the default 0.05 m)");
+  }
+  return t == 0.0 ? 0.05 : t;
+}
+
 Eigen::VectorXd Limits(const google::protobuf::RepeatedField<double>& values) {
   Eigen::VectorXd out(values.size());
   for (int i = 0; i < values.size(); ++i) out[i] = values.Get(i);
@@ -166,6 +176,8 @@ void FleetSessionStore::AssignShared(const std::string& name, OpenFleet& fleet, 
       AssignFleetGoalsFromProto(trial, request, now, termination, response);
       v1::AssignFleetGoalsRequest batch;
       batch.set_now(now);
+      *batch.mutable_states() = request.states();  // (states always apply: Report is deterministic)
+      batch.set_state_tolerance(request.state_tolerance());
       for (int k = 0; k < request.goals_size(); ++k) {
         v1::FleetGoal* goal = batch.add_goals();
         goal->set_robot(request.goals(k).robot());
@@ -198,6 +210,11 @@ void ReplayFleetGoals(OpenFleet& fleet, const std::string& bytes) {
   v1::AssignFleetGoalsRequest batch;
   if (!batch.ParseFromString(bytes)) {
     throw Error(ErrorCode::kFailedPrecondition, "the shared store holds an unreadable fleet goal batch");
+  }
+  for (const v1::FleetRobotState& state : batch.states()) {
+    const auto it = fleet.index.find(state.robot());
+    if (it == fleet.index.end()) throw Error(ErrorCode::kFailedPrecondition, "a stored state names an unknown robot");
+    fleet.session->Report(it->second, Eigen::Vector2d(state.x(), state.y()), batch.now(), StateTolerance(batch));
   }
   for (const v1::FleetGoal& goal : batch.goals()) {
     const auto it = fleet.index.find(goal.robot());
@@ -293,7 +310,22 @@ std::shared_ptr<OpenFleet> OpenFleetFromProto(const v1::OpenFleetSessionRequest&
 void AssignFleetGoalsFromProto(OpenFleet& fleet, const v1::AssignFleetGoalsRequest& request, double now,
                                const Termination& termination, v1::AssignFleetGoalsResponse* response) {
   FleetSession& session = *fleet.session;
-  // Every goal validated before any is planned, so a bad one changes nothing.
+  // Every state and goal validated before any is applied, so a bad one changes nothing.
+  const double tolerance = StateTolerance(request);
+  std::vector<std::pair<int, Eigen::Vector2d>> states;
+  for (int k = 0; k < request.states_size(); ++k) {
+    const v1::FleetRobotState& state = request.states(k);
+    const std::string field = "states[" + std::to_string(k) + "]";
+    const auto it = fleet.index.find(state.robot());
+    if (it == fleet.index.end()) {
+      ThrowInvalid(field + ".robot = '" + state.robot() + "' is not a robot of this fleet session");
+    }
+    if (!std::isfinite(state.x()) || !std::isfinite(state.y())) {
+      ThrowInvalid(field + " (x, y) = (" + FormatNumber(state.x()) + ", " + FormatNumber(state.y()) +
+                   ") must be finite [m]");
+    }
+    states.emplace_back(it->second, Eigen::Vector2d(state.x(), state.y()));
+  }
   std::vector<std::pair<int, Eigen::Vector3d>> goals;
   for (int k = 0; k < request.goals_size(); ++k) {
     const v1::FleetGoal& goal = request.goals(k);
@@ -317,6 +349,22 @@ void AssignFleetGoalsFromProto(OpenFleet& fleet, const v1::AssignFleetGoalsReque
   }
   response->set_now(now);
   std::vector<int> changed;  // robots with a new plan, each once
+  for (const auto& [robot, position] : states) {
+    const FleetStateOutcome outcome = session.Report(robot, position, now, tolerance);
+    v1::FleetStateResult* result = response->add_states();
+    result->set_robot(fleet.names[static_cast<std::size_t>(robot)]);
+    result->set_status(static_cast<v1::FleetStateStatus>(static_cast<int>(outcome.status) + 1));
+    result->set_deviation(outcome.deviation);
+    result->set_delay(outcome.delay);
+    for (int i = 0; i < 3; ++i) result->add_planned(outcome.planned[i]);
+    result->set_message(outcome.message);
+    for (std::size_t i = 0; i < outcome.robots.size(); ++i) {
+      const int r = outcome.robots[i];
+      if (i > 0) result->add_delayed(fleet.names[static_cast<std::size_t>(r)]);
+      if (std::find(changed.begin(), changed.end(), r) == changed.end()) changed.push_back(r);
+      AddPlan(fleet, r, response);
+    }
+  }
   for (std::size_t k = 0; k < goals.size(); ++k) {
     const auto& [robot, target] = goals[k];
     const FleetGoalOutcome outcome = session.Assign(robot, target, now, termination);

@@ -226,7 +226,8 @@ using RawService = v1::Planning::WithRawCallbackMethod_Plan<v1::Planning::WithRa
                             v1::Planning::WithRawCallbackMethod_OpenFleetSession<
                                 v1::Planning::WithRawCallbackMethod_AssignFleetGoals<
                                     v1::Planning::WithRawCallbackMethod_CloseFleetSession<
-                                        v1::Planning::Service>>>>>>>>>>>>>>>>;
+                                        v1::Planning::WithRawCallbackMethod_StreamFleetSession<
+                                            v1::Planning::Service>>>>>>>>>>>>>>>>>;
 
 /// The service's collaborators and its share of the server options.
 struct ServiceContext {
@@ -577,16 +578,13 @@ class PlanningService final : public RawService {
         "AssignFleetGoals", context, in, out, Where::kPool, [this](auto& call) {
           const v1::AssignFleetGoalsRequest& request = call.request;
           call.record.request_id = RequestId(request.request_id(), "goals");
-          if (request.goals_size() > 10000) {
-            ThrowInvalid("goals has " + std::to_string(request.goals_size()) + " entries; send at most 10000 at once");
-          }
-          const double now = request.now() == 0.0 ? workcells_->Now() : request.now();
           const Termination termination = call.Start(BudgetEnd(30.0, call.deadline), call.deadline);
-          fleet_sessions_.Assign(request.name(), request, now, termination, &call.response);
+          AssignFleetGoalsBatch(request.name(), request, termination, &call.response);
           int solved = 0;
           for (const v1::FleetGoalResult& result : call.response.results()) solved += result.outcome() == v1::SUCCESS;
           call.record.fields = {{"session", request.name()},
                                 {"goals", std::to_string(request.goals_size())},
+                                {"states", std::to_string(request.states_size())},
                                 {"solved", std::to_string(solved)},
                                 {"plans", std::to_string(call.response.plans_size())}};
         });
@@ -600,6 +598,11 @@ class PlanningService final : public RawService {
           call.record.fields = {{"session", call.request.name()},
                                 {"closed", call.response.closed() ? "true" : "false"}};
         });
+  }
+
+  grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* StreamFleetSession(
+      grpc::CallbackServerContext* context) override {
+    return new FleetStream(this, context);
   }
 
   grpc::ServerUnaryReactor* Release(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
@@ -707,6 +710,170 @@ class PlanningService final : public RawService {
 
  private:
   enum class Where { kInline, kPool };
+
+  /// One goal-and-state batch of a fleet session (AssignFleetGoals, a StreamFleetSession message).
+  void AssignFleetGoalsBatch(const std::string& name, const v1::AssignFleetGoalsRequest& request,
+                             const Termination& termination, v1::AssignFleetGoalsResponse* response) {
+    if (request.goals_size() > 10000) {
+      ThrowInvalid("goals has " + std::to_string(request.goals_size()) + " entries; send at most 10000 at once");
+    }
+    if (request.states_size() > 100000) {
+      ThrowInvalid("states has " + std::to_string(request.states_size()) + " entries; send at most 100000 at once");
+    }
+    const double now = request.now() == 0.0 ? workcells_->Now() : request.now();
+    fleet_sessions_.Assign(name, request, now, termination, response);
+  }
+
+  /// One StreamFleetSession call: a message is read, answered on the pool as AssignFleetGoals
+  /// answers it (fair queue, per-request heap cap), the answer written, and only then the next
+  /// message read — so answers come in order and a client cannot queue more than one message.
+  /// An error ends the stream with its status, the message index in front; the client's
+  /// half-close ends it with OK. One RequestRecord for the whole stream.
+  class FleetStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
+   public:
+    FleetStream(PlanningService* service, grpc::CallbackServerContext* context)
+        : service_(service), arrival_(Clock::now()), deadline_(SteadyDeadline(*context)) {
+      record_.rpc = "StreamFleetSession";
+      record_.client = service_->ClientOf(*context);
+      service_->services_.metrics->RequestStarted(record_.rpc);
+      service_->in_flight_.fetch_add(1);
+      if (service_->draining_.load()) {
+        End(grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                         "this server is shutting down and takes no new calls; send it to another replica"));
+        return;
+      }
+      if (grpc::Status refused = service_->access_->Authorize(*context, record_.rpc); !refused.ok()) {
+        End(refused);
+        return;
+      }
+      StartRead(&in_);
+    }
+
+    void OnReadDone(bool ok) override {
+      if (!ok) {  // the client closed its side (or the call ended)
+        End(grpc::Status::OK);
+        return;
+      }
+      if (service_->draining_.load()) {
+        End(grpc::Status(grpc::StatusCode::UNAVAILABLE, Prefix() + "this server is shutting down; reopen the "
+                                                                   "stream on another replica (the session is shared "
+                                                                   "with --store redis://…)"));
+        return;
+      }
+      request_.Clear();
+      grpc::ProtoBufferReader reader(&in_);
+      if (!request_.ParseFromZeroCopyStream(&reader)) {
+        End(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                         Prefix() + "not a valid chasles.v1.AssignFleetGoalsRequest message (" +
+                             std::to_string(in_.Length()) + " bytes); check that the client and server use the "
+                             "same chasles.v1 proto"));
+        return;
+      }
+      if (name_.empty()) name_ = request_.name();
+      if (!request_.name().empty() && request_.name() != name_) {
+        End(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                         Prefix() + "name = '" + request_.name() + "' differs from the stream's session '" + name_ +
+                             "'; one stream serves one session"));
+        return;
+      }
+      JobTicket ticket;
+      ticket.client = record_.client;
+      switch (service_->pool_->TrySubmit([this] { Answer(); }, ticket)) {
+        case SubmitResult::kQueued: return;
+        case SubmitResult::kClientQueueFull:
+        case SubmitResult::kQueueFull:
+          End(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                           Prefix() + "the server's work queue is full; reopen the stream later"));
+          return;
+        case SubmitResult::kStopping:
+          End(grpc::Status(grpc::StatusCode::UNAVAILABLE, Prefix() + "the server is shutting down"));
+          return;
+      }
+    }
+
+    void OnWriteDone(bool ok) override {
+      if (!ok) {
+        End(grpc::Status(grpc::StatusCode::CANCELLED, "the stream ended before an answer was delivered"));
+        return;
+      }
+      ++answered_;
+      StartRead(&in_);
+    }
+
+    void OnCancel() override {
+      std::lock_guard<std::mutex> lock(mutex_);
+      cancelled_ = true;
+      if (termination_) termination_->Cancel();
+    }
+
+    void OnDone() override {
+      record_.fields = {{"session", name_},
+                        {"messages", std::to_string(answered_)},
+                        {"goals", std::to_string(goals_)},
+                        {"states", std::to_string(states_)}};
+      record_.total_seconds = SecondsSince(arrival_);
+      service_->Record(record_);
+      service_->in_flight_.fetch_sub(1);
+      delete this;
+    }
+
+   private:
+    std::string Prefix() const { return "message " + std::to_string(answered_) + ": "; }
+
+    /// On a worker: answers request_ into out_ and writes it, or ends the stream.
+    void Answer() {
+      grpc::Status status;
+      v1::AssignFleetGoalsResponse response;
+      {
+        HeapScope heap(service_->options_.request_memory_mb << 20);
+        try {
+          Termination termination(BudgetEnd(30.0, deadline_), deadline_);
+          {
+            std::lock_guard<std::mutex> lock(mutex_);
+            termination_.emplace(termination);
+            if (cancelled_) termination_->Cancel();
+          }
+          service_->AssignFleetGoalsBatch(name_, request_, termination, &response);
+        } catch (...) {
+          status = heap.exceeded() ? service_->MemoryCapStatus() : StatusFromException(std::current_exception());
+        }
+        record_.peak_heap_bytes = std::max(record_.peak_heap_bytes, heap.peak_bytes());
+      }
+      if (!status.ok()) {
+        End(grpc::Status(status.error_code(), Prefix() + status.error_message()));
+        return;
+      }
+      goals_ += static_cast<std::uint64_t>(request_.goals_size());
+      states_ += static_cast<std::uint64_t>(request_.states_size());
+      out_.Clear();
+      grpc::ProtoBufferWriter writer(&out_, grpc::kProtoBufferWriterMaxBufferLength, response.ByteSizeLong());
+      if (!response.SerializeToZeroCopyStream(&writer)) {
+        End(grpc::Status(grpc::StatusCode::INTERNAL, Prefix() + "the answer could not be serialised"));
+        return;
+      }
+      StartWrite(&out_);
+    }
+
+    /// Finishes the stream once, recording its status.
+    void End(const grpc::Status& status) {
+      const grpc::Status sent(status.error_code(), StatusMessage(status.error_message()));
+      record_.status_code = static_cast<int>(sent.error_code());
+      record_.status_message = sent.error_message();
+      Finish(sent);
+    }
+
+    PlanningService* const service_;
+    const Clock::time_point arrival_;
+    const Clock::time_point deadline_;
+    RequestRecord record_;
+    grpc::ByteBuffer in_, out_;
+    v1::AssignFleetGoalsRequest request_;
+    std::string name_;
+    std::uint64_t answered_ = 0, goals_ = 0, states_ = 0;
+    std::mutex mutex_;
+    bool cancelled_ = false;
+    std::optional<Termination> termination_;
+  };
 
   /// A write reactor that only answers an error (a Benchmark refused before it starts).
   class RefusedWriter final : public grpc::ServerWriteReactor<grpc::ByteBuffer> {

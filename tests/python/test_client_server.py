@@ -10,6 +10,7 @@ import csv
 import json
 import math
 import os
+import queue
 import re
 import signal
 import subprocess
@@ -289,6 +290,45 @@ class ServerTest(unittest.TestCase):
         self.assertIn("goals[0].robot = 'nobody'", str(raised.exception))
         self.assertTrue(self.client.close_fleet_session("py-depot"))
         self.assertFalse(self.client.close_fleet_session("py-depot"))
+
+    def test_fleet_stream_carries_states_and_goals(self) -> None:
+        request = ROOT / "examples/requests/coordinate_fleet.json"
+        opened = self.client.open_fleet_session("py-stream", str(request))
+        robots = json.loads(request.read_text())["robots"]
+        outbox: "queue.Queue[Optional[dict]]" = queue.Queue()
+
+        def messages():
+            while (item := outbox.get()) is not None:
+                yield item
+
+        answers = self.client.stream_fleet_session(messages(), timeout=60)
+        t0 = opened.start_time
+        outbox.put({"name": "py-stream", "now": t0, "goals": {r["name"]: r["goal"]["positions"] for r in robots[:10]}})
+        first = next(answers)
+        self.assertEqual(len(first.results), 10)
+        # A robot still moving 2 s in reports where its plan had it at 1.5 s: LATE by 0.5 s.
+        late = None
+        for plan in first.plans:
+            traj = Trajectory.from_knots(plan.knots, period=0.01)
+            seen, now = t0 + 1.5 - plan.start_time, t0 + 2.0 - plan.start_time
+            i, j = int(round(seen / 0.01)), int(round(now / 0.01))
+            if 0 < i and j < len(traj.t) and np.linalg.norm(traj.qd[i][:2]) > 0.05 and np.linalg.norm(traj.qd[j][:2]) > 0.05:
+                late = (plan.robot, traj.q[i][:2])
+                break
+        self.assertIsNotNone(late)
+        outbox.put({"now": t0 + 2.0, "states": {late[0]: late[1]}})
+        second = next(answers)
+        self.assertEqual(second.states[0].robot, late[0])
+        self.assertEqual(second.states[0].status, pb.LATE, second.states[0].message)
+        self.assertAlmostEqual(second.states[0].delay, 0.5, places=6)
+        self.assertIn(late[0], [plan.robot for plan in second.plans])
+        # A bad message ends the stream with an error naming it.
+        outbox.put({"now": t0 + 3.0, "states": {"nobody": (0.0, 0.0)}})
+        with self.assertRaises(ChaslesError) as raised:
+            next(answers)
+        self.assertIn("message 2: states[0].robot = 'nobody'", str(raised.exception))
+        outbox.put(None)
+        self.assertTrue(self.client.close_fleet_session("py-stream"))
 
     def test_several_replicas_balanced_and_one_killed_costs_no_call(self) -> None:
         # Two more replicas; the client balances over all three and retries UNAVAILABLE.

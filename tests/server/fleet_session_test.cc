@@ -309,8 +309,143 @@ TEST_F(FleetSessions, BadInputGetsNamedErrorsAndChangesNothing) {
   EXPECT_FALSE(closed.closed());
 }
 
+// The executor's stream: goals and robot states on one StreamFleetSession call, answered in
+// order. Robots on their way report where they are every second — one of them 0.4 s behind its
+// plan each time: LATE by 0.4 s, its plan and those ordered after it delayed (their new plans in
+// the answer) — and every executed motion, delays included, is checked at 1 ms as above.
+TEST_F(FleetSessions, AStreamCarriesStatesAndGoalsAndALateRobotIsDelayedWithThoseOrderedAfterIt) {
+  const v1::CoordinateRequest example = Example();
+  v1::OpenFleetSessionResponse opened;
+  grpc::Status status = Call(OpenRequest(example, "stream_depot"), &opened, &v1::Planning::Stub::OpenFleetSession);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  std::map<std::string, std::vector<KnotMotion>> motions;
+  double horizon = 1000.0;
+  const auto keep = [&](const v1::AssignFleetGoalsResponse& response) {
+    for (const v1::FleetPlan& plan : response.plans()) {
+      motions[plan.robot()].push_back({plan.start_time(), plan.knots()});
+      horizon = std::max(horizon, plan.finish_time());
+    }
+  };
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  auto stream = server_->stub().StreamFleetSession(&context);
+  const int n = example.robots_size();
+  int late = 0, on_plan = 0, delayed_others = 0;
+  for (int second = 0; second < 12; ++second) {
+    const double now = 1000.0 + second;
+    v1::AssignFleetGoalsRequest message;
+    if (second == 0) message.set_name("stream_depot");  // later messages: the stream's session
+    message.set_now(now);
+    if (second == 0 || second == 6) {
+      for (int k = second == 0 ? 0 : n / 2; k < (second == 0 ? n / 2 : n); ++k) {
+        v1::FleetGoal* goal = message.add_goals();
+        goal->set_robot(example.robots(k).name());
+        *goal->mutable_positions() = example.robots(k).goal().positions();
+      }
+    }
+    // States: every robot on its way; the first one moving for at least 0.4 s is seen 0.4 s
+    // behind its plan.
+    std::string late_robot;
+    for (const auto& [name, list] : motions) {
+      const KnotMotion& current = list.back();
+      double x, y, speed, x0, y0, speed0;
+      current.At(now, &x, &y, &speed);
+      current.At(now - 0.4, &x0, &y0, &speed0);
+      if (current.start > now - 0.4 || speed < 0.05 || speed0 < 0.05) continue;
+      v1::FleetRobotState* state = message.add_states();
+      state->set_robot(name);
+      if (late_robot.empty()) {
+        late_robot = name;
+        state->set_x(x0);
+        state->set_y(y0);
+      } else {
+        state->set_x(x);
+        state->set_y(y);
+      }
+    }
+    ASSERT_TRUE(stream->Write(message));
+    v1::AssignFleetGoalsResponse answer;
+    ASSERT_TRUE(stream->Read(&answer)) << "second " << second;
+    EXPECT_EQ(answer.now(), now);
+    ASSERT_EQ(answer.states_size(), message.states_size());
+    for (const v1::FleetStateResult& result : answer.states()) {
+      if (result.robot() == late_robot) {
+        EXPECT_EQ(result.status(), v1::LATE) << result.message();
+        EXPECT_NEAR(result.delay(), 0.4, 1e-6) << result.message();
+        late += result.status() == v1::LATE;
+        delayed_others += result.delayed_size();
+      } else {
+        EXPECT_EQ(result.status(), v1::ON_PLAN) << result.robot() << ": " << result.message();
+        on_plan += result.status() == v1::ON_PLAN;
+      }
+    }
+    for (const v1::FleetGoalResult& result : answer.results()) {
+      EXPECT_TRUE(result.outcome() == v1::SUCCESS || result.message().find("is going to park") != std::string::npos)
+          << result.message();
+    }
+    keep(answer);
+  }
+  ASSERT_TRUE(stream->WritesDone());
+  status = stream->Finish();
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  EXPECT_GE(late, 8);
+  EXPECT_GT(on_plan, 50);
+  std::cout << "[ stream   ] " << late << " robots reported late (" << delayed_others << " others delayed after them), "
+            << on_plan << " on plan\n";
+  CheckExecuted(example, motions, 1000.0, horizon);
+
+  // A bad message ends the stream with its status, naming the message; what came before stays.
+  grpc::ClientContext bad_context;
+  bad_context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  auto bad = server_->stub().StreamFleetSession(&bad_context);
+  v1::AssignFleetGoalsRequest first;
+  first.set_name("stream_depot");
+  ASSERT_TRUE(bad->Write(first));
+  v1::AssignFleetGoalsResponse answer;
+  ASSERT_TRUE(bad->Read(&answer));
+  v1::AssignFleetGoalsRequest second = first;
+  second.set_name("");
+  v1::FleetRobotState* state = second.add_states();
+  state->set_robot("nobody");
+  bad->Write(second);
+  EXPECT_FALSE(bad->Read(&answer));
+  status = bad->Finish();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("message 1: states[0].robot = 'nobody' is not a robot of this fleet session"),
+            std::string::npos)
+      << status.error_message();
+  // Another session's name on the stream, a NaN position, a negative tolerance: named too.
+  const auto refused = [&](const v1::AssignFleetGoalsRequest& message) {
+    grpc::ClientContext c;
+    c.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+    auto s = server_->stub().StreamFleetSession(&c);
+    s->Write(message);
+    v1::AssignFleetGoalsResponse ignored;
+    while (s->Read(&ignored)) {
+    }
+    return s->Finish();
+  };
+  v1::AssignFleetGoalsRequest nan = first;
+  v1::FleetRobotState* nan_state = nan.add_states();
+  nan_state->set_robot(example.robots(0).name());
+  nan_state->set_x(std::nan(""));
+  status = refused(nan);
+  EXPECT_NE(status.error_message().find("message 0: states[0] (x, y) = (nan, 0) must be finite"), std::string::npos)
+      << status.error_message();
+  v1::AssignFleetGoalsRequest tolerance = first;
+  tolerance.set_state_tolerance(-1.0);
+  status = refused(tolerance);
+  EXPECT_NE(status.error_message().find("state_tolerance = -1 must be finite and > 0 m"), std::string::npos)
+      << status.error_message();
+  v1::AssignFleetGoalsRequest unknown = first;
+  unknown.set_name("no_such_session");
+  status = refused(unknown);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::NOT_FOUND) << status.error_message();
+}
+
 // With --store redis://… a session opened on one replica is served by every replica: batches sent
-// alternately to two replicas each plan against the other's plans (the shared log replayed), two
+// alternately to two replicas each plan against the other's plans (the shared log replayed, late
+// robots reported through the other replica included), two
 // robots sent to one node at the same moment through two replicas: exactly one gets it, every
 // time; every executed motion is certified as above; closed on one, gone on the other.
 TEST(FleetSessionsShared, TwoReplicasServeOneSession) {
@@ -345,6 +480,7 @@ TEST(FleetSessionsShared, TwoReplicasServeOneSession) {
 
   std::map<std::string, std::vector<KnotMotion>> motions;
   double horizon = 1000.0, now = 1000.0;
+  int reported_late = 0;
   const auto keep = [&](const v1::AssignFleetGoalsResponse& response) {
     for (const v1::FleetPlan& plan : response.plans()) {
       motions[plan.robot()].push_back({plan.start_time(), plan.knots()});
@@ -374,11 +510,36 @@ TEST(FleetSessionsShared, TwoReplicasServeOneSession) {
       }
       keep(response);
       now += 1.0;
+      // A robot on its way reported 0.4 s late through the other replica: the next batch (on
+      // that replica or this one) plans around its delayed plan, so the log carries states too.
+      for (const auto& [name, list] : motions) {
+        const KnotMotion& current = list.back();
+        double x, y, speed, x0, y0, speed0;
+        current.At(now, &x, &y, &speed);
+        current.At(now - 0.4, &x0, &y0, &speed0);
+        if (current.start > now - 0.4 || speed < 0.05 || speed0 < 0.05) continue;
+        v1::AssignFleetGoalsRequest states;
+        states.set_name("shared_depot");
+        states.set_now(now);
+        v1::FleetRobotState* state = states.add_states();
+        state->set_robot(name);
+        state->set_x(x0);
+        state->set_y(y0);
+        v1::AssignFleetGoalsResponse reported;
+        status = call(*replicas[(batch + 1) % 2], states, &reported, &v1::Planning::Stub::AssignFleetGoals);
+        ASSERT_TRUE(status.ok()) << status.error_message();
+        ASSERT_EQ(reported.states_size(), 1);
+        EXPECT_EQ(reported.states(0).status(), v1::LATE) << reported.states(0).message();
+        reported_late += reported.states(0).status() == v1::LATE;
+        keep(reported);
+        break;
+      }
     }
     pending = deferred;
     now = std::max(now, horizon + 0.5);
   }
   EXPECT_TRUE(pending.empty());
+  EXPECT_GE(reported_late, 3);
 
   // The race: robot i through a, robot j through b, one node, the same moment.
   int a_won = 0, b_won = 0;

@@ -10,7 +10,7 @@ import threading
 import time
 import uuid
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
+from typing import Any, Callable, Dict, Iterable, Iterator, List, Mapping, Optional, Sequence, Union
 
 import grpc
 import numpy as np
@@ -119,6 +119,19 @@ def channel_target(address: Union[str, Sequence[str]]) -> str:
         raise ValueError("addresses mix IPv4 and IPv6; give one family")
     return ("ipv6:" if v6 else "ipv4:") + ",".join(resolved)
 
+
+
+def fleet_message(name: str, goals: Optional[Mapping[str, Sequence[float]]],
+                  states: Optional[Mapping[str, Sequence[float]]], now: float = 0.0,
+                  state_tolerance: float = 0.0) -> pb.AssignFleetGoalsRequest:
+    """An AssignFleetGoalsRequest: goals ``{robot: (x, y, θ)}``, states ``{robot: (x, y)}``."""
+    message = pb.AssignFleetGoalsRequest(name=name, now=now, state_tolerance=state_tolerance)
+    for robot, positions in (goals or {}).items():
+        message.goals.add(robot=robot, positions=[float(v) for v in positions])
+    for robot, position in (states or {}).items():
+        x, y = (float(v) for v in position)
+        message.states.add(robot=robot, x=x, y=y)
+    return message
 
 class Client:
     """A connection to a chasles-server.
@@ -459,16 +472,44 @@ class Client:
         message.name = name
         return self._call("OpenFleetSession", message, timeout)
 
-    def assign_fleet_goals(self, name: str, goals: Mapping[str, Sequence[float]], now: float = 0.0,
-                           timeout: Optional[float] = 60.0) -> Any:
+    def assign_fleet_goals(self, name: str, goals: Optional[Mapping[str, Sequence[float]]] = None, now: float = 0.0,
+                           timeout: Optional[float] = 60.0, *,
+                           states: Optional[Mapping[str, Sequence[float]]] = None,
+                           state_tolerance: float = 0.0) -> Any:
         """Sends goals ``{robot name: (x, y, θ)}`` to session ``name``, answered in order from
-        ``now`` (server clock, s since the epoch; 0 = now). Returns the AssignFleetGoalsResponse:
-        a result per goal, the new plans (``Trajectory.from_knots(plan.knots)`` samples one, from
-        ``plan.start_time``) and the orders at shared nodes."""
-        message = pb.AssignFleetGoalsRequest(name=name, now=now)
-        for robot, positions in goals.items():
-            message.goals.add(robot=robot, positions=[float(v) for v in positions])
-        return self._call("AssignFleetGoals", message, timeout)
+        ``now`` (server clock, s since the epoch; 0 = now). ``states`` ``{robot name: (x, y)}``
+        are where robots stand at ``now``, applied first: a robot behind its plan is LATE and its
+        plan, and those of the robots ordered after it, are delayed (within ``state_tolerance``
+        [m] of its plan it is ON_PLAN; 0 = 0.05 m). Returns the AssignFleetGoalsResponse: a
+        result per goal and per state, the new plans (``Trajectory.from_knots(plan.knots)``
+        samples one, from ``plan.start_time``) and the orders at shared nodes."""
+        return self._call("AssignFleetGoals", fleet_message(name, goals, states, now, state_tolerance), timeout)
+
+    def stream_fleet_session(self, messages: Iterable[Any], timeout: Optional[float] = None) -> Iterator[Any]:
+        """One StreamFleetSession call: ``messages`` yields AssignFleetGoalsRequests (or dicts
+        ``{"name", "now", "goals": {robot: (x, y, θ)}, "states": {robot: (x, y)},
+        "state_tolerance"}``; a message without a name is for the stream's first session) as
+        the executor produces them; the answers (AssignFleetGoalsResponse) come back one per
+        message, in order. Ends when ``messages`` does.
+
+        Raises:
+            ChaslesError: a bad message ends the stream; the error names the message's index.
+        """
+        def requests() -> Iterator[pb.AssignFleetGoalsRequest]:
+            for item in messages:
+                if isinstance(item, pb.AssignFleetGoalsRequest):
+                    yield item
+                else:
+                    yield fleet_message(item.get("name", ""), item.get("goals"), item.get("states"),
+                                        item.get("now", 0.0), item.get("state_tolerance", 0.0))
+
+        call = self._stub.StreamFleetSession(requests(), timeout=timeout)
+        try:
+            yield from call
+        except grpc.RpcError as error:
+            raise ChaslesError.from_rpc_error(error, "StreamFleetSession") from None
+        finally:
+            call.cancel()  # (a no-op once the stream has ended)
 
     def close_fleet_session(self, name: str, timeout: Optional[float] = 30.0) -> bool:
         """Closes session ``name``; False when it was not open."""
