@@ -498,8 +498,9 @@ std::vector<double> CollisionChecker::SweepBounds(const Eigen::VectorXd& a, cons
   detail::CheckSize(*robot_, a, "a");
   detail::CheckSize(*robot_, b, "b");
   if (!impl_->certifiable) return {};
-  std::vector<double> out(impl_->sx.size());
-  impl_->SweepBounds((b - a).cwiseAbs(), out.data());
+  std::vector<double> grouped(impl_->sx.size()), out(impl_->sx.size());
+  impl_->SweepBounds((b - a).cwiseAbs(), grouped.data());
+  for (std::size_t k = 0; k < grouped.size(); ++k) out[static_cast<std::size_t>(impl_->sphere_source[k])] = grouped[k];
   return out;
 }
 

@@ -152,6 +152,7 @@ struct CollisionChecker::Impl {
   detail::SimdLevel simd = detail::BestSimdLevel();  // for the culls and the FK
   std::vector<double> sx, sy, sz, sr;          // link-frame centres, radius + padding
   std::vector<int> slink_of;                   // sphere -> index into slinks
+  std::vector<int> sphere_source;              // sphere -> its index in link order, then shape order
   std::vector<std::pair<int, int>> self_pairs;  // indices into slinks, not allowed by the ACM
   std::vector<Prim> prims;
   std::vector<double> prim_x, prim_y, prim_z, prim_bound;  // prims' bounding spheres, structure of arrays
@@ -159,6 +160,9 @@ struct CollisionChecker::Impl {
   // kBroadPhasePrims of them: the checks then visit only the prims whose bound's box overlaps
   // the robot's (or a motion's swept) box; with fewer, scanning them all is cheaper.
   static constexpr std::size_t kBroadPhasePrims = 32;
+  /// Spheres per sphere link at most: a link with more is split into groups along its principal
+  /// axis, each with its own bounding sphere (CollisionChecker's constructor).
+  static constexpr std::size_t kMaxSpheresPerBound = 8;
   static constexpr double kClearanceSearchRadius = 0.25;  // [m] first radius Clearance searches
   // When a gather lists at least 1/8 of the prims (clutter all around the robot), scanning them
   // all (one SIMD cull) costs less than the hierarchy's walk and the sort: the thread then scans

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <fcl/fcl.h>
 #include <fcl/geometry/octree/octree.h>
 #include <octomap/OcTree.h>
@@ -503,32 +504,61 @@ CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std:
     for (int l = 0; l < num_links; ++l) {
       const auto& shapes = links[l].collision;
       if (shapes.empty()) continue;
-      SphereLink L;
-      L.link = l;
-      L.begin = static_cast<int>(m.sx.size());
-      Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = Eigen::Vector3d::Constant(-kInf);
-      for (const Shape& s : shapes) {
-        const Eigen::Vector3d c = s.pose.translation();
-        m.sx.push_back(c.x());
-        m.sy.push_back(c.y());
-        m.sz.push_back(c.z());
-        m.sr.push_back(s.radius + pad);
-        m.slink_of.push_back(static_cast<int>(m.slinks.size()));
-        m.fcl_spheres.push_back(std::make_shared<fcl::Sphered>(s.radius + pad));
-        lo = lo.cwiseMin(c);
-        hi = hi.cwiseMax(c);
+      // A link of many spheres (a mesh covered at upload: 30–40) goes in groups of at most
+      // Impl::kMaxSpheresPerBound, each with its own bounding sphere — sphere links of the same link,
+      // never paired with each other — so a long link near an obstacle evaluates the spheres of
+      // the groups near it, not all of them. Groups are runs along the centres' principal axis.
+      const int first_of_link = static_cast<int>(m.sx.size());
+      std::vector<int> order(shapes.size());
+      for (std::size_t k = 0; k < order.size(); ++k) order[k] = static_cast<int>(k);
+      const int groups =
+          static_cast<int>((shapes.size() + Impl::kMaxSpheresPerBound - 1) / Impl::kMaxSpheresPerBound);
+      if (groups > 1) {
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        for (const Shape& s : shapes) mean += s.pose.translation();
+        mean /= static_cast<double>(shapes.size());
+        Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+        for (const Shape& s : shapes) {
+          const Eigen::Vector3d d = s.pose.translation() - mean;
+          scatter += d * d.transpose();
+        }
+        const Eigen::Vector3d axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvectors().col(2);
+        std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+          return shapes[static_cast<std::size_t>(a)].pose.translation().dot(axis) <
+                 shapes[static_cast<std::size_t>(b)].pose.translation().dot(axis);
+        });
       }
-      L.end = static_cast<int>(m.sx.size());
-      const Eigen::Vector3d bc = 0.5 * (lo + hi);
-      double br = 0.0;
-      for (int k = L.begin; k < L.end; ++k) {
-        br = std::max(br, (Eigen::Vector3d(m.sx[k], m.sy[k], m.sz[k]) - bc).norm() + m.sr[k]);
+      const std::size_t per_group = (shapes.size() + static_cast<std::size_t>(groups) - 1) / static_cast<std::size_t>(groups);
+      for (std::size_t from = 0; from < order.size(); from += per_group) {
+        SphereLink L;
+        L.link = l;
+        L.begin = static_cast<int>(m.sx.size());
+        Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = Eigen::Vector3d::Constant(-kInf);
+        for (std::size_t i = from; i < std::min(order.size(), from + per_group); ++i) {
+          const Shape& s = shapes[static_cast<std::size_t>(order[i])];
+          const Eigen::Vector3d c = s.pose.translation();
+          m.sx.push_back(c.x());
+          m.sy.push_back(c.y());
+          m.sz.push_back(c.z());
+          m.sr.push_back(s.radius + pad);
+          m.slink_of.push_back(static_cast<int>(m.slinks.size()));
+          m.sphere_source.push_back(first_of_link + order[i]);
+          m.fcl_spheres.push_back(std::make_shared<fcl::Sphered>(s.radius + pad));
+          lo = lo.cwiseMin(c);
+          hi = hi.cwiseMax(c);
+        }
+        L.end = static_cast<int>(m.sx.size());
+        const Eigen::Vector3d bc = 0.5 * (lo + hi);
+        double br = 0.0;
+        for (int k = L.begin; k < L.end; ++k) {
+          br = std::max(br, (Eigen::Vector3d(m.sx[k], m.sy[k], m.sz[k]) - bc).norm() + m.sr[k]);
+        }
+        for (int i = 0; i < 3; ++i) L.bc[i] = bc[i];
+        L.br = br;
+        m.slinks.push_back(L);
+        m.link_bound_radius.push_back(br);
+        m.fcl_link_bounds.push_back(std::make_shared<fcl::Sphered>(br));
       }
-      for (int i = 0; i < 3; ++i) L.bc[i] = bc[i];
-      L.br = br;
-      m.slinks.push_back(L);
-      m.link_bound_radius.push_back(br);
-      m.fcl_link_bounds.push_back(std::make_shared<fcl::Sphered>(br));
     }
     const std::size_t nl = m.slinks.size();
     m.link_bound_radius.resize(detail::CullPadded(nl), 0.0);
