@@ -297,7 +297,8 @@ TEST(ServerMetrics, LabelValuesStayInTheirBoundedSets) {
   const std::set<std::string> methods = {"Plan", "ListPlanners", "UploadRobot", "UploadScene", "UpdateScene",
                                          "InverseKinematics", "Optimize", "Coordinate", "CreateWorkcell",
                                          "CommitTrajectory", "Release", "Benchmark", "StopBenchmark",
-                                         "OpenFleetSession", "AssignFleetGoals", "CloseFleetSession", "other"};
+                                         "OpenFleetSession", "AssignFleetGoals", "CloseFleetSession", "StreamFleetSession",
+                                         "other"};
   for (const Sample& sample : samples) {
     const auto rpc = sample.labels.find("rpc");
     if (rpc != sample.labels.end()) {
