@@ -61,7 +61,7 @@ struct Model {
   v1::RobotModel robot;
   std::string id, collision;
   double upload_ms = 0.0;
-  std::vector<double> call, total, plan, validate;
+  std::vector<double> call, total, plan, validate, shortcut, parameterize, verify, quality, sample;
   int solved = 0, certified = 0, touching = 0;
 };
 
@@ -169,6 +169,11 @@ void BenchMeshRobot(const MeshRobotBenchOptions& options) {
       m.total.push_back(1e3 * response.timings().total());
       m.plan.push_back(1e3 * response.timings().plan());
       m.validate.push_back(1e3 * response.timings().validate());
+      m.shortcut.push_back(1e3 * response.timings().shortcut());
+      m.parameterize.push_back(1e3 * response.timings().parameterize());
+      m.verify.push_back(1e3 * response.timings().verify());
+      m.quality.push_back(1e3 * response.timings().quality());
+      m.sample.push_back(1e3 * response.timings().sample());
       m.certified += response.verification().collision_guarantee() == "certified";
       // The re-check on the exact meshes: the returned samples, and states every 0.002 rad
       // between consecutive samples (straight in joint space between them).
@@ -199,14 +204,18 @@ void BenchMeshRobot(const MeshRobotBenchOptions& options) {
               "(once per robot).\n\n");
   std::printf("| robot | collision model | upload [ms] | solved | certified | touching the meshes at the re-check | "
               "Plan call median [ms] | p95 [ms] | server total median [ms] | validate median [ms] | plan median [ms] | "
+              "shortcut median [ms] | TOPP median [ms] | certify median [ms] | quality median [ms] | samples median [ms] | "
               "call / hand-made spheres |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   const double base = QuantileOrNan(models[0].call, 0.5);
   for (const Model& m : models) {
-    std::printf("| %s | %s | %.0f | %d/%d | %d | %d | %.2f | %.2f | %.2f | %.3f | %.3f | %.2f× |\n", m.name.c_str(),
-                m.collision.c_str(), m.upload_ms, m.solved, options.queries, m.certified, m.touching,
+    std::printf("| %s | %s | %.0f | %d/%d | %d | %d | %.2f | %.2f | %.2f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f | "
+                "%.2f× |\n",
+                m.name.c_str(), m.collision.c_str(), m.upload_ms, m.solved, options.queries, m.certified, m.touching,
                 QuantileOrNan(m.call, 0.5), QuantileOrNan(m.call, 0.95), QuantileOrNan(m.total, 0.5), QuantileOrNan(m.validate, 0.5),
-                QuantileOrNan(m.plan, 0.5), QuantileOrNan(m.call, 0.5) / base);
+                QuantileOrNan(m.plan, 0.5), QuantileOrNan(m.shortcut, 0.5), QuantileOrNan(m.parameterize, 0.5),
+                QuantileOrNan(m.verify, 0.5), QuantileOrNan(m.quality, 0.5), QuantileOrNan(m.sample, 0.5),
+                QuantileOrNan(m.call, 0.5) / base);
   }
   std::printf("\n");
 }
