@@ -573,36 +573,65 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
   const bool effort = checker != nullptr && limits.max_effort.size() == n && HasInertia(checker->robot());
   DynamicsOptions dynamics;
   dynamics.gravity = limits.gravity;
-  std::vector<Eigen::VectorXd> states;
-  std::vector<TrajectorySample> samples;
+  // The sampled states' positions, one column each (the velocities and accelerations only when
+  // torques are measured), evaluated piece by piece: no sample allocates.
+  std::size_t count = 1;
+  std::vector<int> per_piece;
   for (const Piece& piece : trajectory.pieces()) {
-    const int m = std::max(1, static_cast<int>(std::ceil(piece.MaxJointTravel() / step)));
-    for (int i = samples.empty() ? 0 : 1; i <= m; ++i) samples.push_back(trajectory.Evaluate(piece.t0 + piece.duration * i / m));
+    per_piece.push_back(std::max(1, static_cast<int>(std::ceil(piece.MaxJointTravel() / step))));
+    count += static_cast<std::size_t>(per_piece.back());
   }
-  // Off the sphere path: the clearance at (at most about 200 of) the sampled states.
+  Eigen::MatrixXd states(n, static_cast<Eigen::Index>(count));
+  Eigen::Index filled = 0;
   const bool bound_clearance = checker != nullptr && checker->certifies_motion();
-  const int clearance_every = std::max<int>(1, static_cast<int>(samples.size()) / 200);
-  for (std::size_t s = 0; s < samples.size(); ++s) {
-    const TrajectorySample& x = samples[s];
-    states.push_back(x.q);
-    if (checker != nullptr && !bound_clearance && (s % clearance_every == 0 || s + 1 == samples.size())) {
-      out.min_clearance = std::min(out.min_clearance, checker->Clearance(x.q));
-    }
-    if (effort) {
-      const Eigen::VectorXd tau = InverseDynamics(checker->robot(), x.q, x.qd, x.qdd, dynamics);
-      for (int i = 0; i < n; ++i) out.max_effort_ratio = std::max(out.max_effort_ratio, std::abs(tau[i]) / limits.max_effort[i]);
+  const int clearance_every = std::max<int>(1, static_cast<int>(count) / 200);
+  Eigen::VectorXd q(n);
+  for (std::size_t p = 0; p < trajectory.pieces().size(); ++p) {
+    const Piece& piece = trajectory.pieces()[p];
+    const int m = per_piece[p];
+    const double* const c = piece.coefficients.data();
+    const int size = static_cast<int>(piece.coefficients.cols());
+    for (int i = filled == 0 ? 0 : 1; i <= m; ++i) {
+      const double tau = piece.duration * i / m;
+      for (int j = 0; j < n; ++j) q[j] = tau == 0.0 ? c[j] : poly::Eval(c + j, size, tau, n);
+      if (p + 1 == trajectory.pieces().size() && i == m) q = trajectory.Evaluate(trajectory.duration()).q;  // exact end
+      states.col(filled) = q;
+      const bool last = p + 1 == trajectory.pieces().size() && i == m;
+      // Off the sphere path: the clearance at (at most about 200 of) the sampled states.
+      if (checker != nullptr && !bound_clearance && (filled % clearance_every == 0 || last)) {
+        out.min_clearance = std::min(out.min_clearance, checker->Clearance(q));
+      }
+      if (effort) {
+        // Both sides of a piece boundary, where the acceleration may jump.
+        const auto torque = [&](const TrajectorySample& x) {
+          const Eigen::VectorXd joint = InverseDynamics(checker->robot(), q, x.qd, x.qdd, dynamics);
+          for (int k = 0; k < n; ++k) {
+            out.max_effort_ratio = std::max(out.max_effort_ratio, std::abs(joint[k]) / limits.max_effort[k]);
+          }
+        };
+        torque(piece.State(tau));
+        if (i == m && !last) torque(trajectory.pieces()[p + 1].State(0.0));
+      }
+      ++filled;
     }
   }
+  states.conservativeResize(n, filled);
   if (bound_clearance) out.min_clearance = ClearanceLowerBound(trajectory, *checker);
   if (path.size() >= 2) {
-    for (const Eigen::VectorXd& q : states) {
+    for (Eigen::Index s = 0; s < states.cols(); ++s) {
+      q = states.col(s);
       double nearest = std::numeric_limits<double>::infinity();
       for (std::size_t k = 0; k + 1 < path.size(); ++k) nearest = std::min(nearest, DistanceToSegment(q, path[k], path[k + 1]));
       out.max_deviation = std::max(out.max_deviation, nearest);
     }
+    Eigen::VectorXd a(n), b(n);
     for (const Eigen::VectorXd& w : path) {
       double nearest = std::numeric_limits<double>::infinity();
-      for (std::size_t s = 0; s + 1 < states.size(); ++s) nearest = std::min(nearest, DistanceToSegment(w, states[s], states[s + 1]));
+      for (Eigen::Index s = 0; s + 1 < states.cols(); ++s) {
+        a = states.col(s);
+        b = states.col(s + 1);
+        nearest = std::min(nearest, DistanceToSegment(w, a, b));
+      }
       out.max_deviation = std::max(out.max_deviation, nearest);
     }
   }
