@@ -53,6 +53,16 @@ struct KnotMotion {
   }
 };
 
+/// Where a robot `lag` seconds behind its current plan is at `now`: true, with that position,
+/// when the plan has it moving (faster than 0.05 m/s) both then and `lag` before.
+bool SeenLate(const std::vector<KnotMotion>& plans, double now, double lag, double* x, double* y) {
+  const KnotMotion& current = plans.back();
+  double xn, yn, speed, speed_before;
+  current.At(now, &xn, &yn, &speed);
+  current.At(now - lag, x, y, &speed_before);
+  return current.start <= now - lag && speed >= 0.05 && speed_before >= 0.05;
+}
+
 /// The independent check at 1 ms of every robot's executed motion (its start, then each plan from
 /// its start_time until the robot's next plan starts), rebuilt from the knots alone: discs of
 /// 0.4 m at least 0.2 m apart (1 m spacing), 0.1 m from the scene's unit boxes, at most 1 m/s;
@@ -347,11 +357,8 @@ TEST_F(FleetSessions, AStreamCarriesStatesAndGoalsAndALateRobotIsDelayedWithThos
     // behind its plan.
     std::string late_robot;
     for (const auto& [name, list] : motions) {
-      const KnotMotion& current = list.back();
-      double x, y, speed, x0, y0, speed0;
-      current.At(now, &x, &y, &speed);
-      current.At(now - 0.4, &x0, &y0, &speed0);
-      if (current.start > now - 0.4 || speed < 0.05 || speed0 < 0.05) continue;
+      double x0, y0, x, y, speed;
+      if (!SeenLate(list, now, 0.4, &x0, &y0)) continue;
       v1::FleetRobotState* state = message.add_states();
       state->set_robot(name);
       if (late_robot.empty()) {
@@ -359,6 +366,7 @@ TEST_F(FleetSessions, AStreamCarriesStatesAndGoalsAndALateRobotIsDelayedWithThos
         state->set_x(x0);
         state->set_y(y0);
       } else {
+        list.back().At(now, &x, &y, &speed);  // on plan
         state->set_x(x);
         state->set_y(y);
       }
@@ -513,11 +521,8 @@ TEST(FleetSessionsShared, TwoReplicasServeOneSession) {
       // A robot on its way reported 0.4 s late through the other replica: the next batch (on
       // that replica or this one) plans around its delayed plan, so the log carries states too.
       for (const auto& [name, list] : motions) {
-        const KnotMotion& current = list.back();
-        double x, y, speed, x0, y0, speed0;
-        current.At(now, &x, &y, &speed);
-        current.At(now - 0.4, &x0, &y0, &speed0);
-        if (current.start > now - 0.4 || speed < 0.05 || speed0 < 0.05) continue;
+        double x0, y0;
+        if (!SeenLate(list, now, 0.4, &x0, &y0)) continue;
         v1::AssignFleetGoalsRequest states;
         states.set_name("shared_depot");
         states.set_now(now);
