@@ -504,6 +504,69 @@ void FleetSession::Shift(int robot, double from, double delta) {
   p.trajectory = TimedTrajectory(std::move(pieces), end);
 }
 
+std::vector<int> FleetSession::Delay(int robot, double from, double delta) {
+  // Robot by robot: wherever a delayed robot now overlaps another at a node, the later of the
+  // two in the node's planned order waits until the earlier has left, until no two occupy a node
+  // at once. Each conflict is measured on the plans as they are then, and delays only grow, so
+  // it ends.
+  std::vector<int> robots;
+  std::vector<char> delayed(robots_.size(), 0);
+  // The order at each node is the plans' before any delay: each visit's entry then, per robot
+  // (visits keep their indices while delays shift them).
+  std::vector<std::vector<double>> entered(robots_.size());
+  const auto original_entry = [&](int r, GridCell cell, double enter) {
+    const auto& visits = robots_[static_cast<std::size_t>(r)].visits;
+    for (std::size_t i = 0; i < visits.size(); ++i) {
+      if (visits[i].cell == cell && visits[i].enter == enter) {
+        return delayed[static_cast<std::size_t>(r)] ? entered[static_cast<std::size_t>(r)][i] : enter;
+      }
+    }
+    return enter;  // (not reached: every occupancy is a visit)
+  };
+  const auto delay = [&](int r, double at, double by) {
+    if (!(by > 0.0) || !std::isfinite(by)) {
+      throw std::logic_error("FleetSession::Delay: a delay of " + FormatNumber(by) + " s");
+    }
+    if (!delayed[static_cast<std::size_t>(r)]) {
+      delayed[static_cast<std::size_t>(r)] = 1;
+      for (const Visit& v : robots_[static_cast<std::size_t>(r)].visits) entered[static_cast<std::size_t>(r)].push_back(v.enter);
+      robots.push_back(r);
+    }
+    Shift(r, at, by);
+  };
+  delay(robot, from, delta);
+  std::deque<int> queue{robot};
+  constexpr std::size_t kMaxShifts = 1000000;
+  std::size_t shifts = 0;
+  while (!queue.empty()) {
+    const int r = queue.front();
+    queue.pop_front();
+    for (;;) {
+      // Of the nodes where a delayed robot now overlaps another, the earliest: whichever of the
+      // two came second there waits until the first has left.
+      int later = -1;
+      double at = kInf, by = 0.0;
+      for (const Visit& v : robots_[static_cast<std::size_t>(r)].visits) {
+        for (const Occupancy& o : occupancy_[static_cast<std::size_t>(v.cell)]) {
+          if (o.robot == r || o.leave + kGuard <= v.enter || v.leave + kGuard <= o.enter) continue;
+          const bool other_later = original_entry(o.robot, v.cell, o.enter) > original_entry(r, v.cell, v.enter);
+          const double enter = other_later ? o.enter : v.enter;
+          if (enter < at) {
+            later = other_later ? o.robot : r;
+            at = enter;
+            by = (other_later ? v.leave : o.leave) + kGuard - enter;
+          }
+        }
+      }
+      if (later < 0) break;
+      if (++shifts > kMaxShifts) throw std::logic_error("FleetSession::Delay: delay propagation did not settle");
+      delay(later, at, by);  // (Shift changes occupancy_: the scan starts over)
+      queue.push_back(later);
+    }
+  }
+  return robots;
+}
+
 FleetStateOutcome FleetSession::Report(int robot, const Eigen::Vector2d& position, double time, double tolerance) {
   if (robot < 0 || robot >= num_robots()) {
     ThrowInvalid("robot = " + std::to_string(robot) + " must be in [0, " + std::to_string(num_robots()) + ")");
@@ -566,64 +629,7 @@ FleetStateOutcome FleetSession::Report(int robot, const Eigen::Vector2d& positio
     return out;
   }
   out.status = FleetStateStatus::kLate;
-  // Delay it from the start of its run; then, robot by robot, wherever a delayed robot now
-  // overlaps another at a node, the later of the two (by entry) waits until the earlier has left,
-  // until no two occupy a node at once. Each conflict is measured on the plans as they are
-  // then, and delays only grow, so it ends.
-  std::vector<char> delayed(robots_.size(), 0);
-  // The order at each node is the plans' before any delay: each visit's entry then, per robot
-  // (visits keep their indices while delays shift them).
-  std::vector<std::vector<double>> entered(robots_.size());
-  const auto original_entry = [&](int r, GridCell cell, double enter) {
-    const auto& visits = robots_[static_cast<std::size_t>(r)].visits;
-    for (std::size_t i = 0; i < visits.size(); ++i) {
-      if (visits[i].cell == cell && visits[i].enter == enter) {
-        return delayed[static_cast<std::size_t>(r)] ? entered[static_cast<std::size_t>(r)][i] : enter;
-      }
-    }
-    return enter;  // (not reached: every occupancy is a visit)
-  };
-  const auto delay = [&](int r, double from, double delta) {
-    if (!(delta > 0.0) || !std::isfinite(delta)) {
-      throw std::logic_error("FleetSession::Report: a delay of " + FormatNumber(delta) + " s");
-    }
-    if (!delayed[static_cast<std::size_t>(r)]) {
-      delayed[static_cast<std::size_t>(r)] = 1;
-      for (const Visit& v : robots_[static_cast<std::size_t>(r)].visits) entered[static_cast<std::size_t>(r)].push_back(v.enter);
-      out.robots.push_back(r);
-    }
-    Shift(r, from, delta);
-  };
-  delay(robot, on->start_time, out.delay);
-  std::deque<int> queue{robot};
-  constexpr std::size_t kMaxShifts = 1000000;
-  std::size_t shifts = 0;
-  while (!queue.empty()) {
-    const int r = queue.front();
-    queue.pop_front();
-    for (;;) {
-      // Of the nodes where a delayed robot now overlaps another, the earliest: whichever of the
-      // two came second there waits until the first has left.
-      int later = -1;
-      double from = kInf, delta = 0.0;
-      for (const Visit& v : robots_[static_cast<std::size_t>(r)].visits) {
-        for (const Occupancy& o : occupancy_[static_cast<std::size_t>(v.cell)]) {
-          if (o.robot == r || o.leave + kGuard <= v.enter || v.leave + kGuard <= o.enter) continue;
-          const bool other_later = original_entry(o.robot, v.cell, o.enter) > original_entry(r, v.cell, v.enter);
-          const double enter = other_later ? o.enter : v.enter;
-          if (enter < from) {
-            later = other_later ? o.robot : r;
-            from = enter;
-            delta = (other_later ? v.leave : o.leave) + kGuard - enter;
-          }
-        }
-      }
-      if (later < 0) break;
-      if (++shifts > kMaxShifts) throw std::logic_error("FleetSession::Report: delay propagation did not settle");
-      delay(later, from, delta);  // (Shift changes occupancy_: the scan starts over)
-      queue.push_back(later);
-    }
-  }
+  out.robots = Delay(robot, on->start_time, out.delay);
   for (int r : out.robots) {
     std::vector<FleetSessionOrder> orders = OrdersOf(r, time);
     out.orders.insert(out.orders.end(), orders.begin(), orders.end());

@@ -200,6 +200,9 @@ class FleetSession {
   std::string Name(int robot) const;
   /// Delays robot's plan by `delta` > 0 from session time `from` (a run's start: it waits there).
   void Shift(int robot, double from, double delta);
+  /// Shift(robot, from, delta), then every robot ordered after a delayed one at a node, as much as
+  /// it must; the robots delayed, `robot` first.
+  std::vector<int> Delay(int robot, double from, double delta);
   /// The nearest node (along free edges) from where idle `robot` stands that is not marked in
   /// `avoid`, is not `goal` and that no other robot occupies after `now`; -1 when none.
   GridCell Refuge(int robot, const std::vector<char>& avoid, GridCell goal, double now) const;
