@@ -320,7 +320,8 @@ class ServerTest(unittest.TestCase):
         second = next(answers)
         self.assertEqual(second.states[0].robot, late[0])
         self.assertEqual(second.states[0].status, pb.LATE, second.states[0].message)
-        self.assertAlmostEqual(second.states[0].delay, 0.5, places=6)
+        # (Session times are seconds since the epoch, about 1.8e9: they resolve 2.4e-7 s.)
+        self.assertAlmostEqual(second.states[0].delay, 0.5, delta=1e-5)
         self.assertIn(late[0], [plan.robot for plan in second.plans])
         # A bad message ends the stream with an error naming it.
         outbox.put({"now": t0 + 3.0, "states": {"nobody": (0.0, 0.0)}})
