@@ -429,7 +429,8 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
 namespace {
 
 /// Distance from x to the segment a–b.
-double DistanceToSegment(const Eigen::VectorXd& x, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+double DistanceToSegment(Eigen::Ref<const Eigen::VectorXd> x, Eigen::Ref<const Eigen::VectorXd> a,
+                         Eigen::Ref<const Eigen::VectorXd> b) {
   // Written out, without temporaries: this runs (states × waypoints) times per trajectory.
   const Eigen::Index n = x.size();
   double len2 = 0.0, along = 0.0;
@@ -567,18 +568,22 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
   }
   // Sampled figures: states spaced by at most `step` of joint motion within each piece, and
   // every piece boundary (where a waypoint is passed exactly when the robot stops there).
+  std::vector<double> travel;  // per piece
   double total_travel = 0.0;
-  for (const Piece& piece : trajectory.pieces()) total_travel += piece.MaxJointTravel();
+  for (const Piece& piece : trajectory.pieces()) {
+    travel.push_back(piece.MaxJointTravel());
+    total_travel += travel.back();
+  }
   const double step = std::max(max_joint_step, total_travel / 2000.0);
   const bool effort = checker != nullptr && limits.max_effort.size() == n && HasInertia(checker->robot());
   DynamicsOptions dynamics;
   dynamics.gravity = limits.gravity;
   // The sampled states' positions, one column each (the velocities and accelerations only when
   // torques are measured), evaluated piece by piece: no sample allocates.
-  std::size_t count = 1;
+  std::size_t count = 1;  // the first piece's start, then each piece's states after its start
   std::vector<int> per_piece;
-  for (const Piece& piece : trajectory.pieces()) {
-    per_piece.push_back(std::max(1, static_cast<int>(std::ceil(piece.MaxJointTravel() / step))));
+  for (const double t : travel) {
+    per_piece.push_back(std::max(1, static_cast<int>(std::ceil(t / step))));
     count += static_cast<std::size_t>(per_piece.back());
   }
   Eigen::MatrixXd states(n, static_cast<Eigen::Index>(count));
@@ -593,10 +598,13 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
     const int size = static_cast<int>(piece.coefficients.cols());
     for (int i = filled == 0 ? 0 : 1; i <= m; ++i) {
       const double tau = piece.duration * i / m;
-      for (int j = 0; j < n; ++j) q[j] = tau == 0.0 ? c[j] : poly::Eval(c + j, size, tau, n);
-      if (p + 1 == trajectory.pieces().size() && i == m) q = trajectory.Evaluate(trajectory.duration()).q;  // exact end
-      states.col(filled) = q;
       const bool last = p + 1 == trajectory.pieces().size() && i == m;
+      if (last) {
+        q = trajectory.Evaluate(trajectory.duration()).q;  // the exact end
+      } else {
+        for (int j = 0; j < n; ++j) q[j] = tau == 0.0 ? c[j] : poly::Eval(c + j, size, tau, n);
+      }
+      states.col(filled) = q;
       // Off the sphere path: the clearance at (at most about 200 of) the sampled states.
       if (checker != nullptr && !bound_clearance && (filled % clearance_every == 0 || last)) {
         out.min_clearance = std::min(out.min_clearance, checker->Clearance(q));
@@ -615,22 +623,19 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
       ++filled;
     }
   }
-  states.conservativeResize(n, filled);
   if (bound_clearance) out.min_clearance = ClearanceLowerBound(trajectory, *checker);
   if (path.size() >= 2) {
     for (Eigen::Index s = 0; s < states.cols(); ++s) {
-      q = states.col(s);
       double nearest = std::numeric_limits<double>::infinity();
-      for (std::size_t k = 0; k + 1 < path.size(); ++k) nearest = std::min(nearest, DistanceToSegment(q, path[k], path[k + 1]));
+      for (std::size_t k = 0; k + 1 < path.size(); ++k) {
+        nearest = std::min(nearest, DistanceToSegment(states.col(s), path[k], path[k + 1]));
+      }
       out.max_deviation = std::max(out.max_deviation, nearest);
     }
-    Eigen::VectorXd a(n), b(n);
     for (const Eigen::VectorXd& w : path) {
       double nearest = std::numeric_limits<double>::infinity();
       for (Eigen::Index s = 0; s + 1 < states.cols(); ++s) {
-        a = states.col(s);
-        b = states.col(s + 1);
-        nearest = std::min(nearest, DistanceToSegment(w, a, b));
+        nearest = std::min(nearest, DistanceToSegment(w, states.col(s), states.col(s + 1)));
       }
       out.max_deviation = std::max(out.max_deviation, nearest);
     }

@@ -26,6 +26,16 @@ double StateTolerance(const v1::AssignFleetGoalsRequest& request) {
   return t == 0.0 ? 0.05 : t;
 }
 
+v1::FleetStateStatus StateStatusToProto(FleetStateStatus status) {
+  switch (status) {
+    case FleetStateStatus::kOnPlan: return v1::ON_PLAN;
+    case FleetStateStatus::kLate: return v1::LATE;
+    case FleetStateStatus::kAhead: return v1::AHEAD;
+    case FleetStateStatus::kOffPlan: return v1::OFF_PLAN;
+  }
+  return v1::FLEET_STATE_STATUS_UNSPECIFIED;
+}
+
 Eigen::VectorXd Limits(const google::protobuf::RepeatedField<double>& values) {
   Eigen::VectorXd out(values.size());
   for (int i = 0; i < values.size(); ++i) out[i] = values.Get(i);
@@ -349,11 +359,15 @@ void AssignFleetGoalsFromProto(OpenFleet& fleet, const v1::AssignFleetGoalsReque
   }
   response->set_now(now);
   std::vector<int> changed;  // robots with a new plan, each once
+  const auto new_plan = [&](int r) {
+    if (std::find(changed.begin(), changed.end(), r) == changed.end()) changed.push_back(r);
+    AddPlan(fleet, r, response);
+  };
   for (const auto& [robot, position] : states) {
     const FleetStateOutcome outcome = session.Report(robot, position, now, tolerance);
     v1::FleetStateResult* result = response->add_states();
     result->set_robot(fleet.names[static_cast<std::size_t>(robot)]);
-    result->set_status(static_cast<v1::FleetStateStatus>(static_cast<int>(outcome.status) + 1));
+    result->set_status(StateStatusToProto(outcome.status));
     result->set_deviation(outcome.deviation);
     result->set_delay(outcome.delay);
     for (int i = 0; i < 3; ++i) result->add_planned(outcome.planned[i]);
@@ -361,8 +375,7 @@ void AssignFleetGoalsFromProto(OpenFleet& fleet, const v1::AssignFleetGoalsReque
     for (std::size_t i = 0; i < outcome.robots.size(); ++i) {
       const int r = outcome.robots[i];
       if (i > 0) result->add_delayed(fleet.names[static_cast<std::size_t>(r)]);
-      if (std::find(changed.begin(), changed.end(), r) == changed.end()) changed.push_back(r);
-      AddPlan(fleet, r, response);
+      new_plan(r);
     }
   }
   for (std::size_t k = 0; k < goals.size(); ++k) {
@@ -378,11 +391,7 @@ void AssignFleetGoalsFromProto(OpenFleet& fleet, const v1::AssignFleetGoalsReque
       result->add_moved_aside(fleet.names[static_cast<std::size_t>(outcome.robots[r])]);
     }
     // The moved-aside robots were planned first, the goal's robot last.
-    for (std::size_t i = outcome.robots.size(); i-- > 0;) {
-      const int r = outcome.robots[i];
-      if (std::find(changed.begin(), changed.end(), r) == changed.end()) changed.push_back(r);
-      AddPlan(fleet, r, response);
-    }
+    for (std::size_t i = outcome.robots.size(); i-- > 0;) new_plan(outcome.robots[i]);
   }
   // The orders of the plans as they stand after the last goal (a later goal may replace a plan
   // an earlier one was ordered against); an order between two new plans is listed once.

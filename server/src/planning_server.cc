@@ -117,6 +117,33 @@ BudgetFields BudgetsOf(const Request&) {
   return {};
 }
 
+/// A call's cancellation, reaching the Termination of the job running for it: a job started
+/// after the client cancelled starts cancelled. Thread-safe (gRPC calls Cancel on its thread).
+class CallCancellation {
+ public:
+  /// The job's Termination; if the call was already cancelled, it is cancelled too.
+  Termination Start(Clock::time_point budget_end, Clock::time_point call_deadline) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    termination_.emplace(budget_end, call_deadline);
+    if (cancelled_) termination_->Cancel();
+    return *termination_;
+  }
+  bool cancelled() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return cancelled_;
+  }
+  void Cancel() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    cancelled_ = true;
+    if (termination_) termination_->Cancel();
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  bool cancelled_ = false;
+  std::optional<Termination> termination_;
+};
+
 // ---- One unary call -----------------------------------------------------------------------
 
 /// Everything one unary call owns: its parsed request, its response, its record (log line and
@@ -150,20 +177,10 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
 
   /// Creates the job's Termination; if the call was already cancelled, it is cancelled too.
   Termination Start(Clock::time_point budget_end, Clock::time_point call_deadline) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    termination_.emplace(budget_end, call_deadline);
-    if (cancelled_) termination_->Cancel();
-    return *termination_;
+    return cancellation_.Start(budget_end, call_deadline);
   }
-  bool cancelled() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return cancelled_;
-  }
-  void OnCancel() override {
-    std::lock_guard<std::mutex> lock(mutex_);
-    cancelled_ = true;
-    if (termination_) termination_->Cancel();
-  }
+  bool cancelled() const { return cancellation_.cancelled(); }
+  void OnCancel() override { cancellation_.Cancel(); }
   /// The call's buffers (request, response, gRPC's) are freed here, after the answer left; a call
   /// that held much gives the free heap back to the system then, so RSS returns to its level.
   void OnDone() override {
@@ -201,9 +218,7 @@ class UnaryCall final : public grpc::ServerUnaryReactor {
   grpc::ByteBuffer* const reply_;
   std::size_t request_bytes_ = 0;
   std::function<void(const RequestRecord&)> on_done_;
-  mutable std::mutex mutex_;
-  bool cancelled_ = false;
-  std::optional<Termination> termination_;
+  CallCancellation cancellation_;
 };
 
 /// Thrown from pool work to finish the call with DEADLINE_EXCEEDED.
@@ -711,6 +726,25 @@ class PlanningService final : public RawService {
  private:
   enum class Where { kInline, kPool };
 
+  /// Runs a call's work inside a HeapScope capped at --request-memory-mb: OK, or the status its
+  /// exception maps to (DeadlineError, StatusError, the memory cap, StatusFromException).
+  /// *peak_bytes gets the work's peak heap.
+  grpc::Status RunCapped(const std::function<void()>& work, std::uint64_t* peak_bytes) const {
+    grpc::Status status;
+    HeapScope heap(options_.request_memory_mb << 20);
+    try {
+      work();
+    } catch (const DeadlineError& e) {
+      status = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, e.message);
+    } catch (const StatusError& e) {
+      status = e.status;
+    } catch (...) {
+      status = heap.exceeded() ? MemoryCapStatus() : StatusFromException(std::current_exception());
+    }
+    *peak_bytes = heap.peak_bytes();
+    return status;
+  }
+
   /// One goal-and-state batch of a fleet session (AssignFleetGoals, a StreamFleetSession message).
   void AssignFleetGoalsBatch(const std::string& name, const v1::AssignFleetGoalsRequest& request,
                              const Termination& termination, v1::AssignFleetGoalsResponse* response) {
@@ -800,11 +834,7 @@ class PlanningService final : public RawService {
       StartRead(&in_);
     }
 
-    void OnCancel() override {
-      std::lock_guard<std::mutex> lock(mutex_);
-      cancelled_ = true;
-      if (termination_) termination_->Cancel();
-    }
+    void OnCancel() override { cancellation_.Cancel(); }
 
     void OnDone() override {
       record_.fields = {{"session", name_},
@@ -822,23 +852,15 @@ class PlanningService final : public RawService {
 
     /// On a worker: answers request_ into out_ and writes it, or ends the stream.
     void Answer() {
-      grpc::Status status;
       v1::AssignFleetGoalsResponse response;
-      {
-        HeapScope heap(service_->options_.request_memory_mb << 20);
-        try {
-          Termination termination(BudgetEnd(30.0, deadline_), deadline_);
-          {
-            std::lock_guard<std::mutex> lock(mutex_);
-            termination_.emplace(termination);
-            if (cancelled_) termination_->Cancel();
-          }
-          service_->AssignFleetGoalsBatch(name_, request_, termination, &response);
-        } catch (...) {
-          status = heap.exceeded() ? service_->MemoryCapStatus() : StatusFromException(std::current_exception());
-        }
-        record_.peak_heap_bytes = std::max(record_.peak_heap_bytes, heap.peak_bytes());
-      }
+      std::uint64_t peak = 0;
+      const grpc::Status status = service_->RunCapped(
+          [&] {
+            const Termination termination = cancellation_.Start(BudgetEnd(30.0, deadline_), deadline_);
+            service_->AssignFleetGoalsBatch(name_, request_, termination, &response);
+          },
+          &peak);
+      record_.peak_heap_bytes = std::max(record_.peak_heap_bytes, peak);
       if (!status.ok()) {
         End(grpc::Status(status.error_code(), Prefix() + status.error_message()));
         return;
@@ -870,9 +892,7 @@ class PlanningService final : public RawService {
     v1::AssignFleetGoalsRequest request_;
     std::string name_;
     std::uint64_t answered_ = 0, goals_ = 0, states_ = 0;
-    std::mutex mutex_;
-    bool cancelled_ = false;
-    std::optional<Termination> termination_;
+    CallCancellation cancellation_;
   };
 
   /// A write reactor that only answers an error (a Benchmark refused before it starts).
@@ -942,22 +962,9 @@ class PlanningService final : public RawService {
         call->Complete(grpc::Status(grpc::StatusCode::CANCELLED, "cancelled before it started"));
         return;
       }
-      grpc::Status status;
       std::uint64_t peak = 0;
-      {
-        HeapScope heap(options_.request_memory_mb << 20);
-        try {
-          work(*call);
-          if (call->cancelled() && status.ok()) status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
-        } catch (const DeadlineError& e) {
-          status = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, e.message);
-        } catch (const StatusError& e) {
-          status = e.status;
-        } catch (...) {
-          status = heap.exceeded() ? MemoryCapStatus() : StatusFromException(std::current_exception());
-        }
-        peak = heap.peak_bytes();
-      }
+      grpc::Status status = RunCapped([&] { work(*call); }, &peak);
+      if (status.ok() && call->cancelled()) status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
       call->record.peak_heap_bytes = peak;
       call->Complete(status);  // OnDone gives a large call's free heap back to the system
     };

@@ -630,13 +630,19 @@ FleetStateOutcome FleetSession::Report(int robot, const Eigen::Vector2d& positio
   }
   out.status = FleetStateStatus::kLate;
   out.robots = Delay(robot, on->start_time, out.delay);
-  for (int r : out.robots) {
-    std::vector<FleetSessionOrder> orders = OrdersOf(r, time);
-    out.orders.insert(out.orders.end(), orders.begin(), orders.end());
-  }
+  out.orders = OrdersOf(out.robots, time);
   out.message = Name(robot) + " is " + FormatNumber(out.delay) + " s behind its plan: delayed, with " +
                 std::to_string(out.robots.size() - 1) + " robots ordered after it";
   return out;
+}
+
+std::vector<FleetSessionOrder> FleetSession::OrdersOf(const std::vector<int>& robots, double from) const {
+  std::vector<FleetSessionOrder> orders;
+  for (int r : robots) {
+    std::vector<FleetSessionOrder> of = OrdersOf(r, from);
+    orders.insert(orders.end(), of.begin(), of.end());
+  }
+  return orders;
 }
 
 std::vector<FleetSessionOrder> FleetSession::OrdersOf(int robot, double from) const {
@@ -720,10 +726,7 @@ FleetGoalOutcome FleetSession::Assign(int robot, const Eigen::Vector3d& goal, do
       }
       outcome.robots.clear();
     } else {
-      for (int r : outcome.robots) {
-        std::vector<FleetSessionOrder> orders = OrdersOf(r, now);
-        outcome.orders.insert(outcome.orders.end(), orders.begin(), orders.end());
-      }
+      outcome.orders = OrdersOf(outcome.robots, now);
     }
     outcome.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     return outcome;

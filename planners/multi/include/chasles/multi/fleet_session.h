@@ -142,7 +142,7 @@ class FleetSession {
   /// actually be). Node occupancy stays exclusive. A robot ahead of its plan, or off it, changes
   /// nothing (the orders hold an early robot back; an off-plan robot is for its executor to
   /// stop). Deterministic like Assign; `time` moves the session's clock like Assign's `now`.
-  /// 	hrows Error(kInvalidArgument) for a robot out of range, a position not finite, a
+  /// \throws Error(kInvalidArgument) for a robot out of range, a position not finite, a
   ///         tolerance not finite and > 0, or `time` as Assign's `now`.
   FleetStateOutcome Report(int robot, const Eigen::Vector2d& position, double time, double tolerance);
 
@@ -197,6 +197,8 @@ class FleetSession {
   /// New state for `robot`: its visits before anchor, then `path` (cells and run times).
   RobotState Replanned(int robot, const Visit& anchor, const SearchResult& result, double goal_heading) const;
   std::vector<FleetSessionOrder> OrdersOf(int robot, double from) const;
+  /// The orders of each of `robots` in turn.
+  std::vector<FleetSessionOrder> OrdersOf(const std::vector<int>& robots, double from) const;
   std::string Name(int robot) const;
   /// Delays robot's plan by `delta` > 0 from session time `from` (a run's start: it waits there).
   void Shift(int robot, double from, double delta);
