@@ -494,6 +494,18 @@ bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorX
   return true;
 }
 
+Eigen::VectorXd CollisionChecker::GroupSweepBounds(const Eigen::VectorXd& speed) const {
+  detail::CheckSize(*robot_, speed, "speed");
+  if (!impl_->certifiable) return {};
+  std::vector<double> sphere(impl_->sx.size());
+  impl_->SweepBounds(speed.cwiseAbs(), sphere.data());
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(impl_->slinks.size()));
+  for (std::size_t li = 0; li < impl_->slinks.size(); ++li) {
+    for (int k = impl_->slinks[li].begin; k < impl_->slinks[li].end; ++k) out[li] = std::max(out[li], sphere[k]);
+  }
+  return out;
+}
+
 std::vector<double> CollisionChecker::SweepBounds(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const {
   detail::CheckSize(*robot_, a, "a");
   detail::CheckSize(*robot_, b, "b");

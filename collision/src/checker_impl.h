@@ -332,13 +332,17 @@ struct CollisionChecker::Impl {
       for (std::size_t axis = 0; axis < 3; ++axis) soa[axis * padded + li] = li < nl ? lb[3 * li + axis] : fill;
     }
   }
-  double FastClearance(const Frame* frames) const;
+  /// The clearance; with `group_lower` (slinks.size() values), per sphere link a lower bound on
+  /// its own clearance, the least of them the clearance.
+  double FastClearance(const Frame* frames, double* group_lower = nullptr) const;
   /// The smallest distance between the link spheres (world centres placed on demand into w;
   /// link bounds in soa, as LinkBoundsSoa) and the `count` prims listed in `which` (nullptr:
   /// prims 0..count-1), by branch and bound, or `best` when none of them is nearer (pairs
-  /// whose bound is not below it are skipped); +inf when none and best = +inf.
+  /// whose bound is not below it are skipped); +inf when none and best = +inf. With
+  /// `group_lower`, lowers each sphere link's entry to its distance from these prims, exact
+  /// where the pair was evaluated, else the pair's bound (no less than the result).
   double PrimClearance(const Frame* frames, const std::uint32_t* which, std::size_t count, const double* soa,
-                       double* w, char* placed, double best = detail::kInf) const;
+                       double* w, char* placed, double best = detail::kInf, double* group_lower = nullptr) const;
   /// Each FCL-path robot shape's world transform and bounding centre (n = shapes.size() each).
   void PlaceShapes(const Frame* frames, fcl::Transform3d* tf, Eigen::Vector3d* center) const {
     for (std::size_t i = 0; i < shapes.size(); ++i) {

@@ -304,7 +304,8 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
 }
 
 double CollisionChecker::Impl::PrimClearance(const Frame* frames, const std::uint32_t* which, std::size_t count,
-                                             const double* soa, double* w, char* placed, double best) const {
+                                             const double* soa, double* w, char* placed, double best,
+                                             double* group_lower) const {
   const std::size_t nl = slinks.size();
   const std::size_t padded = detail::CullPadded(nl);
   // A link's bounding sphere is at most as far from an obstacle as any of its spheres, so a
@@ -329,7 +330,10 @@ double CollisionChecker::Impl::PrimClearance(const Frame* frames, const std::uin
     const std::size_t li = pair % padded;
     const SphereLink& L = slinks[li];
     PlaceLinkSpheres(frames, li, w, placed);
-    for (int k = L.begin; k < L.end; ++k) best = std::min(best, SphereDistance(o, &w[3 * k], sr[k]));
+    double link = kInf;
+    for (int k = L.begin; k < L.end; ++k) link = std::min(link, SphereDistance(o, &w[3 * k], sr[k]));
+    bound[pair] = link;  // exact now (no less than the bound it replaces)
+    best = std::min(best, link);
   };
   if (nl * count > 0 && bound[first] < best) exact(first);
   for (std::size_t p = 0; p < count; ++p) {
@@ -338,10 +342,15 @@ double CollisionChecker::Impl::PrimClearance(const Frame* frames, const std::uin
       if (pair != first && bound[pair] < best) exact(pair);
     }
   }
+  if (group_lower != nullptr) {
+    for (std::size_t p = 0; p < count; ++p) {
+      for (std::size_t li = 0; li < nl; ++li) group_lower[li] = std::min(group_lower[li], bound[p * padded + li]);
+    }
+  }
   return best;
 }
 
-double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
+double CollisionChecker::Impl::FastClearance(const Frame* frames, double* group_lower) const {
   const std::size_t ns = sx.size();
   const std::size_t nl = slinks.size();
   Scratch<double, 1024> w(3 * ns);
@@ -352,22 +361,28 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
   Scratch<double, 256> soa(3 * padded);  // link bounding centres, structure of arrays
   LinkBoundsSoa(&lb[0], 0.0, &soa[0]);    // padding lanes finite (their distances are not read)
   double best = kInf;
+  if (group_lower != nullptr) std::fill(group_lower, group_lower + nl, kInf);
   thread_local GatherHistory history;
   if (!prim_broad_phase || ScanInstead(&history)) {
-    best = PrimClearance(frames, nullptr, prims.size(), &soa[0], &w[0], &placed[0]);
+    best = PrimClearance(frames, nullptr, prims.size(), &soa[0], &w[0], &placed[0], kInf, group_lower);
   } else {
     // Prims within `radius` of the link bounds first; a prim outside that box is farther than
     // `radius` from every link, so once the best distance is at most `radius` it is final.
+    double unvisited = kInf;  // every prim not visited is farther than this from every link
     WideningSearch(
         kClearanceSearchRadius, prims.size(), &best,
         [&](double radius, std::vector<std::uint32_t>* near) {
           PrimsNear(&lb[0], nullptr, radius, near);
           if (radius == kClearanceSearchRadius) Gathered(&history, near->size());
+          unvisited = near->size() == prims.size() ? kInf : radius;
           return true;
         },
         [&](const std::uint32_t* fresh, std::size_t count) {
-          best = PrimClearance(frames, fresh, count, &soa[0], &w[0], &placed[0], best);
+          best = PrimClearance(frames, fresh, count, &soa[0], &w[0], &placed[0], best, group_lower);
         });
+    if (group_lower != nullptr) {
+      for (std::size_t li = 0; li < nl; ++li) group_lower[li] = std::min(group_lower[li], unvisited);
+    }
   }
   if (!scene_geoms.empty()) {
     for (std::size_t li = 0; li < nl; ++li) PlaceLinkSpheres(frames, li, &w[0], &placed[0]);
@@ -387,6 +402,14 @@ double CollisionChecker::Impl::FastClearance(const Frame* frames) const {
       }
     };
     SearchGeomsNear([&](double radius) { return LinkBoundsBox(&lb[0], nullptr, radius); }, &best, geom_clearance);
+    // A link's clearance to the maps is no less than the clearance itself (the maps' spheres
+    // are skipped on bounds against `best`, so that is all that is known per link).
+    if (group_lower != nullptr) {
+      for (std::size_t li = 0; li < nl; ++li) group_lower[li] = std::min(group_lower[li], best);
+    }
+  }
+  if (group_lower != nullptr) {
+    for (std::size_t li = 0; li < nl; ++li) group_lower[li] = std::max(0.0, group_lower[li]);
   }
   return best <= 0.0 ? 0.0 : best;
 }
@@ -851,6 +874,29 @@ double CollisionChecker::Clearance(const Eigen::VectorXd& q) const {
   Scratch<Frame, 64> frames(impl_->num_links);
   impl_->ComputeFk(q, &frames[0]);
   return impl_->fast ? impl_->FastClearance(&frames[0]) : impl_->FclClearance(&frames[0]);
+}
+
+int CollisionChecker::num_clearance_groups() const {
+  return impl_->fast ? static_cast<int>(impl_->slinks.size()) : 1;
+}
+
+std::vector<int> CollisionChecker::clearance_group_links() const {
+  if (!impl_->fast) return {-1};
+  std::vector<int> out;
+  for (const auto& L : impl_->slinks) out.push_back(L.link);
+  return out;
+}
+
+double CollisionChecker::Clearance(const Eigen::VectorXd& q, Eigen::VectorXd* group_lower) const {
+  CheckSize(*robot_, q, "q");
+  Scratch<Frame, 64> frames(impl_->num_links);
+  impl_->ComputeFk(q, &frames[0]);
+  group_lower->resize(num_clearance_groups());
+  if (!impl_->fast) {
+    (*group_lower)[0] = impl_->FclClearance(&frames[0]);
+    return (*group_lower)[0];
+  }
+  return impl_->FastClearance(&frames[0], group_lower->data());
 }
 
 const CollisionOptions& CollisionChecker::options() const { return impl_->options; }

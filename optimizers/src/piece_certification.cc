@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace chasles::detail {
 
@@ -61,6 +62,45 @@ CollisionChecker::Curve SpanCurve(const TimedTrajectory::Piece& piece, const Pie
   };
 }
 
+bool LineSegmentOf(const TimedTrajectory::Piece& piece, Eigen::VectorXd* a, Eigen::VectorXd* b) {
+  const Eigen::MatrixXd& c = piece.coefficients;
+  const Eigen::Index m = c.cols();
+  const double length = piece.duration;
+  if (c.rows() == 0 || m == 0 || !(length >= 0.0) || !std::isfinite(length) || !c.allFinite()) return false;
+  // The direction: the largest column after the first (none, or all zero: the piece stands still).
+  Eigen::Index widest = 0;
+  double norm = 0.0;
+  for (Eigen::Index k = 1; k < m; ++k) {
+    const double v = c.col(k).cwiseAbs().maxCoeff();
+    if (v > norm) {
+      norm = v;
+      widest = k;
+    }
+  }
+  if (widest == 0) {
+    *a = c.col(0);
+    *b = c.col(0);
+    return true;
+  }
+  const Eigen::VectorXd d = c.col(widest);
+  const double dd = d.squaredNorm();
+  std::vector<double> sigma(static_cast<std::size_t>(m), 0.0);  // σ(τ), σ(0) = 0
+  double deviation = 0.0;  // bound on |q(τ) − c₀ − d·σ(τ)|∞ over the piece
+  double power = 1.0;      // length^k
+  for (Eigen::Index k = 1; k < m; ++k) {
+    power *= length;
+    const double s = c.col(k).dot(d) / dd;
+    sigma[static_cast<std::size_t>(k)] = s;
+    deviation += (c.col(k) - s * d).cwiseAbs().maxCoeff() * power;
+  }
+  if (!(deviation <= kLineTolerance)) return false;
+  double lo = 0.0, hi = 0.0;
+  poly::Range(sigma.data(), static_cast<int>(m), length, &lo, &hi);
+  *a = c.col(0) + lo * d;
+  *b = c.col(0) + hi * d;
+  return a->allFinite() && b->allFinite();
+}
+
 bool CertifySpan(const TimedTrajectory::Piece& piece, const PieceSpan& span, const CollisionChecker& checker,
                  int max_depth, CheckCounters* counters, PieceSpan* failed) {
   if (checker.IsCurveCertified(SpanCurve(piece, span, checker.robot()), SpanSpeedBound(piece, span), counters)) {
@@ -73,16 +113,6 @@ bool CertifySpan(const TimedTrajectory::Piece& piece, const PieceSpan& span, con
   }
   return CertifySpan(piece, {span.begin, mid}, checker, max_depth - 1, counters, failed) &&
          CertifySpan(piece, {mid, span.end}, checker, max_depth - 1, counters, failed);
-}
-
-double SpanClearanceLipschitz(const TimedTrajectory::Piece& piece, const PieceSpan& span,
-                              const CollisionChecker& checker) {
-  if (!checker.certifies_motion()) return std::numeric_limits<double>::infinity();
-  const Eigen::VectorXd speed = SpanSpeedBound(piece, span);
-  const std::vector<double> sweep = checker.SweepBounds(Eigen::VectorXd::Zero(speed.size()), speed);
-  double out = 0.0;
-  for (double d : sweep) out = std::max(out, d);
-  return out;
 }
 
 }  // namespace chasles::detail

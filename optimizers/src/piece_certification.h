@@ -2,7 +2,7 @@
 /// \file
 /// Internal to optimizers/: certified collision checks of timed-trajectory pieces — conservative
 /// advancement over each polynomial (CollisionChecker::IsCurveCertified) with an exact per-joint
-/// speed bound — and the lever (Lipschitz) bound on the clearance between evaluated states.
+/// speed bound.
 /// Used by VerifyTrajectory, MeasureTrajectory and the time-optimal blend check.
 
 #include <vector>
@@ -41,6 +41,19 @@ void ClampedPosition(const TimedTrajectory::Piece& piece, double tau, const Robo
 CollisionChecker::Curve SpanCurve(const TimedTrajectory::Piece& piece, const PieceSpan& span,
                                   const RobotModel& robot);
 
+/// Largest deviation [rad] from its line that LineSegmentOf accepts in a piece: rounding of
+/// the coefficients (~1e-16 rad), far below any motion of the robot's spheres that matters.
+inline constexpr double kLineTolerance = 1e-12;
+
+/// When the piece moves along one line — q(τ) = c₀ + d·σ(τ), every coefficient column after the
+/// first a multiple of one direction d, up to at most kLineTolerance rad anywhere on the piece —
+/// the joint-space segment it sweeps: *a = c₀ + d·min σ, *b = c₀ + d·max σ over [0, duration]
+/// (exact extrema of the polynomial σ), and true. A time-optimal parameterization's pieces along
+/// the path's segments are such; so is a piece that stands still. False for any other piece.
+/// Collisions depend only on the configurations a piece visits, so certifying the straight
+/// segment a → b certifies the piece, with a speed bound |b − a| that no time profile loosens.
+bool LineSegmentOf(const TimedTrajectory::Piece& piece, Eigen::VectorXd* a, Eigen::VectorXd* b);
+
 /// Certifies the span with IsCurveCertified; a span the checker does not certify is bisected
 /// and its halves certified in time order, down to `max_depth` levels (this gets past the
 /// advancement's state cap and loose bounds of long spans). Returns true when every part is
@@ -48,11 +61,5 @@ CollisionChecker::Curve SpanCurve(const TimedTrajectory::Piece& piece, const Pie
 /// Only meaningful when checker.certifies_motion() (otherwise IsCurveCertified is discrete).
 bool CertifySpan(const TimedTrajectory::Piece& piece, const PieceSpan& span, const CollisionChecker& checker,
                  int max_depth, CheckCounters* counters, PieceSpan* failed);
-
-/// L = maxₖ Dₖ [m per unit of s] over the span: no robot sphere centre (hence the clearance)
-/// moves more than L·Δs between s and s + Δs. +inf when the checker has no lever bounds
-/// (!certifies_motion()).
-double SpanClearanceLipschitz(const TimedTrajectory::Piece& piece, const PieceSpan& span,
-                              const CollisionChecker& checker);
 
 }  // namespace chasles::detail

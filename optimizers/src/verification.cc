@@ -122,6 +122,23 @@ class Verifier {
   /// kMaxBisections levels. On failure the reason names the contact, found densely in the
   /// first part that did not certify.
   bool CertifyPiece(const Piece& piece) {
+    // A piece along a line visits the configurations of one straight segment: certified as that
+    // segment in one advancement (no restart per span, a speed bound no time profile loosens).
+    // Should it not certify, the spans below find and name the contact.
+    Eigen::VectorXd a, b;
+    if (detail::LineSegmentOf(piece, &a, &b)) {
+      const Eigen::VectorXd delta = b - a;
+      const Eigen::VectorXd& lower = robot_.lower_limits();
+      const Eigen::VectorXd& upper = robot_.upper_limits();
+      const auto segment = [&](double s, Eigen::VectorXd* q) {
+        q->resize(a.size());
+        for (Eigen::Index i = 0; i < a.size(); ++i) (*q)[i] = std::min(upper[i], std::max(lower[i], a[i] + s * delta[i]));
+      };
+      CheckCounters counters;
+      const bool ok = checker_.IsCurveCertified(segment, delta.cwiseAbs(), &counters);
+      report_->states_checked += static_cast<int>(counters.state_checks);
+      if (ok) return true;
+    }
     for (const detail::PieceSpan& span : detail::SplitPiece(piece, detail::kCertifiedSpanTravel)) {
       CheckCounters counters;
       detail::PieceSpan failed;
@@ -453,55 +470,106 @@ constexpr double kClearanceRelativeTolerance = 0.02;  // of the clearance: 1 mm 
 constexpr int kMaxClearanceStates = 5000;
 
 /// A lower bound on the clearance over the whole continuous trajectory (checker certifies
-/// motions, so it has lever bounds). Between states at local times τa < τb of a span with
-/// Lipschitz constant L per unit τ, the clearance c(τ) >= max(ca − L(τ − τa), cb − L(τb − τ)),
-/// whose minimum is (ca + cb − L(τb − τa))/2. Starting from states at most 0.2 rad apart, the
-/// interval with the lowest bound is bisected until every bound is within
-/// max(kClearanceTolerance, kClearanceRelativeTolerance · best)
-/// of the smallest clearance evaluated (or kMaxClearanceStates states were evaluated: the
-/// figure is then the loosest remaining bound, still below the true minimum).
+/// motions, so it has lever bounds). The trajectory is a sequence of curves: a piece along a
+/// line is its straight segment a → b (LineSegmentOf: the same configurations), parameter
+/// u ∈ [0, 1] with |dq/du| = |b − a| exactly; any other piece goes by time in spans of at
+/// most kCertifiedSpanTravel, with each span's largest speed. Per clearance group g of the
+/// checker (a sphere link), no sphere of g moves more than L_g per unit of the parameter, so
+/// between evaluated parameters x_a < x_b, g's clearance c_g(x) >= max(c_g(x_a) − L_g(x − x_a),
+/// c_g(x_b) − L_g(x_b − x)), whose minimum is (c_g(x_a) + c_g(x_b) − L_g(x_b − x_a))/2; the
+/// interval's bound is the least over the groups (with the lower bounds Clearance gives per
+/// group), so a group far from the scene, or slow, leaves the bound to the others. Starting
+/// from states at most 0.2 rad apart, the interval with the lowest bound is bisected until
+/// every bound is within max(kClearanceTolerance, kClearanceRelativeTolerance · best) of the
+/// smallest clearance evaluated (or kMaxClearanceStates states were evaluated: the figure is
+/// then the loosest remaining bound, still below the true minimum).
 double ClearanceLowerBound(const TimedTrajectory& trajectory, const CollisionChecker& checker) {
   constexpr double kInitialTravel = 0.2;  // [rad]
+  const std::size_t groups = static_cast<std::size_t>(checker.num_clearance_groups());
+  const RobotModel& robot = checker.robot();
+  const Eigen::VectorXd& lower_limit = robot.lower_limits();
+  const Eigen::VectorXd& upper_limit = robot.upper_limits();
+  // A piece, or its segment a → a + delta when it moves along a line.
+  struct Curve {
+    const Piece* piece;
+    bool line;
+    Eigen::VectorXd a, delta;
+  };
+  std::vector<Curve> curves;
+  curves.reserve(trajectory.pieces().size());
+  // Per evaluated state, its groups' lower bounds; per span, its groups' L_g per unit of the
+  // parameter: both `groups` values from the offsets the intervals keep.
+  std::vector<double> lower, rates;
   struct Interval {
     double bound;
-    const Piece* piece;
-    double a, b, ca, cb, lipschitz;  // local times, clearances there, L per unit time
+    std::size_t curve;
+    double a, b;                   // parameters: local time, or u on a segment
+    std::size_t at_a, at_b, rate;  // offsets into lower (states a, b) and rates
     bool operator>(const Interval& other) const { return bound > other.bound; }
   };
   std::priority_queue<Interval, std::vector<Interval>, std::greater<Interval>> open;
-  const RobotModel& robot = checker.robot();
   double best = std::numeric_limits<double>::infinity();
   int evaluated = 0;
-  Eigen::VectorXd q;
-  const auto clearance = [&](const Piece& piece, double tau) {
-    detail::ClampedPosition(piece, tau, robot, &q);
-    const double c = checker.Clearance(q);
-    best = std::min(best, c);
+  Eigen::VectorXd q(robot.num_dofs()), group;
+  const auto clearance = [&](std::size_t curve, double x) {
+    const Curve& c = curves[curve];
+    if (c.line) {
+      for (Eigen::Index i = 0; i < q.size(); ++i) {
+        q[i] = std::min(upper_limit[i], std::max(lower_limit[i], c.a[i] + x * c.delta[i]));
+      }
+    } else {
+      detail::ClampedPosition(*c.piece, x, robot, &q);
+    }
+    best = std::min(best, checker.Clearance(q, &group));
     ++evaluated;
-    return c;
+    const std::size_t at = lower.size();
+    lower.insert(lower.end(), group.data(), group.data() + groups);
+    return at;
   };
-  const auto push = [&](const Piece* piece, double a, double b, double ca, double cb, double lipschitz) {
-    const double bound = std::min(std::min(ca, cb), 0.5 * (ca + cb - lipschitz * (b - a)));
-    open.push({bound, piece, a, b, ca, cb, lipschitz});
+  const auto push = [&](std::size_t curve, double a, double b, std::size_t at_a, std::size_t at_b, std::size_t rate) {
+    double bound = std::numeric_limits<double>::infinity();
+    const double h = b - a;
+    for (std::size_t g = 0; g < groups; ++g) {
+      const double ca = lower[at_a + g], cb = lower[at_b + g];
+      bound = std::min(bound, std::min(std::min(ca, cb), 0.5 * (ca + cb - rates[rate + g] * h)));
+    }
+    open.push({bound, curve, a, b, at_a, at_b, rate});
+  };
+  // States at most kInitialTravel apart over [begin, end] of a curve, whose joints move at most
+  // speed_i per unit of the parameter.
+  const auto cover = [&](std::size_t curve, double begin, double end, const Eigen::VectorXd& speed) {
+    const double length = end - begin;
+    const Eigen::VectorXd sweep = checker.GroupSweepBounds(speed);
+    const std::size_t rate = rates.size();
+    for (std::size_t g = 0; g < groups; ++g) rates.push_back(sweep[static_cast<Eigen::Index>(g)]);
+    const int m = std::max(1, static_cast<int>(std::ceil(speed.maxCoeff() * length / kInitialTravel)));
+    double a = begin;
+    std::size_t at_a = clearance(curve, a);
+    for (int i = 1; i <= m; ++i) {
+      const double b = i == m ? end : begin + length * i / m;
+      const std::size_t at_b = clearance(curve, b);
+      push(curve, a, b, at_a, at_b, rate);
+      a = b;
+      at_a = at_b;
+    }
   };
   for (const Piece& piece : trajectory.pieces()) {
-    if (!(piece.duration > 0.0)) {
-      clearance(piece, 0.0);
-      continue;
+    Curve curve{&piece, false, {}, {}};
+    Eigen::VectorXd b;
+    if (detail::LineSegmentOf(piece, &curve.a, &b)) {
+      curve.line = true;
+      curve.delta = b - curve.a;
     }
-    for (const detail::PieceSpan& span : detail::SplitPiece(piece, detail::kCertifiedSpanTravel)) {
-      const double length = span.end - span.begin;
-      if (!(length > 0.0)) continue;
-      const double lipschitz = detail::SpanClearanceLipschitz(piece, span, checker) / length;
-      const double travel = detail::SpanSpeedBound(piece, span).maxCoeff();
-      const int m = std::max(1, static_cast<int>(std::ceil(travel / kInitialTravel)));
-      double a = span.begin, ca = clearance(piece, a);
-      for (int i = 1; i <= m; ++i) {
-        const double b = i == m ? span.end : span.begin + length * i / m;
-        const double cb = clearance(piece, b);
-        push(&piece, a, b, ca, cb, lipschitz);
-        a = b;
-        ca = cb;
+    curves.push_back(std::move(curve));
+    const std::size_t at = curves.size() - 1;
+    if (curves[at].line) {
+      cover(at, 0.0, 1.0, curves[at].delta.cwiseAbs());
+    } else if (!(piece.duration > 0.0)) {
+      clearance(at, 0.0);
+    } else {
+      for (const detail::PieceSpan& span : detail::SplitPiece(piece, detail::kCertifiedSpanTravel)) {
+        const double length = span.end - span.begin;
+        if (length > 0.0) cover(at, span.begin, span.end, detail::SpanSpeedBound(piece, span) / length);
       }
     }
   }
@@ -516,9 +584,9 @@ double ClearanceLowerBound(const TimedTrajectory& trajectory, const CollisionChe
       best = std::min(best, top.bound);  // cannot split further: keep its bound
       continue;
     }
-    const double cm = clearance(*top.piece, mid);
-    push(top.piece, top.a, mid, top.ca, cm, top.lipschitz);
-    push(top.piece, mid, top.b, cm, top.cb, top.lipschitz);
+    const std::size_t at_mid = clearance(top.curve, mid);
+    push(top.curve, top.a, mid, top.at_a, at_mid, top.rate);
+    push(top.curve, mid, top.b, at_mid, top.at_b, top.rate);
   }
   double out = best;
   if (!open.empty()) out = std::min(out, open.top().bound);

@@ -1,14 +1,17 @@
 // ObstacleProximity against analytic answers: a sphere link vs a box, a sphere, an occupancy map
-// of a box, a mesh; contact; max_distance; link order and obstacle names; threads.
+// of a box, a mesh; contact; max_distance; link order and obstacle names; threads. And the
+// checker's per-group clearance bounds against ObstacleProximity's per-link FCL distances.
 
 #include <cmath>
 #include <memory>
+#include <random>
 #include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 
+#include "chasles/collision/collision_checker.h"
 #include "chasles/collision/proximity.h"
 #include "chasles/robot/error.h"
 #include "test_util.h"
@@ -318,6 +321,62 @@ TEST(ProximityTest, BuiltFromACheckerAndQueriedFromThreads) {
     double nearest = std::numeric_limits<double>::infinity();
     for (const LinkProximity& r : proximity.Query(q)) nearest = std::min(nearest, r.distance);
     EXPECT_NEAR(nearest, checker->Clearance(q), 1e-6) << q.transpose();
+  }
+}
+
+// CollisionChecker::Clearance(q, &groups): each clearance group's value is a lower bound on its
+// link's FCL distance to the scene (ObstacleProximity, a second implementation), the least of
+// them is Clearance(q), and the link nearest the scene gets its distance. Panda in the shelf
+// (primitives), in 300 random boxes (the prims' broad phase) and in the shelf's occupancy map.
+TEST(ProximityTest, ClearanceGroupsBoundEachLinksFclDistance) {
+  auto panda = test::LoadRobot("panda");
+  auto clutter = std::make_shared<Scene>();
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> xy(-1.2, 1.2), z(0.0, 1.4), size(0.02, 0.1);
+  for (int i = 0; i < 300; ++i) {
+    const Eigen::Vector3d c(xy(rng), xy(rng), z(rng));
+    if (c.head<2>().norm() < 0.35) continue;  // leave the robot's column free
+    clutter->AddObject({"box" + std::to_string(i),
+                        Shape::Box(Eigen::Vector3d(size(rng), size(rng), size(rng)), At(c.x(), c.y(), c.z()))});
+  }
+  const std::vector<std::pair<const char*, std::shared_ptr<Scene>>> scenes = {
+      {"shelf", test::LoadScene("scenes/shelf.json")},
+      {"clutter", clutter},
+      {"shelf_octomap", test::LoadScene("scenes/shelf_octomap.json")}};
+  for (const auto& [name, scene] : scenes) {
+    const CollisionChecker checker(panda, scene);
+    ASSERT_TRUE(checker.uses_fast_path()) << name;
+    const ObstacleProximity proximity(panda, scene);
+    const std::vector<int> group_link = checker.clearance_group_links();
+    ASSERT_EQ(static_cast<int>(group_link.size()), checker.num_clearance_groups());
+    Eigen::VectorXd groups;
+    int tight = 0, states = 0;
+    for (int trial = 0; trial < 150; ++trial) {
+      const Eigen::VectorXd q = test::RandomConfig(*panda, rng);
+      const double clearance = checker.Clearance(q, &groups);
+      ASSERT_EQ(groups.size(), checker.num_clearance_groups());
+      EXPECT_EQ(groups.minCoeff(), clearance) << name << " trial " << trial;
+      EXPECT_EQ(clearance, checker.Clearance(q)) << name << " trial " << trial;
+      if (clearance <= 0.0) continue;
+      ++states;
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const LinkProximity& link : proximity.Query(q)) {
+        double least = std::numeric_limits<double>::infinity();  // over the link's groups
+        for (std::size_t g = 0; g < group_link.size(); ++g) {
+          if (group_link[g] == link.link) least = std::min(least, groups[static_cast<Eigen::Index>(g)]);
+        }
+        EXPECT_LE(least, link.distance + 1e-9) << name << " trial " << trial << " link " << link.link;
+        nearest = std::min(nearest, link.distance);
+      }
+      EXPECT_NEAR(clearance, nearest, 1e-6) << name << " trial " << trial;
+      // Groups far from the scene may keep only a bounding-sphere bound, but some groups other
+      // than the nearest are bounded above the clearance (else there is no gain over it).
+      int above = 0;
+      for (Eigen::Index g = 0; g < groups.size(); ++g) above += groups[g] > clearance + 1e-3 ? 1 : 0;
+      if (above > 0) ++tight;
+    }
+    EXPECT_GT(states, 50) << name;
+    if (scene->occupancy_maps().empty()) EXPECT_GT(tight, states / 2) << name;
   }
 }
 

@@ -4,6 +4,7 @@
 #include "chasles/optimizers/verification.h"
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <gmock/gmock.h>
@@ -152,6 +153,49 @@ TEST(CertifiedVerification, APieceThatDipsIntoAnObstacleBetweenDiscreteStatesIsR
   const TrajectoryQuality far_quality = MeasureTrajectory(far.trajectory, limits, {}, &far_checker);
   EXPECT_LE(far_quality.min_clearance, 1e-3 + 1e-12);
   EXPECT_GE(far_quality.min_clearance, 1e-3 - 1e-4 - 1e-12);
+}
+
+// A piece along a line that goes out and comes back (it starts and ends at rest at q = 0): its
+// certification and its min_clearance cover every configuration it sweeps, out to q1 = 1 rad,
+// not only its ends. min_clearance is checked against the FCL path's clearance at 20001 states
+// of the sweep (a second implementation).
+TEST(CertifiedVerification, ALinePieceThatTurnsBackIsCertifiedAndMeasuredOverItsWholeSweep) {
+  TimedTrajectory::Piece piece;  // q1(τ) = 16 τ²(1 − τ)², q2 = 0: out to 1 rad at τ = 0.5, back
+  piece.duration = 1.0;
+  piece.coefficients = Eigen::MatrixXd::Zero(2, 5);
+  piece.coefficients.row(0) << 0.0, 0.0, 16.0, -32.0, 16.0;
+  const TimedTrajectory trajectory({piece});
+  const Eigen::VectorXd rest = Eigen::Vector2d::Zero();
+  const KinematicLimits limits = Limits(4.0, 40.0);  // peaks 3.08 rad/s, 32 rad/s²
+  // A ball of 5 cm radially outside the tip sphere's path (centre 2 m out, radius 0.08 m) at
+  // q1 = 0.9, `gap` from it.
+  const auto ball_at = [](double gap) {
+    auto scene = std::make_shared<Scene>();
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = (2.0 + 0.08 + 0.05 + gap) * Eigen::Vector3d(std::cos(0.9), std::sin(0.9), 0.0);
+    scene->AddObject({"ball", Shape::Sphere(0.05, pose)});
+    return scene;
+  };
+  const CollisionChecker hit(test::PlanarArm(), ball_at(-0.01));
+  ASSERT_TRUE(hit.certifies_motion());
+  ASSERT_TRUE(hit.IsValid(rest));
+  const VerificationReport rejected = VerifyTrajectory(trajectory, rest, rest, hit, limits);
+  EXPECT_FALSE(rejected.ok);
+  EXPECT_THAT(rejected.reason, HasSubstr("between link 'link2' and 'ball'"));
+
+  const auto scene = ball_at(0.003);
+  const CollisionChecker checker(test::PlanarArm(), scene);
+  const VerificationReport report = VerifyTrajectory(trajectory, rest, rest, checker, limits);
+  EXPECT_TRUE(report.ok) << report.reason;
+  CollisionOptions fcl;
+  fcl.force_fcl = true;
+  const CollisionChecker dense(test::PlanarArm(), scene, fcl);
+  double truth = std::numeric_limits<double>::infinity();
+  for (int i = 0; i <= 20000; ++i) truth = std::min(truth, dense.Clearance(Eigen::Vector2d(i / 20000.0, 0.0)));
+  ASSERT_NEAR(truth, 0.003, 1e-6);
+  const TrajectoryQuality quality = MeasureTrajectory(trajectory, limits, {}, &checker);
+  EXPECT_LE(quality.min_clearance, truth + 1e-9);
+  EXPECT_GE(quality.min_clearance, truth - 1e-4 - 1e-9);  // within the documented tolerance
 }
 
 TEST(CertifiedVerification, AMotionGrazingAnObstacleWithinRoundingIsNotCertified) {

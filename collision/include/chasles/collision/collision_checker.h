@@ -154,6 +154,22 @@ class CollisionChecker {
   /// leaves the clearance to the other pairs (+inf when no other pair remains).
   double Clearance(const Eigen::VectorXd& q) const;
 
+  /// Clearance(q), and in *group_lower one value per clearance group (num_clearance_groups()):
+  /// on the fast path the robot's spheres in the groups the checker bounds them by (a link's
+  /// spheres, a long link's in several groups), else one group of everything. Each value is a
+  /// lower bound [m] on that group's own clearance (exact for the groups near the scene, a
+  /// bounding-sphere bound for the others); the least of them is the clearance.
+  double Clearance(const Eigen::VectorXd& q, Eigen::VectorXd* group_lower) const;
+  int num_clearance_groups() const;
+  /// The robot link (index into RobotModel::links()) of each clearance group; -1 for the one
+  /// group off the fast path.
+  std::vector<int> clearance_group_links() const;
+
+  /// Per clearance group, the largest D_k of its spheres when |dq_i/ds| <= speed_i (see
+  /// IsMotionCertified): no sphere centre of the group moves more than that per unit of s.
+  /// Empty when !certifies_motion().
+  Eigen::VectorXd GroupSweepBounds(const Eigen::VectorXd& speed) const;
+
   /// True when the fast sphere path is used: every robot shape is a sphere and force_fcl is
   /// off. Then self checks, robot–primitive checks and robot–occupancy-map checks bypass FCL's
   /// generic machinery (exact sphere–primitive and sphere–voxel tests, same answers as FCL up
