@@ -125,6 +125,19 @@ constexpr double kMinCertifiedStep = 1e-7;   // in s
 // 555M instructions, none 490M, 2 426M, 1.25 419M, 1.1 418M with 3 % more states; 1.25 keeps the
 // states' median.
 constexpr double kMaxStepGrowth = 1.25;
+// Contact lookahead. An advancement never steps into a contact: on a curve through an obstacle
+// it creeps up to it, each step a fixed fraction shorter (the limiting pair's distance shrinks
+// at its true rate v, the step is distance / D with D >= v), until the step falls below
+// kMinCertifiedStep — 160 states on average for the Panda's rejected motions, all of them real
+// contacts (checked: a colliding state within 1e-5 of where the creep stopped). Once the step is
+// below 1/kLookaheadShrink of the largest so far and still shrinking, the contact is predicted
+// where the steps' geometric series sums, s + Δ_k / (1 − Δ_k / Δ_{k−1}), and one state a little
+// beyond it is checked: a collision there rejects the curve (a contact proves it), otherwise the
+// advancement goes on unchanged and probes again once the step has halved. Steps, and so the
+// answer, are exactly those without the lookahead.
+constexpr double kLookaheadShrink = 4.0;
+constexpr double kLookaheadRearm = 2.0;
+constexpr double kLookaheadBeyond = 1.05;
 constexpr double kChunkReach = 0.2;          // [m] broad phase: sweep bound of one chunk of a curve
 constexpr double kMinGridMargin = 1e-5;      // [m]
 constexpr double kMaxLinkGridMargin = 0.1;   // [m]
@@ -150,7 +163,7 @@ struct AdvancementScratch {
   std::vector<detail::Frame> frames;
   std::vector<std::uint32_t> near;  // broad phase: the prims near the current chunk
   std::vector<double> grow;          // broad phase: per sphere link, D_l times the chunk's length
-  Eigen::VectorXd q;
+  Eigen::VectorXd q, probe;
   bool in_use = false;
 };
 
@@ -294,6 +307,8 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
   const auto place = [&](std::size_t li) { PlaceLinkSpheres(frames, li, w, m.placed.data()); };
 
   double last_step = kInf;  // the step taken from the previous state
+  double peak_step = 0.0;   // the largest step taken
+  double probe_below = kInf;  // lookahead: the next probe once the step is below this
   double s = 0.0;
   for (int state = 0;; ++state) {
     if (state >= kMaxCertifiedStates) return false;
@@ -431,6 +446,16 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
     }
     if (step >= 1.0 - s) return true;  // [s, 1] is clear (the last chunk ends at 1)
     if (!(step >= kMinCertifiedStep)) return false;  // grazing (or NaN): reject conservatively
+    peak_step = std::max(peak_step, step);
+    if (step < last_step && step < probe_below && step * kLookaheadShrink < peak_step) {
+      probe_below = step / kLookaheadRearm;
+      const double ahead = s + kLookaheadBeyond * step / (1.0 - step / last_step);
+      if (ahead < 1.0) {
+        if (counters != nullptr) ++counters->state_checks;
+        curve(ahead, &m.probe);
+        if (m.probe.allFinite() && Collide(m.probe, nullptr)) return false;
+      }
+    }
     // A step cut at the chunk's end says nothing of the clearance: the next may grow from the
     // larger of it and the step before.
     last_step = step < limit ? step : std::max(step, last_step);

@@ -376,7 +376,9 @@ TEST(ProximityTest, ClearanceGroupsBoundEachLinksFclDistance) {
       if (above > 0) ++tight;
     }
     EXPECT_GT(states, 50) << name;
-    if (scene->occupancy_maps().empty()) EXPECT_GT(tight, states / 2) << name;
+    if (scene->occupancy_maps().empty()) {
+      EXPECT_GT(tight, states / 2) << name;
+    }
   }
 }
 

@@ -113,7 +113,9 @@ class CollisionChecker {
   /// advancement runs from a.
   /// Conservative: returns false when Δs falls below 1e-7 or more than 20000 states would be
   /// evaluated (a motion that grazes an obstacle within rounding is rejected), so false does not
-  /// prove a collision.
+  /// prove a collision. While the steps shrink towards a contact, one state just beyond where
+  /// they would sum up to is checked now and then (a collision there ends the check early; the
+  /// steps and the answer are the same without it).
   /// Otherwise (FCL path, or a scene with meshes or an occupancy map too large to grid) it falls
   /// back to the discrete IsMotionValid(a, b, 0.005) and certifies nothing.
   /// `counters->state_checks` counts the evaluated states. Precondition: sizes == num_dofs().
