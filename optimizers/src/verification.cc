@@ -693,20 +693,36 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
   }
   if (bound_clearance) out.min_clearance = ClearanceLowerBound(trajectory, *checker);
   if (path.size() >= 2) {
-    for (Eigen::Index s = 0; s < states.cols(); ++s) {
-      double nearest = std::numeric_limits<double>::infinity();
-      for (std::size_t k = 0; k + 1 < path.size(); ++k) {
-        nearest = std::min(nearest, DistanceToSegment(states.col(s), path[k], path[k + 1]));
+    // max over points of the distance to the nearest segment of the other polyline. A point
+    // whose distance to some segment is at most the deviation so far cannot raise it, so its
+    // search stops there; it starts at the segment nearest the previous point (consecutive
+    // points are near the same segment), which usually ends it at once. Exact either way.
+    const auto deviation = [&](std::size_t points, const auto& point, std::size_t segments, const auto& segment) {
+      std::size_t start = 0;
+      for (std::size_t p = 0; p < points; ++p) {
+        double nearest = std::numeric_limits<double>::infinity();
+        std::size_t at = start;
+        for (std::size_t i = 0; i < segments && nearest > out.max_deviation; ++i) {
+          const std::size_t k = (start + i) % segments;
+          const double d = segment(point(p), k);
+          if (d < nearest) {
+            nearest = d;
+            at = k;
+          }
+        }
+        start = at;
+        out.max_deviation = std::max(out.max_deviation, nearest);
       }
-      out.max_deviation = std::max(out.max_deviation, nearest);
-    }
-    for (const Eigen::VectorXd& w : path) {
-      double nearest = std::numeric_limits<double>::infinity();
-      for (Eigen::Index s = 0; s + 1 < states.cols(); ++s) {
-        nearest = std::min(nearest, DistanceToSegment(w, states.col(s), states.col(s + 1)));
-      }
-      out.max_deviation = std::max(out.max_deviation, nearest);
-    }
+    };
+    deviation(
+        static_cast<std::size_t>(states.cols()), [&](std::size_t p) { return states.col(static_cast<Eigen::Index>(p)); },
+        path.size() - 1, [&](const auto& x, std::size_t k) { return DistanceToSegment(x, path[k], path[k + 1]); });
+    deviation(
+        path.size(), [&](std::size_t p) -> const Eigen::VectorXd& { return path[p]; },
+        static_cast<std::size_t>(states.cols()) - 1, [&](const auto& x, std::size_t k) {
+          const auto s = static_cast<Eigen::Index>(k);
+          return DistanceToSegment(x, states.col(s), states.col(s + 1));
+        });
   }
   return out;
 }

@@ -53,8 +53,11 @@ struct VerificationReport {
 ///    (to 1e-12 relative), velocity, acceleration and (when limited) jerk limits;
 /// 4. collisions (self + scene) and, with max_effort on a robot with inertia, torques:
 ///    - when checker.certifies_motion() (sphere robot; primitives and gridded occupancy maps):
-///      every piece is certified along its continuous motion, piece by piece in time order: cut
-///      into spans of at most 0.25 rad of joint travel, each span's curve checked by
+///      every piece is certified along its continuous motion, piece by piece in time order. A
+///      piece along a line (every coefficient column after the first a multiple of one
+///      direction, to 1e-12 rad) is certified as the straight segment it sweeps, between the
+///      extremes of its scalar profile, in one IsCurveCertified; should that not certify, or for
+///      any other piece: cut into spans of at most 0.25 rad of joint travel, each span's curve checked by
 ///      CollisionChecker::IsCurveCertified with the exact speed bound (span length)·max|q̇ᵢ|
 ///      over the span (extrema of the polynomial); a span that does not certify is bisected, up
 ///      to 12 levels, so only a motion that collides or passes within rounding of a contact
@@ -112,10 +115,13 @@ struct TrajectoryQuality {
 /// Measures `trajectory` against the limits and the input `path` (may be empty: deviation 0),
 /// sampling states every `max_joint_step` of joint motion (at most 2000 states in all) for the
 /// sampled figures. `checker` may be null (clearance +inf, effort 0).
-/// min_clearance, when checker->certifies_motion(): the clearance is Lipschitz along each span
-/// of a piece (≤ 0.25 rad of travel) with L = maxₖ Dₖ, Dₖ = Σᵢ Rₖᵢ·(span length)·max|q̇ᵢ| the
-/// lever bound of sphere k (CollisionChecker::SweepBounds), so between evaluated states at
-/// s0 < s1 it is at least (c0 + c1 − L·(s1 − s0))/2. Starting from states at most 0.2 rad
+/// min_clearance, when checker->certifies_motion(): a piece along a line is taken as the straight
+/// segment it sweeps (parameter u ∈ [0, 1], |dq/du| = |b − a| exactly), any other piece by time in
+/// spans of at most 0.25 rad of travel (each span's largest speed). Each clearance group g of the
+/// checker (CollisionChecker::Clearance(q, &groups)) moves at most L_g = maxₖ Dₖ over its spheres
+/// per unit of the parameter, Dₖ = Σᵢ Rₖᵢ·|dqᵢ| the lever bound of sphere k, so between evaluated
+/// states at s0 < s1 its clearance is at least (c0 + c1 − L_g·(s1 − s0))/2, and the clearance the
+/// least of these over the groups. Starting from states at most 0.2 rad
 /// apart, the interval with the lowest such bound is bisected until every bound is within
 /// max(1e-4 m, 2 % of it) of the smallest clearance evaluated; the figure is the smallest bound (>= 0). At most
 /// 5000 states are evaluated: beyond that the figure is the smallest remaining bound (still a
