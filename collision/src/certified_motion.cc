@@ -481,13 +481,7 @@ bool CollisionChecker::IsMotionCertified(const Eigen::VectorXd& a, const Eigen::
 
 bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorXd& speed_bound,
                                         CheckCounters* counters) const {
-  detail::CheckSize(*robot_, speed_bound, "speed_bound");
-  for (int i = 0; i < speed_bound.size(); ++i) {
-    if (!std::isfinite(speed_bound[i]) || speed_bound[i] < 0.0) {
-      ThrowInvalid("speed_bound[" + std::to_string(i) + "] = " + FormatNumber(speed_bound[i]) +
-                   " must be finite and >= 0");
-    }
-  }
+  detail::CheckSpeedBound(*robot_, speed_bound, "speed_bound");
   if (impl_->certifiable) {
     // Probes first, in bisection order, until they are at most kProbeSpacing apart in every
     // joint (by the speed bound), so a curve through an obstacle is rejected here rather than by
@@ -520,10 +514,10 @@ bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorX
 }
 
 Eigen::VectorXd CollisionChecker::GroupSweepBounds(const Eigen::VectorXd& speed) const {
-  detail::CheckSize(*robot_, speed, "speed");
+  detail::CheckSpeedBound(*robot_, speed, "speed");
   if (!impl_->certifiable) return {};
   std::vector<double> sphere(impl_->sx.size());
-  impl_->SweepBounds(speed.cwiseAbs(), sphere.data());
+  impl_->SweepBounds(speed, sphere.data());
   Eigen::VectorXd out = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(impl_->slinks.size()));
   for (std::size_t li = 0; li < impl_->slinks.size(); ++li) {
     for (int k = impl_->slinks[li].begin; k < impl_->slinks[li].end; ++k) out[li] = std::max(out[li], sphere[k]);

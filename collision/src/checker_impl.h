@@ -117,6 +117,10 @@ struct SceneAllowances {
 ///         naming `field`.
 void CheckSize(const RobotModel& robot, const Eigen::VectorXd& q, const char* field);
 
+/// \throws Error(kInvalidArgument) naming `field`, the index and the value, when speed (a bound
+///         on |dq_i/ds| per joint) has the wrong size or a value that is not finite and >= 0.
+void CheckSpeedBound(const RobotModel& robot, const Eigen::VectorXd& speed, const char* field);
+
 /// Every q_i within the robot's limits (NaN is not).
 bool WithinLimits(const RobotModel& robot, const Eigen::VectorXd& q);
 

@@ -813,6 +813,16 @@ void detail::CheckSize(const RobotModel& robot, const Eigen::VectorXd& q, const 
   }
 }
 
+void detail::CheckSpeedBound(const RobotModel& robot, const Eigen::VectorXd& speed, const char* field) {
+  CheckSize(robot, speed, field);
+  for (int i = 0; i < speed.size(); ++i) {
+    if (!std::isfinite(speed[i]) || speed[i] < 0.0) {
+      ThrowInvalid(std::string(field) + "[" + std::to_string(i) + "] = " + FormatNumber(speed[i]) +
+                   " must be finite and >= 0");
+    }
+  }
+}
+
 bool detail::WithinLimits(const RobotModel& robot, const Eigen::VectorXd& q) {
   const Eigen::VectorXd& lo = robot.lower_limits();
   const Eigen::VectorXd& hi = robot.upper_limits();

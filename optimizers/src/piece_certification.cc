@@ -62,6 +62,16 @@ CollisionChecker::Curve SpanCurve(const TimedTrajectory::Piece& piece, const Pie
   };
 }
 
+CollisionChecker::Curve SegmentCurve(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const RobotModel& robot) {
+  const RobotModel* r = &robot;
+  return [a, delta = Eigen::VectorXd(b - a), r](double s, Eigen::VectorXd* q) {
+    const Eigen::VectorXd& lower = r->lower_limits();
+    const Eigen::VectorXd& upper = r->upper_limits();
+    q->resize(a.size());
+    for (Eigen::Index i = 0; i < a.size(); ++i) (*q)[i] = std::min(upper[i], std::max(lower[i], a[i] + s * delta[i]));
+  };
+}
+
 bool LineSegmentOf(const TimedTrajectory::Piece& piece, Eigen::VectorXd* a, Eigen::VectorXd* b) {
   const Eigen::MatrixXd& c = piece.coefficients;
   const Eigen::Index m = c.cols();

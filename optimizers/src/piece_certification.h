@@ -41,6 +41,10 @@ void ClampedPosition(const TimedTrajectory::Piece& piece, double tau, const Robo
 CollisionChecker::Curve SpanCurve(const TimedTrajectory::Piece& piece, const PieceSpan& span,
                                   const RobotModel& robot);
 
+/// The straight segment q(s) = a + s·(b − a), s ∈ [0, 1], clamped into the robot's joint limits
+/// (as SpanCurve; clamping does not increase any speed, so |b − a| bounds |dq/ds|).
+CollisionChecker::Curve SegmentCurve(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const RobotModel& robot);
+
 /// Largest deviation [rad] from its line that LineSegmentOf accepts in a piece: rounding of
 /// the coefficients (~1e-16 rad), far below any motion of the robot's spheres that matters.
 inline constexpr double kLineTolerance = 1e-12;

@@ -127,15 +127,8 @@ class Verifier {
     // Should it not certify, the spans below find and name the contact.
     Eigen::VectorXd a, b;
     if (detail::LineSegmentOf(piece, &a, &b)) {
-      const Eigen::VectorXd delta = b - a;
-      const Eigen::VectorXd& lower = robot_.lower_limits();
-      const Eigen::VectorXd& upper = robot_.upper_limits();
-      const auto segment = [&](double s, Eigen::VectorXd* q) {
-        q->resize(a.size());
-        for (Eigen::Index i = 0; i < a.size(); ++i) (*q)[i] = std::min(upper[i], std::max(lower[i], a[i] + s * delta[i]));
-      };
       CheckCounters counters;
-      const bool ok = checker_.IsCurveCertified(segment, delta.cwiseAbs(), &counters);
+      const bool ok = checker_.IsCurveCertified(detail::SegmentCurve(a, b, robot_), (b - a).cwiseAbs(), &counters);
       report_->states_checked += static_cast<int>(counters.state_checks);
       if (ok) return true;
     }
@@ -487,15 +480,9 @@ double ClearanceLowerBound(const TimedTrajectory& trajectory, const CollisionChe
   constexpr double kInitialTravel = 0.2;  // [rad]
   const std::size_t groups = static_cast<std::size_t>(checker.num_clearance_groups());
   const RobotModel& robot = checker.robot();
-  const Eigen::VectorXd& lower_limit = robot.lower_limits();
-  const Eigen::VectorXd& upper_limit = robot.upper_limits();
-  // A piece, or its segment a → a + delta when it moves along a line.
-  struct Curve {
-    const Piece* piece;
-    bool line;
-    Eigen::VectorXd a, delta;
-  };
-  std::vector<Curve> curves;
+  // Per piece: its segment's SegmentCurve when it moves along a line, else its own position by
+  // local time.
+  std::vector<CollisionChecker::Curve> curves;
   curves.reserve(trajectory.pieces().size());
   // Per evaluated state, its groups' lower bounds; per span, its groups' L_g per unit of the
   // parameter: both `groups` values from the offsets the intervals keep.
@@ -512,14 +499,7 @@ double ClearanceLowerBound(const TimedTrajectory& trajectory, const CollisionChe
   int evaluated = 0;
   Eigen::VectorXd q(robot.num_dofs()), group;
   const auto clearance = [&](std::size_t curve, double x) {
-    const Curve& c = curves[curve];
-    if (c.line) {
-      for (Eigen::Index i = 0; i < q.size(); ++i) {
-        q[i] = std::min(upper_limit[i], std::max(lower_limit[i], c.a[i] + x * c.delta[i]));
-      }
-    } else {
-      detail::ClampedPosition(*c.piece, x, robot, &q);
-    }
+    curves[curve](x, &q);
     best = std::min(best, checker.Clearance(q, &group));
     ++evaluated;
     const std::size_t at = lower.size();
@@ -554,17 +534,15 @@ double ClearanceLowerBound(const TimedTrajectory& trajectory, const CollisionChe
     }
   };
   for (const Piece& piece : trajectory.pieces()) {
-    Curve curve{&piece, false, {}, {}};
-    Eigen::VectorXd b;
-    if (detail::LineSegmentOf(piece, &curve.a, &b)) {
-      curve.line = true;
-      curve.delta = b - curve.a;
+    const std::size_t at = curves.size();
+    Eigen::VectorXd a, b;
+    if (detail::LineSegmentOf(piece, &a, &b)) {
+      curves.push_back(detail::SegmentCurve(a, b, robot));
+      cover(at, 0.0, 1.0, (b - a).cwiseAbs());
+      continue;
     }
-    curves.push_back(std::move(curve));
-    const std::size_t at = curves.size() - 1;
-    if (curves[at].line) {
-      cover(at, 0.0, 1.0, curves[at].delta.cwiseAbs());
-    } else if (!(piece.duration > 0.0)) {
+    curves.push_back([&piece, &robot](double tau, Eigen::VectorXd* q) { detail::ClampedPosition(piece, tau, robot, q); });
+    if (!(piece.duration > 0.0)) {
       clearance(at, 0.0);
     } else {
       for (const detail::PieceSpan& span : detail::SplitPiece(piece, detail::kCertifiedSpanTravel)) {

@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <iostream>
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -203,6 +205,43 @@ TEST(CertifiedCurve, FallsBackToDiscreteStatesWhenTheCheckerCannotCertify) {
   EXPECT_TRUE(checker.IsCurveCertified([](double s, Eigen::VectorXd* q) { *q = Q1(-1 + 2 * s); }, Q1(2), &counters));
   EXPECT_EQ(counters.state_checks, 401u);
   EXPECT_FALSE(checker.IsCurveCertified([](double s, Eigen::VectorXd* q) { *q = Q1(0.0025 * s); }, Q1(0.0025)));
+}
+
+// A speed bound that is not one value per joint, finite and >= 0 is rejected naming the field,
+// the index and the value — by IsCurveCertified and by GroupSweepBounds alike.
+TEST(CertifiedCurve, BadSpeedBoundsAreRejectedNamingFieldIndexAndValue) {
+  auto panda = test::LoadRobot("panda");
+  CollisionChecker checker(panda, test::LoadScene("scenes/shelf.json"));
+  const CollisionChecker::Curve still = [](double, Eigen::VectorXd* q) { *q = test::PandaReady(); };
+  const auto expect = [](const std::function<void()>& call, const std::string& message) {
+    try {
+      call();
+      ADD_FAILURE() << "no Error thrown; expected: " << message;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << e.what();
+      EXPECT_EQ(std::string(e.what()), message);
+    }
+  };
+  Eigen::VectorXd negative = Eigen::VectorXd::Zero(panda->num_dofs());
+  negative[2] = -1.0;
+  Eigen::VectorXd nan = Eigen::VectorXd::Zero(panda->num_dofs());
+  nan[4] = std::nan("");
+  const Eigen::VectorXd short_bound = Eigen::VectorXd::Zero(3);
+  const std::string joints = std::to_string(panda->num_dofs());
+  expect([&] { checker.IsCurveCertified(still, negative); }, "speed_bound[2] = -1 must be finite and >= 0");
+  expect([&] { checker.IsCurveCertified(still, nan); }, "speed_bound[4] = nan must be finite and >= 0");
+  expect([&] { checker.IsCurveCertified(still, short_bound); },
+         "speed_bound has 3 values, robot '" + panda->name() + "' has " + joints + " joints");
+  expect([&] { checker.GroupSweepBounds(negative); }, "speed[2] = -1 must be finite and >= 0");
+  expect([&] { checker.GroupSweepBounds(nan); }, "speed[4] = nan must be finite and >= 0");
+  expect([&] { checker.GroupSweepBounds(short_bound); },
+         "speed has 3 values, robot '" + panda->name() + "' has " + joints + " joints");
+  // A valid bound: one value per clearance group, each the largest of its spheres' sweep bounds.
+  const Eigen::VectorXd speed = Eigen::VectorXd::Constant(panda->num_dofs(), 0.5);
+  const Eigen::VectorXd groups = checker.GroupSweepBounds(speed);
+  ASSERT_EQ(groups.size(), checker.num_clearance_groups());
+  const std::vector<double> spheres = checker.SweepBounds(Eigen::VectorXd::Zero(panda->num_dofs()), speed);
+  EXPECT_NEAR(groups.maxCoeff(), *std::max_element(spheres.begin(), spheres.end()), 1e-12);
 }
 
 TEST(CertifiedMotion, AStartInSelfCollisionIsRejected) {

@@ -170,6 +170,8 @@ class CollisionChecker {
   /// Per clearance group, the largest D_k of its spheres when |dq_i/ds| <= speed_i (see
   /// IsMotionCertified): no sphere centre of the group moves more than that per unit of s.
   /// Empty when !certifies_motion().
+  /// \throws Error(kInvalidArgument) when speed has the wrong size or a value that is not finite
+  ///         and >= 0 (`speed[2] = -1 must be finite and >= 0`).
   Eigen::VectorXd GroupSweepBounds(const Eigen::VectorXd& speed) const;
 
   /// True when the fast sphere path is used: every robot shape is a sphere and force_fcl is
