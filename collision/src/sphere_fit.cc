@@ -37,7 +37,12 @@
 // (on a lattice when they are wide, always with the widest); each chosen ball shrinks to the
 // farthest corner of the elements it covered. The nominal R is bisected between a value the
 // budget fails and one it meets; each doubling of R gets its own grid (coarser when the cap
-// requires, padded so the balls fit). The last resort is one ball around all vertices, also
+// requires, padded so the balls fit). From the cover the bisection settles on, every ball whose
+// elements all lie in other kept balls is then dropped, in the order chosen: a ball chosen early
+// for the first uncovered element is often covered over by later ones (on the UR5's cylinder
+// meshes, 203 of 259 balls are kept, at the same reach). Letting the greedy choose twice the
+// budget and pruning down to it instead gives, with a budget of 32, the same 203 balls and reach,
+// and fits up to 1.7× slower. The last resort is one ball around all vertices, also
 // returned whenever its reach is smaller.
 //
 // Reach, proven per final ball as the smaller of two bounds: the largest U of the cubes it meets,
@@ -57,6 +62,7 @@
 #include "chasles/collision/sphere_fit.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -750,6 +756,74 @@ struct Ball {
   double radius;  // voxel units, as needed by the elements it covers
 };
 
+/// Drops, in the order they were chosen, the balls whose every element also lies in another kept
+/// ball. The greedy chooses a ball for the first uncovered element, so a ball chosen early is often
+/// covered over by those chosen after it. An element's count is its balls containing it whole
+/// (the voxel's elements all inside: one count per voxel) plus those containing its sub-cube.
+void DropRedundant(const Grid& grid, const std::vector<std::uint64_t>& initial, std::vector<Ball>* balls) {
+  std::vector<std::int32_t> slot(grid.size(), -1);
+  std::vector<std::uint16_t> whole;               // per slot
+  std::vector<std::int32_t> partial_of;           // per slot: its row of `partial`, or -1
+  std::vector<std::array<std::uint16_t, 64>> partial;
+  // Visits the elements of each voxel ball `b` contains (radius with a relative 1e-12 above the
+  // needed one, far below the 1e-9·h rounding margin the fitted radius gets).
+  const auto for_held = [&](const Ball& ball, auto visit) {
+    const int centre[3] = {static_cast<int>(ball.voxel % grid.n[0]), static_cast<int>(ball.voxel / grid.n[0] % grid.n[1]),
+                           static_cast<int>(ball.voxel / grid.n[0] / grid.n[1])};
+    const double radius = ball.radius * (1.0 + 1e-12);
+    ForVoxelsInBall(grid, centre, radius, [&](std::size_t w, int di, int dj, int dk) {
+      if (initial[w] == 0) return;
+      double far2;
+      const std::uint64_t bits = CoveredBits(initial[w], di, dj, dk, radius * radius, &far2);
+      if (bits != 0) visit(w, bits);
+    });
+  };
+  for (const Ball& ball : *balls) {
+    for_held(ball, [&](std::size_t w, std::uint64_t bits) {
+      if (slot[w] < 0) {
+        slot[w] = static_cast<std::int32_t>(whole.size());
+        whole.push_back(0);
+        partial_of.push_back(-1);
+      }
+      const std::int32_t s = slot[w];
+      if (bits == initial[w]) {
+        ++whole[s];
+        return;
+      }
+      if (partial_of[s] < 0) {
+        partial_of[s] = static_cast<std::int32_t>(partial.size());
+        partial.emplace_back().fill(0);
+      }
+      for (std::uint64_t rest = bits; rest != 0; rest &= rest - 1) ++partial[partial_of[s]][LowestBit(rest)];
+    });
+  }
+  std::vector<Ball> kept;
+  for (const Ball& ball : *balls) {
+    bool redundant = true;
+    for_held(ball, [&](std::size_t w, std::uint64_t bits) {
+      if (!redundant) return;
+      const std::int32_t s = slot[w];
+      if (whole[s] >= 2) return;
+      for (std::uint64_t rest = bits; rest != 0 && redundant; rest &= rest - 1) {
+        redundant = whole[s] + (partial_of[s] < 0 ? 0 : partial[partial_of[s]][LowestBit(rest)]) >= 2;
+      }
+    });
+    if (!redundant) {
+      kept.push_back(ball);
+      continue;
+    }
+    for_held(ball, [&](std::size_t w, std::uint64_t bits) {
+      const std::int32_t s = slot[w];
+      if (bits == initial[w]) {
+        --whole[s];
+        return;
+      }
+      for (std::uint64_t rest = bits; rest != 0; rest &= rest - 1) --partial[partial_of[s]][LowestBit(rest)];
+    });
+  }
+  *balls = std::move(kept);
+}
+
 /// Greedy cover of `initial` (copied into `work`) by candidate balls (radius² `clearance2` per
 /// voxel centre, voxel units), swept along the grid's longest axis: the first uncovered element in
 /// sweep order gets, among the balls that contain it, the one covering the most uncovered
@@ -1058,6 +1132,7 @@ FittedSpheres FitSpheres(const TriangleMesh& mesh, const SphereFitOptions& optio
         }
       }
     }
+    DropRedundant(grid, level.voxels.elements, &best);
     FittedSpheres out;
     for (const Ball& ball : best) {
       const int at[3] = {static_cast<int>(ball.voxel % grid.n[0]), static_cast<int>(ball.voxel / grid.n[0] % grid.n[1]),

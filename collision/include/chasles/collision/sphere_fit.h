@@ -50,12 +50,13 @@ struct FittedSpheres {
 /// Degenerate meshes (a single triangle, coplanar or collinear points, one point) are fine.
 ///
 /// The reach is measured on the spheres found, against the mesh itself (not only on the grid), so
-/// it is close to the true largest distance: e.g. 1.2–1.5 cm for a 96-sided cylinder 0.1–0.15 m
-/// across with 48 spheres.
+/// it is close to the true largest distance: e.g. 0.9–1.7 cm for the UR5's 96-sided cylinders,
+/// 0.08–0.15 m across, with a budget of 40 spheres each, of which 26–32 are kept
+/// (examples/robots/ur5_meshes).
 ///
 /// Time and memory grow with the grid (options.max_voxels_per_axis cubed, or max_reach / 6 per
-/// voxel when that is coarser) and the triangle count: about 0.2–0.8 s for a 960-triangle
-/// cylinder at the defaults with 48 spheres on one core, more when a tight budget forces the reach
+/// voxel when that is coarser) and the triangle count: about 0.2–1.5 s for a 960-triangle
+/// cylinder at the defaults with 40 spheres on one core, more when a tight budget forces the reach
 /// to relax over several grids. Thread-safe (no state).
 /// \throws Error(kInvalidArgument) when options are invalid (SphereFitOptions::Validate), the mesh
 ///         has no triangles, a triangle refers to a vertex out of range
