@@ -25,9 +25,9 @@ void ValidatePositive(const Eigen::VectorXd& values, const char* field, int num_
   }
   for (int i = 0; i < values.size(); ++i) {
     const double v = values[i];
+    if (std::isfinite(v) && v > 0.0) continue;  // the message is built only for a bad value
     const std::string name = std::string(field) + "[" + std::to_string(i) + "] = " + FormatNumber(v);
-    if (!std::isfinite(v)) ThrowInvalid(name + " must be finite");
-    if (!(v > 0.0)) ThrowInvalid(name + " must be > 0");
+    ThrowInvalid(name + (std::isfinite(v) ? " must be > 0" : " must be finite"));
   }
 }
 

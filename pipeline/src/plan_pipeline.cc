@@ -173,7 +173,7 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
     out.code = code;
     out.message = std::move(message);
     out.seconds.total = SecondsSince(t_start);
-    return out;
+    return std::move(out);  // every call is `return finish(...)`: the samples are moved, not copied
   };
 
   // 1. Validate: contract violations throw; a colliding start or goal is an outcome.
