@@ -1,9 +1,9 @@
 #pragma once
 /// \file
 /// Internal to chasles_collision: CollisionChecker::Impl (what a checker builds once and every
-/// query reads) and the small types it holds, shared by collision_checker.cc (construction, state
-/// checks, clearance), certified_motion.cc (lever bounds and the conservative advancement) and
-/// allowed_pairs.cc (the scene's allowed pairs resolved against a robot). See the design notes at
+/// query reads) and the small types it holds, shared by collision_checker.cc (construction and
+/// state checks), clearance.cc (distances to the scene), certified_motion.cc (lever bounds and the
+/// conservative advancement) and allowed_pairs.cc (the scene's allowed pairs resolved against a robot). See the design notes at
 /// the top of collision_checker.cc.
 
 #include <algorithm>
