@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "chasles/optimizers/shortcut.h"
@@ -92,6 +93,180 @@ std::string DescribeSegments(const std::vector<std::size_t>& segments) {
   }
   if (segments.size() > 4) text += ", …";
   return text;
+}
+
+/// Phase 1's outcome: the goal states (the joint goal, or collision-free IK solutions of the
+/// pose goal, nearest to the start first), or the code and message that end the query.
+struct Ends {
+  std::vector<Eigen::VectorXd> goals;
+  std::optional<PlanOutcomeCode> code;
+  std::string message;
+};
+
+Ends CheckEnds(const PlanQuery& query, const Termination& termination, PlanOutcome* out) {
+  const CollisionChecker& checker = *query.checker;
+  Ends ends;
+  const CollisionResult start_contact = checker.Check(query.start);
+  out->state_checks += 1;
+  if (start_contact.in_collision) {
+    ends.code = PlanOutcomeCode::kStartInCollision;
+    ends.message = "start is in collision: " + DescribeContact(start_contact);
+    return ends;
+  }
+  if (query.pose_goal) {
+    const PoseGoalSpec& pose = *query.pose_goal;
+    IkRequest ik;
+    ik.link = pose.link;
+    ik.target = pose.pose;
+    ik.position_tolerance = pose.position_tolerance;
+    ik.orientation_tolerance = pose.orientation_tolerance;
+    ik.max_solutions = pose.max_goal_states;
+    ik.time_budget = std::max(1e-3, std::min(pose.ik_time_budget, termination.SecondsLeft()));
+    ik.seed = query.seed;
+    ik.initial_guess = query.start;
+    ik.accept = [&checker](const Eigen::VectorXd& q) { return checker.IsValid(q); };
+    ik.stop = [&termination] { return termination.ShouldStop(); };
+    const IkResult solved = SolveIk(checker.robot(), ik);
+    if (solved.solutions.empty()) {
+      ends.code = PlanOutcomeCode::kGoalUnreachable;
+      ends.message = "pose goal for link '" + checker.robot().links()[pose.link].name +
+                     "' has no collision-free IK solution: " + solved.message;
+      return ends;
+    }
+    ends.goals = solved.solutions;
+    std::stable_sort(ends.goals.begin(), ends.goals.end(), [&query](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+      return (a - query.start).norm() < (b - query.start).norm();
+    });
+    return ends;
+  }
+  const CollisionResult goal_contact = checker.Check(query.goal);
+  out->state_checks += 1;
+  if (goal_contact.in_collision) {
+    ends.code = PlanOutcomeCode::kGoalInCollision;
+    ends.message = "goal is in collision: " + DescribeContact(goal_contact);
+    return ends;
+  }
+  ends.goals.push_back(query.goal);
+  return ends;
+}
+
+/// Phase 2: the query's planner from the start to the first goal state (the others as further goals).
+PlannerResult PlanPath(const PlannerRegistry& registry, const PlanQuery& query, const std::vector<Eigen::VectorXd>& goals,
+                       const Termination& termination) {
+  std::unique_ptr<Planner> planner = registry.Create(query.planner_id);
+  PlanningProblem problem;
+  problem.checker = query.checker;
+  problem.start = query.start;
+  problem.goal = goals.front();
+  problem.additional_goals.assign(goals.begin() + 1, goals.end());
+  problem.goal_tolerance = query.goal_tolerance;
+  problem.max_step = query.collision_resolution;
+  problem.seed = query.seed;
+  problem.parameters = query.parameters;
+  planner->Setup(problem);
+  return planner->Solve(termination);
+}
+
+/// The outcome a planner's status ends the query with; none for an exact solution.
+std::optional<PlanOutcomeCode> PlanFailure(PlanStatus status) {
+  switch (status) {
+    case PlanStatus::kExactSolution: return std::nullopt;
+    case PlanStatus::kApproximateSolution: return PlanOutcomeCode::kApproximateOnly;
+    case PlanStatus::kCancelled: return PlanOutcomeCode::kCancelled;
+    case PlanStatus::kDeadlineExceeded: return PlanOutcomeCode::kDeadlineExceeded;
+    case PlanStatus::kInvalidStart: return PlanOutcomeCode::kStartInCollision;
+    case PlanStatus::kInvalidGoal: return PlanOutcomeCode::kGoalInCollision;
+    case PlanStatus::kNoSolution: return PlanOutcomeCode::kNoPathWithinBudget;
+    case PlanStatus::kLocalMinimum: return PlanOutcomeCode::kLocalMinimum;
+  }
+  return PlanOutcomeCode::kNoPathWithinBudget;
+}
+
+/// Phase 3: the path shortened with the query's shortcut settings, its checks counted.
+JointPath Shorten(const JointPath& path, const PlanQuery& query, double max_step, const Termination& termination,
+                  std::uint64_t* state_checks) {
+  ShortcutOptions options;
+  options.max_attempts = query.shortcut_attempts;
+  options.max_step = max_step;
+  options.seed = query.seed;
+  options.stall_attempts = query.shortcut_stall;
+  options.stall_improvement = 0.01;
+  // With the stall rule on, a candidate gaining less than half its threshold is not checked
+  // (on the bench's Panda scenes: 43 % fewer shortcut states, same path lengths and durations).
+  options.min_gain = query.shortcut_stall > 0 ? 0.005 : 0.0;
+  // The time budget is the planner's; only the deadline or a cancellation cuts this short.
+  options.stop = [&termination] {
+    const StopReason reason = termination.Reason();
+    return reason == StopReason::kCancelled || reason == StopReason::kDeadline;
+  };
+  CheckCounters counters;
+  JointPath shorter = ShortcutPath(path, *query.checker, options, &counters);
+  *state_checks += counters.state_checks;
+  return shorter;
+}
+
+/// Phase 5b: repairs a path whose segments collide between the states the planner checked:
+/// re-checks each segment finer (certified when the checker certifies motions, else at a quarter
+/// of the verification step), replans each colliding one with RRT-Connect at that step between
+/// its ends, shortens at that step and times again; up to three rounds, the step halved each
+/// round. `timed` and `out` (its path and repair record) take the result.
+void RepairByReplanning(const PlannerRegistry& registry, const PlanQuery& query, const TrajectorySpec& spec,
+                        double verify_step, bool shortcut, const Termination& termination, TrajectoryStageResult* timed,
+                        PlanOutcome* out) {
+  const CollisionChecker& checker = *query.checker;
+  const auto t_repair = Clock::now();
+  const Termination repair_termination = termination.WithFreshBudget(std::chrono::duration<double>(query.repair_budget));
+  const std::vector<std::string> ids = registry.Ids();
+  const bool rrt = std::find(ids.begin(), ids.end(), "rrt_connect") != ids.end() &&
+                   registry.Spec("rrt_connect").Supports(checker.robot().kind());
+  double step = verify_step / 4.0;
+  JointPath path = out->path;
+  for (int round = 0; round < 3 && rrt && timed->code == TrajectoryStageCode::kVerificationFailed; ++round) {
+    if (repair_termination.ShouldStop()) {
+      out->repair.actions.push_back("replanning stopped: " + std::string(repair_termination.Reason() == StopReason::kBudget
+                                                                             ? "its budget of " + FormatNumber(query.repair_budget) + " s was spent"
+                                                                             : "the call ended"));
+      break;
+    }
+    const std::string how = checker.certifies_motion() ? std::string("certified") : "at " + FormatNumber(step) + " rad";
+    const std::vector<std::size_t> colliding = CollidingSegments(path, checker, step, &out->state_checks);
+    if (colliding.empty()) {
+      out->repair.actions.push_back("re-checked the path's " + std::to_string(path.size() - 1) + " segments " + how +
+                                   ": all free, so replanning cannot help");
+      break;
+    }
+    std::string failed;
+    const JointPath replanned =
+        ReplanSegments(registry, query, path, colliding, step, query.seed + 7919u * static_cast<std::uint64_t>(round + 1),
+                       how, repair_termination, out, &failed);
+    if (replanned.empty()) {
+      out->repair.actions.push_back(failed);
+      break;
+    }
+    path = shortcut ? Shorten(replanned, query, step, termination, &out->state_checks) : replanned;
+    *timed = RunTrajectoryStage(path, checker, spec, verify_step, termination);
+    std::string action = "replanned " + std::to_string(colliding.size()) + " segment" +
+                         std::string(colliding.size() == 1 ? " that collides " : "s that collide ") + how + " (" +
+                         DescribeSegments(colliding) + ") with RRT-Connect at " + FormatNumber(step) + " rad" + (shortcut ? ", shortened" : "") +
+                         ", " + std::to_string(path.size()) + " waypoints: ";
+    if (timed->code == TrajectoryStageCode::kSuccess) {
+      action += "verified";
+      out->repair.repaired = true;
+      out->path = path;
+    } else {
+      action += "failed verification (" +
+                (timed->repair.attempted() ? timed->repair.failure : timed->message) + ")";
+    }
+    out->repair.actions.push_back(std::move(action));
+    for (std::string& nested : timed->repair.actions) out->repair.actions.push_back(std::move(nested));
+    if (timed->code == TrajectoryStageCode::kInfeasibleLimits) break;
+    step /= 2.0;
+  }
+  if (!rrt) {
+    out->repair.actions.push_back("no segment replanned: RRT-Connect does not plan for a " +
+                                 std::string(ToString(checker.robot().kind())) + " robot");
+  }
+  out->repair.seconds += SecondsSince(t_repair);
 }
 
 }  // namespace
@@ -184,107 +359,26 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
     spec.gravity = query.gravity;
     out.limits = ResolveLimits(checker.robot(), spec);
   }
-  const CollisionResult start_contact = checker.Check(query.start);
-  out.state_checks += 1;
-  if (start_contact.in_collision) {
-    out.seconds.validate = SecondsSince(t_start);
-    return finish(PlanOutcomeCode::kStartInCollision, "start is in collision: " + DescribeContact(start_contact));
-  }
-  // The goal states: the joint goal, or collision-free IK solutions of the pose goal, nearest
-  // to the start first.
-  std::vector<Eigen::VectorXd> goals;
-  if (query.pose_goal) {
-    const PoseGoalSpec& pose = *query.pose_goal;
-    IkRequest ik;
-    ik.link = pose.link;
-    ik.target = pose.pose;
-    ik.position_tolerance = pose.position_tolerance;
-    ik.orientation_tolerance = pose.orientation_tolerance;
-    ik.max_solutions = pose.max_goal_states;
-    ik.time_budget = std::max(1e-3, std::min(pose.ik_time_budget, termination.SecondsLeft()));
-    ik.seed = query.seed;
-    ik.initial_guess = query.start;
-    ik.accept = [&checker](const Eigen::VectorXd& q) { return checker.IsValid(q); };
-    ik.stop = [&termination] { return termination.ShouldStop(); };
-    const IkResult solved = SolveIk(checker.robot(), ik);
-    if (solved.solutions.empty()) {
-      out.seconds.validate = SecondsSince(t_start);
-      return finish(PlanOutcomeCode::kGoalUnreachable, "pose goal for link '" +
-                                                           checker.robot().links()[pose.link].name +
-                                                           "' has no collision-free IK solution: " + solved.message);
-    }
-    goals = solved.solutions;
-    std::stable_sort(goals.begin(), goals.end(), [&query](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-      return (a - query.start).norm() < (b - query.start).norm();
-    });
-  } else {
-    const CollisionResult goal_contact = checker.Check(query.goal);
-    out.state_checks += 1;
-    if (goal_contact.in_collision) {
-      out.seconds.validate = SecondsSince(t_start);
-      return finish(PlanOutcomeCode::kGoalInCollision, "goal is in collision: " + DescribeContact(goal_contact));
-    }
-    goals.push_back(query.goal);
-  }
+  Ends ends = CheckEnds(query, termination, &out);
   out.seconds.validate = SecondsSince(t_start);
+  if (ends.code) return finish(*ends.code, std::move(ends.message));
 
   // 2. Plan a geometric path.
   auto t = Clock::now();
-  std::unique_ptr<Planner> planner = registry_.Create(query.planner_id);
-  PlanningProblem problem;
-  problem.checker = query.checker;
-  problem.start = query.start;
-  problem.goal = goals.front();
-  problem.additional_goals.assign(goals.begin() + 1, goals.end());
-  problem.goal_tolerance = query.goal_tolerance;
-  problem.max_step = query.collision_resolution;
-  problem.seed = query.seed;
-  problem.parameters = query.parameters;
-  planner->Setup(problem);
-  const PlannerResult planned = planner->Solve(termination);
+  const PlannerResult planned = PlanPath(registry_, query, ends.goals, termination);
   out.seconds.plan = SecondsSince(t);
   out.graph_states = planned.graph_states;
   out.state_checks += planned.state_checks;
   out.raw_path = planned.path;
-  switch (planned.status) {
-    case PlanStatus::kExactSolution:
-      out.goal = planned.path.back();  // exactly one of the goal states
-      break;
-    case PlanStatus::kApproximateSolution:
-      return finish(PlanOutcomeCode::kApproximateOnly, planned.message);
-    case PlanStatus::kCancelled: return finish(PlanOutcomeCode::kCancelled, planned.message);
-    case PlanStatus::kDeadlineExceeded: return finish(PlanOutcomeCode::kDeadlineExceeded, planned.message);
-    case PlanStatus::kInvalidStart: return finish(PlanOutcomeCode::kStartInCollision, planned.message);
-    case PlanStatus::kInvalidGoal: return finish(PlanOutcomeCode::kGoalInCollision, planned.message);
-    case PlanStatus::kNoSolution: return finish(PlanOutcomeCode::kNoPathWithinBudget, planned.message);
-    case PlanStatus::kLocalMinimum: return finish(PlanOutcomeCode::kLocalMinimum, planned.message);
-  }
+  if (const std::optional<PlanOutcomeCode> failed = PlanFailure(planned.status)) return finish(*failed, planned.message);
+  out.goal = planned.path.back();  // exactly one of the goal states
   out.suboptimality_bound = planned.suboptimality_bound;
 
   // 3. Shorten.
   t = Clock::now();
-  const auto shorten = [&](const JointPath& path, double max_step) {
-    ShortcutOptions options;
-    options.max_attempts = query.shortcut_attempts;
-    options.max_step = max_step;
-    options.seed = query.seed;
-    options.stall_attempts = query.shortcut_stall;
-    options.stall_improvement = 0.01;
-    // With the stall rule on, a candidate gaining less than half its threshold is not checked
-    // (on the bench's Panda scenes: 43 % fewer shortcut states, same path lengths and durations).
-    options.min_gain = query.shortcut_stall > 0 ? 0.005 : 0.0;
-    // The time budget is the planner's; only the deadline or a cancellation cuts this short.
-    options.stop = [&termination] {
-      const StopReason reason = termination.Reason();
-      return reason == StopReason::kCancelled || reason == StopReason::kDeadline;
-    };
-    CheckCounters counters;
-    JointPath shorter = ShortcutPath(path, checker, options, &counters);
-    out.state_checks += counters.state_checks;
-    return shorter;
-  };
   const bool shortcut = query.shortcut_attempts >= 0 && !planned.keep_path_shape;
-  out.path = shortcut ? shorten(planned.path, query.collision_resolution) : planned.path;
+  out.path = shortcut ? Shorten(planned.path, query, query.collision_resolution, termination, &out.state_checks)
+                      : planned.path;
   out.seconds.shortcut = SecondsSince(t);
 
   // 4–5. Time-parameterise (and optimise), then verify densely before anything leaves.
@@ -297,64 +391,9 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
   out.seconds.optimize = timed.optimize_seconds;
   out.seconds.verify = timed.verify_seconds;
 
-  // 5b. Repair a path whose segments collide between the states the planner checked: re-check
-  // each segment finer (certified when the checker certifies motions, else at a quarter of the
-  // verification step), replan each colliding one with RRT-Connect at that step between its
-  // ends, shorten at that step and time again; up to three rounds, the step halved each round.
+  // 5b. Repair a path whose segments collide between the states the planner checked.
   if (timed.code == TrajectoryStageCode::kVerificationFailed && !planned.keep_path_shape) {
-    const auto t_repair = Clock::now();
-    const Termination repair_termination = termination.WithFreshBudget(std::chrono::duration<double>(query.repair_budget));
-    const std::vector<std::string> ids = registry_.Ids();
-    const bool rrt = std::find(ids.begin(), ids.end(), "rrt_connect") != ids.end() &&
-                     registry_.Spec("rrt_connect").Supports(checker.robot().kind());
-    double step = verify_step / 4.0;
-    JointPath path = out.path;
-    for (int round = 0; round < 3 && rrt && timed.code == TrajectoryStageCode::kVerificationFailed; ++round) {
-      if (repair_termination.ShouldStop()) {
-        out.repair.actions.push_back("replanning stopped: " + std::string(repair_termination.Reason() == StopReason::kBudget
-                                                                               ? "its budget of " + FormatNumber(query.repair_budget) + " s was spent"
-                                                                               : "the call ended"));
-        break;
-      }
-      const std::string how = checker.certifies_motion() ? std::string("certified") : "at " + FormatNumber(step) + " rad";
-      const std::vector<std::size_t> colliding = CollidingSegments(path, checker, step, &out.state_checks);
-      if (colliding.empty()) {
-        out.repair.actions.push_back("re-checked the path's " + std::to_string(path.size() - 1) + " segments " + how +
-                                     ": all free, so replanning cannot help");
-        break;
-      }
-      std::string failed;
-      const JointPath replanned =
-          ReplanSegments(registry_, query, path, colliding, step, query.seed + 7919u * static_cast<std::uint64_t>(round + 1),
-                         how, repair_termination, &out, &failed);
-      if (replanned.empty()) {
-        out.repair.actions.push_back(failed);
-        break;
-      }
-      path = shortcut ? shorten(replanned, step) : replanned;
-      timed = RunTrajectoryStage(path, checker, spec, verify_step, termination);
-      std::string action = "replanned " + std::to_string(colliding.size()) + " segment" +
-                           std::string(colliding.size() == 1 ? " that collides " : "s that collide ") + how + " (" +
-                           DescribeSegments(colliding) + ") with RRT-Connect at " + FormatNumber(step) + " rad" + (shortcut ? ", shortened" : "") +
-                           ", " + std::to_string(path.size()) + " waypoints: ";
-      if (timed.code == TrajectoryStageCode::kSuccess) {
-        action += "verified";
-        out.repair.repaired = true;
-        out.path = path;
-      } else {
-        action += "failed verification (" +
-                  (timed.repair.attempted() ? timed.repair.failure : timed.message) + ")";
-      }
-      out.repair.actions.push_back(std::move(action));
-      for (std::string& nested : timed.repair.actions) out.repair.actions.push_back(std::move(nested));
-      if (timed.code == TrajectoryStageCode::kInfeasibleLimits) break;
-      step /= 2.0;
-    }
-    if (!rrt) {
-      out.repair.actions.push_back("no segment replanned: RRT-Connect does not plan for a " +
-                                   std::string(ToString(checker.robot().kind())) + " robot");
-    }
-    out.repair.seconds += SecondsSince(t_repair);
+    RepairByReplanning(registry_, query, spec, verify_step, shortcut, termination, &timed, &out);
   }
   out.seconds.repair = out.repair.seconds;
   out.limits = timed.limits;
@@ -368,6 +407,8 @@ PlanOutcome PlanningPipeline::Plan(const PlanQuery& query, const Termination& te
     return finish(PlanOutcomeCode::kVerificationFailed,
                   "the trajectory failed dense verification: " + out.repair.Describe());
   }
+
+  // 6. What leaves: the trajectory, its quality figures and samples.
   out.trajectory = std::move(timed.trajectory);
   out.quality = timed.quality;
   out.seconds.quality = timed.quality_seconds;
