@@ -438,6 +438,26 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
 
 namespace {
 
+/// The least distance [rad] from w to the piece's positions over τ ∈ [0, duration]: the least of
+/// Σᵢ (cᵢ(τ) − wᵢ)², a polynomial of twice the piece's degree, by poly::Range (its ends and the
+/// real roots of its derivative).
+double DistanceToPiece(const Eigen::VectorXd& w, const Piece& piece) {
+  const int n = static_cast<int>(piece.coefficients.rows());
+  const int size = static_cast<int>(piece.coefficients.cols());
+  std::vector<double> square(static_cast<std::size_t>(2 * size - 1), 0.0), row(static_cast<std::size_t>(size));
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < size; ++j) row[j] = piece.coefficients(i, j);
+    row[0] -= w[i];
+    for (int a = 0; a < size; ++a) {
+      if (row[a] == 0.0) continue;
+      for (int b = 0; b < size; ++b) square[a + b] += row[a] * row[b];
+    }
+  }
+  double lo, hi;
+  poly::Range(square.data(), 2 * size - 1, piece.duration, &lo, &hi);
+  return std::sqrt(std::max(0.0, lo));
+}
+
 /// Distance from x to the segment a–b.
 double DistanceToSegment(Eigen::Ref<const Eigen::VectorXd> x, Eigen::Ref<const Eigen::VectorXd> a,
                          Eigen::Ref<const Eigen::VectorXd> b) {
@@ -695,12 +715,12 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
     deviation(
         static_cast<std::size_t>(states.cols()), [&](std::size_t p) { return states.col(static_cast<Eigen::Index>(p)); },
         path.size() - 1, [&](const auto& x, std::size_t k) { return DistanceToSegment(x, path[k], path[k + 1]); });
+    // Each waypoint to the trajectory itself, exactly: per piece the least of |q(τ) − w|² (a
+    // polynomial, poly::Range), not chords between sampled states (which lie outside a blend's
+    // curve and overstated the distance to the corner it cuts).
     deviation(
-        path.size(), [&](std::size_t p) -> const Eigen::VectorXd& { return path[p]; },
-        static_cast<std::size_t>(states.cols()) - 1, [&](const auto& x, std::size_t k) {
-          const auto s = static_cast<Eigen::Index>(k);
-          return DistanceToSegment(x, states.col(s), states.col(s + 1));
-        });
+        path.size(), [&](std::size_t p) -> const Eigen::VectorXd& { return path[p]; }, trajectory.pieces().size(),
+        [&](const Eigen::VectorXd& w, std::size_t k) { return DistanceToPiece(w, trajectory.pieces()[k]); });
   }
   return out;
 }

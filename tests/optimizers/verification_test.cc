@@ -308,6 +308,27 @@ TEST_F(VerificationTest, MaxDeviationMatchesABruteForceOverDenseStates) {
   EXPECT_NEAR(quality.max_deviation, expected, 1e-5);
 }
 
+TEST_F(VerificationTest, ABlendIsReportedWithinTheDeviationItWasBuiltFor) {
+  // A right-angle corner, blended at 0.05 rad: the blend passes the corner at 0.05 rad exactly
+  // (TOPP's bound, tight at the corner). The figure measured from each waypoint used to be the
+  // distance to chords between sampled states, which lie outside the blend's curve: 0.0510.
+  KinematicLimits limits;
+  limits.max_velocity = Eigen::Vector2d(1.0, 1.0);
+  limits.max_acceleration = Eigen::Vector2d(1.0, 1.0);
+  const JointPath corner = {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(1.0, 0.0), Eigen::Vector2d(1.0, 1.0)};
+  TimeOptimalOptions options;
+  options.max_deviation = 0.05;
+  const TimedTrajectory blended = ParameterizeTimeOptimal(corner, limits, options);
+  for (double step : {0.01, 0.05, 0.2}) {
+    const TrajectoryQuality quality = MeasureTrajectory(blended, limits, corner, nullptr, step);
+    // Independently: the corner's distance to states 1e-6 s apart over the whole trajectory.
+    double nearest = std::numeric_limits<double>::infinity();
+    for (double t = 0.0; t <= blended.duration(); t += 1e-6) nearest = std::min(nearest, (blended.Evaluate(t).q - corner[1]).norm());
+    EXPECT_LE(quality.max_deviation, options.max_deviation * (1 + 1e-9)) << "step " << step;
+    EXPECT_NEAR(quality.max_deviation, nearest, 1e-6) << "step " << step;
+  }
+}
+
 TEST_F(VerificationTest, TrajectoryThroughTheObstacleFailsNamingLinkAndObstacle) {
   const TimedTrajectory straight = ParameterizeRestToRest({path_.front(), path_.back()}, limits_);
   const VerificationReport report = VerifyTrajectory(straight, path_.front(), path_.back(), *checker_, limits_);

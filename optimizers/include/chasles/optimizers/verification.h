@@ -100,7 +100,9 @@ struct TrajectoryQuality {
   double max_effort_ratio = 0.0;        ///< max |τᵢ|/τmaxᵢ at the sampled states; 0 without effort limits
   /// Largest distance [rad] (Euclidean in joint space) between the trajectory and the input
   /// path, both ways: from sampled states to the nearest point of the path's polyline, and from
-  /// each waypoint to the nearest sampled state.
+  /// each waypoint to the nearest point of the trajectory (exact: per polynomial piece, the least
+  /// of |q(τ) − w|²). Never above the true largest distance; below it by at most what the
+  /// sampled states miss between them.
   double max_deviation = 0.0;
   /// Smallest distance [m] between the robot — grown by the checker's padding — and the scene's
   /// obstacles (CollisionChecker::Clearance; self-distance and allowed pairs not included);
