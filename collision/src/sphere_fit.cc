@@ -762,9 +762,11 @@ struct Ball {
 /// (the voxel's elements all inside: one count per voxel) plus those containing its sub-cube.
 void DropRedundant(const Grid& grid, const std::vector<std::uint64_t>& initial, std::vector<Ball>* balls) {
   std::vector<std::int32_t> slot(grid.size(), -1);
-  std::vector<std::uint16_t> whole;               // per slot
+  // Counts are 32-bit: a budget (max_spheres) has no upper bound, and a count that wrapped
+  // would drop a ball still needed.
+  std::vector<std::uint32_t> whole;               // per slot
   std::vector<std::int32_t> partial_of;           // per slot: its row of `partial`, or -1
-  std::vector<std::array<std::uint16_t, 64>> partial;
+  std::vector<std::array<std::uint32_t, 64>> partial;
   // Visits the elements of each voxel ball `b` contains (radius with a relative 1e-12 above the
   // needed one, far below the 1e-9·h rounding margin the fitted radius gets).
   const auto for_held = [&](const Ball& ball, auto visit) {
