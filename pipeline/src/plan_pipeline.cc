@@ -106,13 +106,16 @@ struct Ends {
 Ends CheckEnds(const PlanQuery& query, const Termination& termination, PlanOutcome* out) {
   const CollisionChecker& checker = *query.checker;
   Ends ends;
-  const CollisionResult start_contact = checker.Check(query.start);
-  out->state_checks += 1;
-  if (start_contact.in_collision) {
-    ends.code = PlanOutcomeCode::kStartInCollision;
-    ends.message = "start is in collision: " + DescribeContact(start_contact);
-    return ends;
-  }
+  // True, with the outcome set, when `q` (the start or the goal) is in collision.
+  const auto in_collision = [&](const Eigen::VectorXd& q, PlanOutcomeCode code, const char* what) {
+    const CollisionResult contact = checker.Check(q);
+    out->state_checks += 1;
+    if (!contact.in_collision) return false;
+    ends.code = code;
+    ends.message = std::string(what) + " is in collision: " + DescribeContact(contact);
+    return true;
+  };
+  if (in_collision(query.start, PlanOutcomeCode::kStartInCollision, "start")) return ends;
   if (query.pose_goal) {
     const PoseGoalSpec& pose = *query.pose_goal;
     IkRequest ik;
@@ -139,13 +142,7 @@ Ends CheckEnds(const PlanQuery& query, const Termination& termination, PlanOutco
     });
     return ends;
   }
-  const CollisionResult goal_contact = checker.Check(query.goal);
-  out->state_checks += 1;
-  if (goal_contact.in_collision) {
-    ends.code = PlanOutcomeCode::kGoalInCollision;
-    ends.message = "goal is in collision: " + DescribeContact(goal_contact);
-    return ends;
-  }
+  if (in_collision(query.goal, PlanOutcomeCode::kGoalInCollision, "goal")) return ends;
   ends.goals.push_back(query.goal);
   return ends;
 }
