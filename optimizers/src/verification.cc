@@ -691,10 +691,11 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
   }
   if (bound_clearance) out.min_clearance = ClearanceLowerBound(trajectory, *checker);
   if (path.size() >= 2) {
-    // max over points of the distance to the nearest segment of the other polyline. A point
-    // whose distance to some segment is at most the deviation so far cannot raise it, so its
-    // search stops there; it starts at the segment nearest the previous point (consecutive
-    // points are near the same segment), which usually ends it at once. Exact either way.
+    // max over points of the distance to the nearest part of the other side (a path segment, or
+    // a trajectory piece). A point whose distance to some part is at most the deviation so far
+    // cannot raise it, so its search stops there; it starts at the part nearest the previous
+    // point (consecutive points are near the same part), which usually ends it at once. Exact
+    // either way.
     const auto deviation = [&](std::size_t points, const auto& point, std::size_t segments, const auto& segment) {
       std::size_t start = 0;
       for (std::size_t p = 0; p < points; ++p) {

@@ -119,12 +119,7 @@ Ends CheckEnds(const PlanQuery& query, const Termination& termination, PlanOutco
   if (query.pose_goal) {
     const PoseGoalSpec& pose = *query.pose_goal;
     IkRequest ik;
-    ik.link = pose.link;
-    ik.target = pose.pose;
-    ik.position_tolerance = pose.position_tolerance;
-    ik.orientation_tolerance = pose.orientation_tolerance;
-    ik.max_solutions = pose.max_goal_states;
-    ik.time_budget = std::max(1e-3, std::min(pose.ik_time_budget, termination.SecondsLeft()));
+    SetPoseGoalIk(pose, termination.SecondsLeft(), &ik);
     ik.seed = query.seed;
     ik.initial_guess = query.start;
     ik.accept = [&checker](const Eigen::VectorXd& q) { return checker.IsValid(q); };
@@ -267,6 +262,15 @@ void RepairByReplanning(const PlannerRegistry& registry, const PlanQuery& query,
 }
 
 }  // namespace
+
+void SetPoseGoalIk(const PoseGoalSpec& goal, double seconds_left, IkRequest* ik) {
+  ik->link = goal.link;
+  ik->target = goal.pose;
+  ik->position_tolerance = goal.position_tolerance;
+  ik->orientation_tolerance = goal.orientation_tolerance;
+  ik->max_solutions = goal.max_goal_states;
+  ik->time_budget = std::max(1e-3, std::min(goal.ik_time_budget, seconds_left));
+}
 
 const char* ToString(PlanOutcomeCode code) {
   switch (code) {

@@ -871,12 +871,8 @@ CoordinationOutcome Coordinator::Run() {
     if (spec.pose_goal) {
       const PoseGoalSpec& pose = *spec.pose_goal;
       IkRequest ik;
-      ik.link = pose.link;
-      ik.target = pose.pose;
-      ik.position_tolerance = pose.position_tolerance;
-      ik.orientation_tolerance = pose.orientation_tolerance;
-      ik.max_solutions = 1;
-      ik.time_budget = std::max(1e-3, std::min(pose.ik_time_budget, termination_.SecondsLeft()));
+      SetPoseGoalIk(pose, termination_.SecondsLeft(), &ik);
+      ik.max_solutions = 1;  // one goal state per robot
       ik.seed = query_.seed + k;
       ik.initial_guess = m.start;
       const CollisionChecker& own = ends;

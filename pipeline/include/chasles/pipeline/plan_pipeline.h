@@ -33,6 +33,13 @@ struct PoseGoalSpec {
   double ik_time_budget = 0.2;          ///< [s], > 0
 };
 
+struct IkRequest;  // chasles/robot/inverse_kinematics.h
+
+/// Sets `ik`'s link, target, tolerances and max_solutions (max_goal_states) from `goal`, and its
+/// time budget: goal.ik_time_budget, no more than `seconds_left` of the call, at least 1 ms.
+/// Seed, initial guess and the accept/stop callbacks are the caller's.
+void SetPoseGoalIk(const PoseGoalSpec& goal, double seconds_left, IkRequest* ik);
+
 /// One planning query in domain types. Defaults match the proto documentation.
 struct PlanQuery {
   std::shared_ptr<const CollisionChecker> checker;  ///< robot + scene
