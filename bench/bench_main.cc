@@ -79,7 +79,7 @@ struct Options {
   std::vector<std::string> problems = {"maze", "office", "drone_course", "panda_shelf"};
   int segments = 200;   // trajectory: straight rest-to-rest segments
   int paths = 200;      // trajectory: planner-produced paths of 5–10 waypoints
-  int knots = 100;      // trajectory: collocation knots
+  int knots = 50;       // trajectory: collocation knots (the API's default)
   std::vector<std::string> methods = {"topp", "collocation", "spline"};
   int runs = 5;         // coordination: seeds per scenario and method
   std::vector<std::string> scenarios = {"crossing_arms", "swap_bases", "corridor"};
@@ -671,33 +671,123 @@ double MedianMillis(int repeats, Call&& call) {
 }
 
 struct MethodRow {
-  std::vector<double> ratio, ms, iterations, velocity, acceleration, jerk_integral, deviation, clearance;
-  int fell_back = 0, failed_verification = 0, runs = 0;
+  std::vector<double> ratio, ms, iterations, velocity, acceleration, deviation, clearance;
+  int fell_back = 0, failed_verification = 0, runs = 0, fd_violations = 0;
 };
+
+/// Samples 1 ms apart whose finite differences exceed a limit by more than 1e-6 relative: the
+/// first difference against the velocity limit, the second against the acceleration limit.
+int FiniteDifferenceViolations(const TimedTrajectory& trajectory, const KinematicLimits& limits) {
+  const std::vector<TrajectorySample> s = trajectory.Sample(1e-3);
+  int count = 0;
+  for (std::size_t k = 1; k + 1 < s.size(); ++k) {
+    const double dt0 = s[k].t - s[k - 1].t, dt1 = s[k + 1].t - s[k].t;
+    if (std::abs(dt0 - dt1) > 1e-12) continue;  // the last, shorter step
+    const Eigen::VectorXd v = (s[k + 1].q - s[k].q) / dt1;
+    const Eigen::VectorXd a = (s[k + 1].q - 2 * s[k].q + s[k - 1].q) / (dt0 * dt1);
+    for (int i = 0; i < v.size(); ++i) {
+      if (std::abs(v[i]) > limits.max_velocity[i] * (1 + 1e-6) ||
+          std::abs(a[i]) > limits.max_acceleration[i] * (1 + 1e-6)) {
+        ++count;
+        break;
+      }
+    }
+  }
+  return count;
+}
+
+/// One result into its row: duration over `reference`, compute time, limits, deviation from the
+/// path, clearance (with obstacles), dense verification and the 1 kHz finite-difference check.
+void RecordMethod(MethodRow* row, const TimedTrajectory& trajectory, double ms, const OptimizerReport* report,
+                  const JointPath& path, const KinematicLimits& limits, const CollisionChecker& checker,
+                  double reference) {
+  ++row->runs;
+  if (report != nullptr && !report->ok) {
+    ++row->fell_back;
+    return;
+  }
+  const bool obstacles = !checker.scene().empty();
+  const TrajectoryQuality q = MeasureTrajectory(trajectory, limits, path, obstacles ? &checker : nullptr);
+  row->ratio.push_back(trajectory.duration() / reference);
+  row->ms.push_back(ms);
+  row->iterations.push_back(report != nullptr ? report->iterations : 0);
+  row->velocity.push_back(q.max_velocity_ratio);
+  row->acceleration.push_back(q.max_acceleration_ratio);
+  row->deviation.push_back(q.max_deviation);
+  if (obstacles) row->clearance.push_back(q.min_clearance);
+  if (!VerifyTrajectory(trajectory, path.front(), path.back(), checker, limits).ok) ++row->failed_verification;
+  row->fd_violations += FiniteDifferenceViolations(trajectory, limits);
+}
 
 void PrintMethodRows(const std::string& what, const std::string& ratio_name, std::map<std::string, MethodRow>& rows,
                      const std::vector<std::string>& order, double topp_ms_median) {
   std::printf("| %s | method | runs | %s median | %s p95 | %s max | compute median [ms] | compute p95 [ms] | "
-              "vs topp compute | iterations median | max |q̇|/v | max |q̈|/a | deviation median [rad] | "
-              "min clearance [m] | fell back |\n",
+              "vs topp compute | iterations median | max |q̇|/v | max |q̈|/a | 1 kHz finite-difference violations | "
+              "deviation median [rad] | deviation max [rad] | min clearance [m] | not ok |\n",
               what.c_str(), ratio_name.c_str(), ratio_name.c_str(), ratio_name.c_str());
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const std::string& m : order) {
     if (rows.count(m) == 0) continue;
     MethodRow& r = rows[m];
     const double ms = QuantileOrNan(r.ms, 0.5);
-    double vmax = 0, amax = 0, cmin = std::numeric_limits<double>::infinity();
+    double vmax = 0, amax = 0, cmin = std::numeric_limits<double>::infinity(), dmax = 0;
     for (double v : r.velocity) vmax = std::max(vmax, v);
     for (double a : r.acceleration) amax = std::max(amax, a);
     for (double c : r.clearance) cmin = std::min(cmin, c);
-    std::printf("| %s | %s | %d | %.6f | %.6f | %.6f | %.4f | %.4f | %.1f× | %.0f | %.6f | %.6f | %.4f | %s | %d%s |\n",
+    for (double d : r.deviation) dmax = std::max(dmax, d);
+    std::printf("| %s | %s | %d | %.6f | %.6f | %.6f | %.4f | %.4f | %.1f× | %.0f | %.6f | %.6f | %d | %.4f | %.4f | %s | "
+                "%d%s |\n",
                 what.c_str(), m.c_str(), r.runs, QuantileOrNan(r.ratio, 0.5), QuantileOrNan(r.ratio, 0.95),
                 r.ratio.empty() ? std::nan("") : *std::max_element(r.ratio.begin(), r.ratio.end()), ms,
                 QuantileOrNan(r.ms, 0.95), ms / topp_ms_median, QuantileOrNan(r.iterations, 0.5), vmax, amax,
-                QuantileOrNan(r.deviation, 0.5), std::isfinite(cmin) ? std::to_string(cmin).c_str() : "no obstacles",
-                r.fell_back, r.failed_verification > 0 ? (" (" + std::to_string(r.failed_verification) + " failed verification)").c_str() : "");
+                r.fd_violations, QuantileOrNan(r.deviation, 0.5), dmax,
+                std::isfinite(cmin) ? std::to_string(cmin).c_str() : "no obstacles", r.fell_back,
+                r.failed_verification > 0 ? (" (" + std::to_string(r.failed_verification) + " failed verification)").c_str() : "");
   }
 }
+
+/// Every requested method on each path, into `rows`; ratios over TOPP's duration on the same
+/// path (max_deviation 0.05 rad), or over `exact` when given (straight segments: T*).
+void RunMethods(const std::vector<JointPath>& paths, const std::vector<double>& exact, const KinematicLimits& limits,
+                const CollisionChecker& checker, const Options& options, std::map<std::string, MethodRow>* rows) {
+  const auto want = [&](const char* m) {
+    return std::find(options.methods.begin(), options.methods.end(), m) != options.methods.end();
+  };
+  CollocationOptions collocation;
+  collocation.knots = options.knots;
+  SplineOptions spline;
+  const auto millis = [](Clock::time_point t0) { return 1e3 * std::chrono::duration<double>(Clock::now() - t0).count(); };
+  for (std::size_t p = 0; p < paths.size(); ++p) {
+    const JointPath& path = paths[p];
+    TimedTrajectory topp;
+    const double topp_ms = MedianMillis(5, [&] { topp = ParameterizeTimeOptimal(path, limits, {}, &checker); });
+    const double reference = exact.empty() ? topp.duration() : exact[p];
+    RecordMethod(&(*rows)["topp"], topp, topp_ms, nullptr, path, limits, checker, reference);
+    if (path.size() > 2) {
+      TimedTrajectory stops;
+      const double stops_ms = MedianMillis(5, [&] { stops = ParameterizeRestToRest(path, limits); });
+      RecordMethod(&(*rows)["none (stops)"], stops, stops_ms, nullptr, path, limits, checker, reference);
+    }
+    if (want("collocation")) {
+      auto t0 = Clock::now();
+      CollocationResult result = OptimizeByCollocation(topp, limits, collocation, &checker, &path);
+      RecordMethod(&(*rows)["collocation (along the path)"], result.trajectory, millis(t0), &result.report, path, limits,
+                   checker, reference);
+      t0 = Clock::now();
+      result = OptimizeByCollocation(topp, limits, collocation, &checker);
+      RecordMethod(&(*rows)["collocation (free)"], result.trajectory, millis(t0), &result.report, path, limits, checker,
+                   reference);
+    }
+    if (want("spline")) {
+      const auto t0 = Clock::now();
+      const SplineResult result = SmoothWithBSpline(topp, limits, spline, &checker);
+      RecordMethod(&(*rows)["spline"], result.trajectory, millis(t0), &result.report, path, limits, checker, reference);
+    }
+  }
+}
+
+const std::vector<std::string> kMethodOrder = {"topp", "none (stops)", "collocation (along the path)",
+                                               "collocation (free)", "spline"};
 
 void BenchTrajectory(const Options& options) {
   auto robot = LoadRobot("panda");
@@ -705,24 +795,16 @@ void BenchTrajectory(const Options& options) {
   KinematicLimits limits;
   limits.max_velocity = robot->velocity_limits();
   limits.max_acceleration = 2.0 * robot->velocity_limits();  // the server's default
-  const bool want_collocation =
-      std::find(options.methods.begin(), options.methods.end(), "collocation") != options.methods.end();
-  const bool want_spline = std::find(options.methods.begin(), options.methods.end(), "spline") != options.methods.end();
-  CollocationOptions collocation;
-  collocation.knots = options.knots;
-  SplineOptions spline;
 
-  // 1. Straight rest-to-rest segments in free space.
+  // 1. Straight rest-to-rest segments in free space, against the exact minimum time.
   auto free_space = std::make_shared<const CollisionChecker>(robot, std::make_shared<Scene>());
   std::mt19937_64 rng(options.seed);
-  std::map<std::string, MethodRow> rows;
-  for (int k = 0; k < options.segments; ++k) {
+  std::vector<JointPath> segments;
+  std::vector<double> t_star;
+  while (static_cast<int>(segments.size()) < options.segments) {
     // Endpoints and the line between them free of self-collision, so verification applies.
-    Eigen::VectorXd a, b;
-    do {
-      a = RandomConfiguration(*robot, &rng);
-      b = RandomConfiguration(*robot, &rng);
-    } while (!free_space->IsValid(a) || !free_space->IsValid(b) || !free_space->IsMotionValid(a, b, 0.005));
+    const Eigen::VectorXd a = RandomConfiguration(*robot, &rng), b = RandomConfiguration(*robot, &rng);
+    if (!free_space->IsValid(a) || !free_space->IsValid(b) || !free_space->IsMotionValid(a, b, 0.005)) continue;
     double v = std::numeric_limits<double>::infinity(), acc = v;
     for (int i = 0; i < n; ++i) {
       const double d = std::abs(b[i] - a[i]);
@@ -730,49 +812,44 @@ void BenchTrajectory(const Options& options) {
       v = std::min(v, limits.max_velocity[i] / d);
       acc = std::min(acc, limits.max_acceleration[i] / d);
     }
-    const double t_star = v * v > acc ? 2.0 / std::sqrt(acc) : 1.0 / v + v / acc;
-    TimedTrajectory topp;
-    const double topp_ms = MedianMillis(21, [&] { topp = ParameterizeTimeOptimal({a, b}, limits); });
-    const auto record = [&](const std::string& method, const TimedTrajectory& traj, double ms, const OptimizerReport* report) {
-      MethodRow& row = rows[method];
-      ++row.runs;
-      if (report != nullptr && !report->ok) {
-        ++row.fell_back;
-        return;
-      }
-      const TrajectoryQuality q = MeasureTrajectory(traj, limits, {a, b}, nullptr);
-      row.ratio.push_back(traj.duration() / t_star);
-      row.ms.push_back(ms);
-      row.iterations.push_back(report != nullptr ? report->iterations : 0);
-      row.velocity.push_back(q.max_velocity_ratio);
-      row.acceleration.push_back(q.max_acceleration_ratio);
-      row.deviation.push_back(q.max_deviation);
-      if (!VerifyTrajectory(traj, a, b, *free_space, limits).ok) ++row.failed_verification;
-    };
-    record("topp", topp, topp_ms, nullptr);
-    if (want_collocation) {
-      CollocationResult result;
-      const auto t0 = Clock::now();
-      result = OptimizeByCollocation(topp, limits, collocation, free_space.get());
-      record("collocation", result.trajectory, 1e3 * std::chrono::duration<double>(Clock::now() - t0).count(), &result.report);
-    }
-    if (want_spline) {
-      SplineResult result;
-      const auto t0 = Clock::now();
-      result = SmoothWithBSpline(topp, limits, spline, free_space.get());
-      record("spline", result.trajectory, 1e3 * std::chrono::duration<double>(Clock::now() - t0).count(), &result.report);
-    }
+    segments.push_back({a, b});
+    t_star.push_back(v * v > acc ? 2.0 / std::sqrt(acc) : 1.0 / v + v / acc);
   }
+  std::map<std::string, MethodRow> rows;
+  RunMethods(segments, t_star, limits, *free_space, options, &rows);
   std::printf("\n## Trajectory optimisation (panda, v = model limits, a = 2·v per second)\n\n");
   std::printf("%d seeded straight rest-to-rest segments between random configurations (free space, no self-collision "
-              "on the line), T* = 1/V + V/A "
-              "(or 2/√A); collocation with K = %d knots. compute = one call (topp: median of 21 repeats).\n\n",
-              options.segments, options.knots);
-  const std::vector<std::string> order = {"topp", "collocation", "spline"};
-  PrintMethodRows("straight", "T/T*", rows, order, QuantileOrNan(rows["topp"].ms, 0.5));
+              "on the line), T* = 1/V + V/A (or 2/√A); collocation with K = %d knots, budget %d iterations. compute = "
+              "one call (topp: median of 5 repeats).\n\n",
+              options.segments, options.knots, CollocationOptions().max_iterations);
+  PrintMethodRows("straight", "T/T*", rows, kMethodOrder, QuantileOrNan(rows["topp"].ms, 0.5));
   std::fflush(stdout);
 
-  // 2. Planner paths of 5–10 waypoints in the shelf scene.
+  // 2. Random multi-waypoint paths in free space: 2–10 waypoints, steps of up to 0.6 rad per
+  // joint, every segment free of self-collision.
+  std::vector<JointPath> random_paths;
+  while (static_cast<int>(random_paths.size()) < options.paths) {
+    const int waypoints = 2 + static_cast<int>(rng() % 9);
+    JointPath path{RandomConfiguration(*robot, &rng)};
+    if (!free_space->IsValid(path[0])) continue;
+    std::uniform_real_distribution<double> step(-0.6, 0.6);
+    for (int tries = 0; static_cast<int>(path.size()) < waypoints && tries < 100; ++tries) {
+      Eigen::VectorXd q = path.back();
+      for (int i = 0; i < n; ++i) q[i] = std::clamp(q[i] + step(rng), robot->lower_limits()[i], robot->upper_limits()[i]);
+      if (free_space->IsValid(q) && free_space->IsMotionValid(path.back(), q, 0.005)) path.push_back(q);
+    }
+    if (static_cast<int>(path.size()) == waypoints) random_paths.push_back(path);
+  }
+  std::map<std::string, MethodRow> random_rows;
+  RunMethods(random_paths, {}, limits, *free_space, options, &random_rows);
+  std::printf("\n%zu random paths of 2–10 waypoints in free space (steps up to 0.6 rad per joint); ratios are "
+              "durations over TOPP's (max_deviation 0.05 rad) on the same path; collocation along the path keeps a "
+              "0.05 rad corridor, free keeps only the ends.\n\n",
+              random_paths.size());
+  PrintMethodRows("random path", "T/T_topp", random_rows, kMethodOrder, QuantileOrNan(random_rows["topp"].ms, 0.5));
+  std::fflush(stdout);
+
+  // 3. Planner paths of 5–10 waypoints in the shelf scene.
   PlannerRegistry registry;
   RegisterDefaultPlanners(&registry);
   const PlanningPipeline pipeline(registry);
@@ -799,53 +876,15 @@ void BenchTrajectory(const Options& options) {
       paths.push_back(out.path);
     }
   }
-  std::map<std::string, MethodRow> path_rows;
   std::vector<double> waypoints;
-  for (const JointPath& path : paths) {
-    waypoints.push_back(static_cast<double>(path.size()));
-    TimeOptimalOptions topp_options;
-    TimedTrajectory topp;
-    const double topp_ms =
-        MedianMillis(5, [&] { topp = ParameterizeTimeOptimal(path, limits, topp_options, shelf.get()); });
-    const double base = topp.duration();
-    const auto record = [&](const std::string& method, const TimedTrajectory& traj, double ms, const OptimizerReport* report) {
-      MethodRow& row = path_rows[method];
-      ++row.runs;
-      if (report != nullptr && !report->ok) {
-        ++row.fell_back;
-        return;
-      }
-      const TrajectoryQuality q = MeasureTrajectory(traj, limits, path, shelf.get());
-      row.ratio.push_back(traj.duration() / base);
-      row.ms.push_back(ms);
-      row.iterations.push_back(report != nullptr ? report->iterations : 0);
-      row.velocity.push_back(q.max_velocity_ratio);
-      row.acceleration.push_back(q.max_acceleration_ratio);
-      row.deviation.push_back(q.max_deviation);
-      row.clearance.push_back(q.min_clearance);
-      if (!VerifyTrajectory(traj, path.front(), path.back(), *shelf, limits).ok) ++row.failed_verification;
-    };
-    record("topp", topp, topp_ms, nullptr);
-    TimedTrajectory stops;
-    const double stops_ms = MedianMillis(5, [&] { stops = ParameterizeRestToRest(path, limits); });
-    record("none (stops)", stops, stops_ms, nullptr);
-    if (want_collocation) {
-      const auto t0 = Clock::now();
-      const CollocationResult result = OptimizeByCollocation(topp, limits, collocation, shelf.get());
-      record("collocation", result.trajectory, 1e3 * std::chrono::duration<double>(Clock::now() - t0).count(), &result.report);
-    }
-    if (want_spline) {
-      const auto t0 = Clock::now();
-      const SplineResult result = SmoothWithBSpline(topp, limits, spline, shelf.get());
-      record("spline", result.trajectory, 1e3 * std::chrono::duration<double>(Clock::now() - t0).count(), &result.report);
-    }
-  }
+  for (const JointPath& path : paths) waypoints.push_back(static_cast<double>(path.size()));
+  std::map<std::string, MethodRow> path_rows;
+  RunMethods(paths, {}, limits, *shelf, options, &path_rows);
   std::printf("\n%zu RRT-Connect paths in the shelf scene with 5–10 waypoints after 20 shortcut attempts (median %.0f "
               "waypoints); ratios are durations over the time-optimal parameterisation of the same path (max_deviation "
               "0.05 rad), so 'none' shows what blending gains and the optimisers what they gain over it.\n\n",
               paths.size(), QuantileOrNan(waypoints, 0.5));
-  PrintMethodRows("path", "T/T_topp", path_rows, {"topp", "none (stops)", "collocation", "spline"},
-                  QuantileOrNan(path_rows["topp"].ms, 0.5));
+  PrintMethodRows("planner path", "T/T_topp", path_rows, kMethodOrder, QuantileOrNan(path_rows["topp"].ms, 0.5));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -22,6 +22,7 @@ namespace chasles {
 namespace {
 
 using collocation::ClearancePair;
+using collocation::CorridorRow;
 using collocation::Instant;
 using collocation::CollocationNlp;
 using collocation::Layout;
@@ -37,7 +38,9 @@ constexpr double kClearanceTolerance = 1e-6;  // [m] below a requirement that st
 constexpr double kSweepStep = 0.05;          // [rad] least joint motion allowed between clearance instants
 constexpr double kMinIntervalFraction = 0.1;  // of an even split of the duration's lower bound
 constexpr double kRegularization = 1e-3;      // ρ/T₀ of the tie-breaking terms (Transcription)
-constexpr double kJumpTolerance = 1e-7;      // [rad], [rad/s]: largest defect left between pieces
+constexpr double kCorrectionTolerance = 1e-4;  // of the acceleration limit: largest knot correction (ExactChain)
+constexpr double kCorridorMargin = 1e-4;     // relative: the knots' first corridor radius is δ(1 − this)
+constexpr int kWaypointSamples = 32;         // per warm-start piece, to find where it passes a waypoint
 
 void ValidateOptions(const CollocationOptions& options) {
   if (options.knots < 2) ThrowInvalid("collocation knots = " + std::to_string(options.knots) + " must be >= 2");
@@ -49,6 +52,9 @@ void ValidateOptions(const CollocationOptions& options) {
   finite_nonnegative(options.jerk_weight, "jerk_weight");
   finite_nonnegative(options.clearance, "clearance");
   finite_nonnegative(options.activation_distance, "activation_distance");
+  if (!std::isfinite(options.corridor) || !(options.corridor > 0.0) || options.corridor > 1.0) {
+    ThrowInvalid("collocation corridor = " + FormatNumber(options.corridor) + " must be in (0, 1] rad");
+  }
   if (options.max_iterations < 1) {
     ThrowInvalid("collocation max_iterations = " + std::to_string(options.max_iterations) + " must be >= 1");
   }
@@ -85,26 +91,82 @@ std::string StatusName(Ipopt::ApplicationReturnStatus status) {
   return "Ipopt status " + std::to_string(static_cast<int>(status));
 }
 
-/// The cubic pieces of a solution x (one per interval), ending exactly at `end`.
-TimedTrajectory BuildTrajectory(const Layout& L, const Eigen::VectorXd& x, const Eigen::VectorXd& end) {
+/// The cubic pieces of a solution x with its defects closed exactly. Ipopt leaves the defects
+/// open by up to its tolerance (~1e-8 rad), which would make positions jump at knots. Per joint,
+/// the knot accelerations that are neither fixed nor on their bound get the least-norm
+/// correction Δ (a linear problem: the end state of the chain is linear in them for fixed
+/// durations) after which the chain integrated from (q₀, q̇₀) ends at (q_N, q̇_N); the pieces are
+/// that chain, ending exactly at t.end_q. `correction` receives maxᵢ,ₖ |Δᵢₖ|/Aᵢ (+inf when a
+/// joint has no free acceleration to correct with).
+TimedTrajectory ExactChain(const Layout& L, const Eigen::VectorXd& x, const Transcription& t, double* correction) {
+  const int N = L.intervals, n = L.n;
+  Eigen::VectorXd h(N), until_end(N + 1);
+  for (int k = 0; k < N; ++k) h[k] = x[L.h(k)];
+  until_end[N] = 0.0;
+  for (int k = N - 1; k >= 0; --k) until_end[k] = until_end[k + 1] + h[k];
+  Eigen::MatrixXd a(N + 1, n), q(N + 1, n), v(N + 1, n);
+  for (int k = 0; k <= N; ++k) {
+    for (int i = 0; i < n; ++i) a(k, i) = x[L.a(k, i)];
+  }
+  const auto integrate = [&](int i) {
+    q(0, i) = t.start_q[i];
+    v(0, i) = t.start_v[i];
+    for (int k = 0; k < N; ++k) {
+      q(k + 1, i) = q(k, i) + v(k, i) * h[k] + (2 * a(k, i) + a(k + 1, i)) * h[k] * h[k] / 6;
+      v(k + 1, i) = v(k, i) + (a(k, i) + a(k + 1, i)) * h[k] / 2;
+    }
+  };
+  *correction = 0.0;
+  for (int i = 0; i < n; ++i) {
+    // ∂(q_N, q̇_N)/∂aⱼ: aⱼ enters steps j−1 and j directly and every later velocity. Accelerations
+    // on their bound are left alone, unless too few others remain to correct with.
+    Eigen::MatrixXd G;
+    Eigen::Matrix2d GG;
+    for (bool spare_bounds : {true, false}) {
+      G = Eigen::MatrixXd::Zero(2, N + 1);
+      for (int j = 0; j <= N; ++j) {
+        const bool fixed = (j == 0 && t.start_at_rest_acceleration) || (j == N && t.end_at_rest_acceleration) ||
+                           (spare_bounds && std::abs(a(j, i)) >= t.max_acceleration[i] * (1.0 - 1e-9));
+        if (fixed) continue;
+        const double before = j > 0 ? h[j - 1] : 0.0, after = j < N ? h[j] : 0.0;
+        G(0, j) = before * before / 6 + after * after / 3 + before / 2 * until_end[j] +
+                  (j < N ? after / 2 * until_end[j + 1] : 0.0);
+        G(1, j) = (before + after) / 2;
+      }
+      GG = G * G.transpose();
+      if (GG.determinant() > 1e-9 * GG(0, 0) * GG(1, 1)) break;
+    }
+    for (int round = 0; round < 2; ++round) {
+      integrate(i);
+      const Eigen::Vector2d r(t.end_q[i] - q(N, i), t.end_v[i] - v(N, i));
+      if (r.isZero(0.0)) break;
+      if (!(GG.determinant() > 1e-9 * GG(0, 0) * GG(1, 1))) {
+        *correction = std::numeric_limits<double>::infinity();
+        break;
+      }
+      const Eigen::VectorXd delta = G.transpose() * GG.ldlt().solve(r);
+      a.col(i) += delta;
+      *correction = std::max(*correction, delta.cwiseAbs().maxCoeff() / t.max_acceleration[i]);
+    }
+    integrate(i);
+  }
   std::vector<Piece> pieces;
   double t0 = 0.0;
-  for (int k = 0; k < L.intervals; ++k) {
+  for (int k = 0; k < N; ++k) {
     Piece piece;
     piece.t0 = t0;
-    piece.duration = x[L.h(k)];
-    piece.coefficients.resize(L.n, 4);
-    for (int i = 0; i < L.n; ++i) {
-      const double a0 = x[L.a(k, i)];
-      piece.coefficients(i, 0) = x[L.q(k, i)];
-      piece.coefficients(i, 1) = x[L.v(k, i)];
-      piece.coefficients(i, 2) = a0 / 2;
-      piece.coefficients(i, 3) = (x[L.a(k + 1, i)] - a0) / piece.duration / 6;
+    piece.duration = h[k];
+    piece.coefficients.resize(n, 4);
+    for (int i = 0; i < n; ++i) {
+      piece.coefficients(i, 0) = q(k, i);
+      piece.coefficients(i, 1) = v(k, i);
+      piece.coefficients(i, 2) = a(k, i) / 2;
+      piece.coefficients(i, 3) = (a(k + 1, i) - a(k, i)) / h[k] / 6;
     }
-    t0 += piece.duration;
+    t0 += h[k];
     pieces.push_back(std::move(piece));
   }
-  return TimedTrajectory(std::move(pieces), end);
+  return TimedTrajectory(std::move(pieces), t.end_q);
 }
 
 /// T + w Σ ‖q̈ₖ₊₁ − q̈ₖ‖²/hₖ (= T + w∫‖q⃛‖² dt) of a solution, without the regularisation.
@@ -118,18 +180,119 @@ double Objective(const Layout& L, const Eigen::VectorXd& x, double jerk_weight) 
   return total;
 }
 
-/// Largest |piece k's end − knot k+1| over positions and velocities (the defects left open).
-void DefectJumps(const Layout& L, const Eigen::VectorXd& x, const TimedTrajectory& trajectory, double* position,
-                 double* velocity) {
-  *position = *velocity = 0.0;
-  for (int k = 0; k < L.intervals; ++k) {
-    const Piece& piece = trajectory.pieces()[k];
-    for (int i = 0; i < L.n; ++i) {
-      const Eigen::VectorXd c = piece.coefficients.row(i).transpose();
-      *position = std::max(*position, std::abs(poly::Eval(c.data(), 4, piece.duration) - x[L.q(k + 1, i)]));
-      *velocity = std::max(*velocity, std::abs(poly::EvalDerivative(c.data(), 4, 1, piece.duration) - x[L.v(k + 1, i)]));
+/// The path being followed: its distinct waypoints and, per interval, the segment it follows.
+struct PathFollowing {
+  JointPath waypoints;             ///< consecutive repeats removed
+  std::vector<double> knot_times;  ///< in the warm start, K values from 0 to its duration
+  std::vector<int> segment;        ///< per interval: j, following waypoints j → j+1
+  std::vector<int> waypoint_knot;  ///< per interior waypoint j (index j − 1): its knot
+};
+
+/// Where `trajectory` passes waypoint w after time `after`: the first local minimum of the
+/// distance once it is within `reach` (else the least distance), by samples and golden-section
+/// refinement.
+double PassingTime(const TimedTrajectory& trajectory, const Eigen::VectorXd& w, double after, double reach) {
+  std::vector<double> times;
+  for (const Piece& piece : trajectory.pieces()) {
+    for (int s = 0; s <= kWaypointSamples; ++s) {
+      const double time = piece.t0 + piece.duration * s / kWaypointSamples;
+      if (time > after) times.push_back(time);
     }
   }
+  if (times.empty()) return trajectory.duration();
+  const auto distance = [&](double time) { return (trajectory.Evaluate(time).q - w).norm(); };
+  std::size_t best = 0;
+  double best_distance = distance(times[0]);
+  bool within = best_distance <= reach;
+  for (std::size_t s = 1; s < times.size(); ++s) {
+    const double d = distance(times[s]);
+    if (within && d > best_distance) break;  // past the first local minimum within reach
+    if (d < best_distance) {
+      best = s;
+      best_distance = d;
+    }
+    within = within || d <= reach;
+  }
+  double lo = best > 0 ? times[best - 1] : std::max(after, 0.0), hi = best + 1 < times.size() ? times[best + 1] : times[best];
+  const double ratio = (std::sqrt(5.0) - 1) / 2;
+  for (int round = 0; round < 80 && hi - lo > 1e-12 * std::max(1.0, hi); ++round) {
+    const double m1 = hi - ratio * (hi - lo), m2 = lo + ratio * (hi - lo);
+    if (distance(m1) <= distance(m2)) {
+      hi = m2;
+    } else {
+      lo = m1;
+    }
+  }
+  const double refined = (lo + hi) / 2;
+  return distance(refined) <= best_distance ? refined : times[best];
+}
+
+/// Knot times along the warm start: one where it passes each interior waypoint, the rest spread
+/// evenly in time between them, at least two intervals per segment (`knots` raised if needed).
+PathFollowing FollowPath(const TimedTrajectory& warm, const JointPath& path, double corridor, int* knots) {
+  PathFollowing f;
+  for (const Eigen::VectorXd& w : path) {
+    if (f.waypoints.empty() || (w - f.waypoints.back()).norm() > 0.0) f.waypoints.push_back(w);
+  }
+  const int segments = static_cast<int>(f.waypoints.size()) - 1;
+  *knots = std::max(*knots, 2 * segments + 1);
+  const int intervals = *knots - 1;
+  std::vector<double> anchor{0.0};
+  for (int j = 1; j < segments; ++j) anchor.push_back(PassingTime(warm, f.waypoints[j], anchor.back(), corridor));
+  anchor.push_back(warm.duration());
+  // Intervals per segment: 2 each, the rest by duration (largest remainder).
+  std::vector<int> count(segments, 2);
+  const int spare = intervals - 2 * segments;
+  std::vector<std::pair<double, int>> remainder;
+  int given = 0;
+  for (int j = 0; j < segments; ++j) {
+    const double share = spare * (anchor[j + 1] - anchor[j]) / std::max(warm.duration(), 1e-300);
+    count[j] += static_cast<int>(std::floor(share));
+    given += static_cast<int>(std::floor(share));
+    remainder.push_back({share - std::floor(share), j});
+  }
+  std::sort(remainder.begin(), remainder.end(), std::greater<>());
+  for (int r = 0; given < spare; ++r, ++given) ++count[remainder[r % segments].second];
+  for (int j = 0; j < segments; ++j) {
+    if (j > 0) f.waypoint_knot.push_back(static_cast<int>(f.knot_times.size()));
+    for (int s = 0; s < count[j]; ++s) {
+      f.knot_times.push_back(anchor[j] + (anchor[j + 1] - anchor[j]) * s / count[j]);
+      f.segment.push_back(j);
+    }
+  }
+  f.knot_times.push_back(warm.duration());
+  return f;
+}
+
+/// The corridor rows of knot k (1 … K−2): within `radius` of the segment of interval k, and
+/// of its waypoint when the knot has one.
+void AddCorridorRows(const PathFollowing& f, int k, double radius, std::vector<CorridorRow>* rows) {
+  for (std::size_t w = 0; w < f.waypoint_knot.size(); ++w) {
+    if (f.waypoint_knot[w] == k) rows->push_back({{k, 0.0}, f.waypoints[w + 1], Eigen::VectorXd(), 0.0, radius, 0.0});
+  }
+  const int j = f.segment[k];
+  const Eigen::VectorXd ab = f.waypoints[j + 1] - f.waypoints[j];
+  rows->push_back({{k, 0.0}, f.waypoints[j], ab / ab.norm(), ab.norm(), radius, 0.0});
+}
+
+/// An upper bound on the distance from the trajectory to the path (each piece to its segment,
+/// each waypoint knot to its waypoint); `worst` receives the interval with the largest.
+double CorridorBound(const TimedTrajectory& trajectory, const PathFollowing& f, std::vector<double>* per_interval) {
+  per_interval->assign(trajectory.pieces().size(), 0.0);
+  double bound = 0.0;
+  for (std::size_t k = 0; k < trajectory.pieces().size(); ++k) {
+    const Piece& piece = trajectory.pieces()[k];
+    const int j = f.segment[k];
+    double d = MaxDistanceToSegment(piece, f.waypoints[j], f.waypoints[j + 1]);
+    for (std::size_t w = 0; w < f.waypoint_knot.size(); ++w) {
+      if (f.waypoint_knot[w] == static_cast<int>(k)) {
+        d = std::max(d, (piece.coefficients.col(0) - f.waypoints[w + 1]).norm());
+      }
+    }
+    (*per_interval)[k] = d;
+    bound = std::max(bound, d);
+  }
+  return bound;
 }
 
 /// max over pieces and joints of |q⁽ᵒʳᵈᵉʳ⁾ᵢ| / limitᵢ (exact).
@@ -361,7 +524,8 @@ Ipopt::SmartPtr<Ipopt::IpoptApplication> MakeIpopt(const CollocationOptions& opt
 }  // namespace
 
 CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const KinematicLimits& limits,
-                                        const CollocationOptions& options, const CollisionChecker* checker) {
+                                        const CollocationOptions& options, const CollisionChecker* checker,
+                                        const JointPath* path) {
   const Clock::time_point started = Clock::now();
   ValidateOptions(options);
   if (warm_start.empty()) ThrowInvalid("collocation warm_start is empty");
@@ -383,6 +547,25 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     ThrowInvalid("collocation warm_start has a non-finite duration or end state");
   }
 
+  bool along = false;
+  if (path != nullptr && !path->empty()) {
+    for (std::size_t k = 0; k < path->size(); ++k) {
+      const Eigen::VectorXd& w = (*path)[k];
+      if (w.size() != n || !w.allFinite()) {
+        ThrowInvalid("collocation path[" + std::to_string(k) + "] has " + std::to_string(w.size()) +
+                     " values (must be " + std::to_string(n) + " finite joint positions)");
+      }
+    }
+    const auto same = [](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+      return (a - b).cwiseAbs().maxCoeff() <= 1e-9 * std::max(1.0, b.cwiseAbs().maxCoeff());
+    };
+    if (!same(path->front(), first.q) || !same(path->back(), last.q)) {
+      ThrowInvalid("collocation path runs from path[0] to path[" + std::to_string(path->size() - 1) +
+                   "], which are not the warm start's start and end");
+    }
+    for (std::size_t k = 1; k < path->size() && !along; ++k) along = (*path)[k] != (*path)[k - 1];
+  }
+
   CollocationResult result;
   OptimizerReport& report = result.report;
   const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - started).count(); };
@@ -397,10 +580,43 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     return result;
   }
 
+  const double rest_tolerance = 1e-9 * std::max(1.0, limits.max_velocity.maxCoeff());
+  const bool start_rest = first.qd.cwiseAbs().maxCoeff() <= rest_tolerance;
+  const bool end_rest = last.qd.cwiseAbs().maxCoeff() <= rest_tolerance;
+  if (!along && start_rest && end_rest && first.q == last.q) {
+    report.message = "free collocation (no path to follow) of a warm start that returns to its start at rest: the "
+                     "minimum-time trajectory between equal ends does not move; follow the path instead";
+    report.solve_seconds = elapsed();
+    return result;
+  }
+
+  // The warm start; with max_effort and both ends at rest, first slowed down until its torques
+  // are within their limits (when a slow-down can).
+  TimedTrajectory slowed;
+  const TimedTrajectory* initial = &warm_start;
+  if (effort && start_rest && end_rest) {
+    double ratio = 0.0, where = 0.0;
+    const double slow = EffortSlowDown(warm_start, checker->robot(), limits, &ratio, &where);
+    if (std::isfinite(slow) && slow > 1.0) {
+      slowed = warm_start.TimeScaled(slow);
+      initial = &slowed;
+    }
+  }
+  const double span = initial->duration();
+  // The knot times: along a path, one where the warm start passes each interior waypoint;
+  // otherwise evenly spread.
+  int knots = options.knots;
+  PathFollowing following;
+  if (along) following = FollowPath(*initial, *path, options.corridor, &knots);
+  std::vector<double> knot_times = following.knot_times;
+  if (!along) {
+    for (int k = 0; k < knots; ++k) knot_times.push_back(k + 1 == knots ? span : span * k / (knots - 1));
+  }
+
   // The transcription.
   Transcription t;
   t.num_dofs = n;
-  t.knots = options.knots;
+  t.knots = knots;
   t.jerk_weight = options.jerk_weight;
   const double inf = std::numeric_limits<double>::infinity();
   t.position_lower = checker != nullptr ? checker->robot().lower_limits() : Eigen::VectorXd::Constant(n, -inf);
@@ -409,9 +625,6 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   t.max_acceleration = limits.max_acceleration;
   t.max_jerk = limits.max_jerk;
   t.max_effort = limits.max_effort;
-  const double rest_tolerance = 1e-9 * std::max(1.0, limits.max_velocity.maxCoeff());
-  const bool start_rest = first.qd.cwiseAbs().maxCoeff() <= rest_tolerance;
-  const bool end_rest = last.qd.cwiseAbs().maxCoeff() <= rest_tolerance;
   t.start_q = first.q;
   t.end_q = last.q;
   t.start_v = start_rest ? Eigen::VectorXd::Zero(n) : first.qd;
@@ -419,7 +632,7 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   const bool jerk_limited = limits.max_jerk.size() != 0;
   t.start_at_rest_acceleration = jerk_limited && start_rest;
   t.end_at_rest_acceleration = jerk_limited && end_rest;
-  const Layout layout{n, options.knots - 1};
+  const Layout layout{n, knots - 1};
   // hₖ >= a tenth of an even split of a lower bound on the duration (no joint can beat
   // |Δqᵢ|/vᵢ), and never below a thousandth of the warm start's interval.
   double lower_bound = 0.0;
@@ -432,30 +645,25 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   const double deadline = std::isfinite(options.time_budget) ? options.time_budget : 1e300;
   t.stop = [&] { return (options.stop && options.stop()) || elapsed() > deadline; };
 
-  // The warm start, sampled at K evenly spaced times; with max_effort and both ends at rest,
-  // first slowed down until its torques are within their limits (when a slow-down can).
-  TimedTrajectory slowed;
-  const TimedTrajectory* initial = &warm_start;
-  if (effort && start_rest && end_rest) {
-    double ratio = 0.0, where = 0.0;
-    const double slow = EffortSlowDown(warm_start, checker->robot(), limits, &ratio, &where);
-    if (std::isfinite(slow) && slow > 1.0) {
-      slowed = warm_start.TimeScaled(slow);
-      initial = &slowed;
-    }
-  }
-  const double span = initial->duration();
   t.nominal_interval = span / layout.intervals;
   t.regularization = kRegularization * span;
   Eigen::VectorXd warm(layout.size());
   for (int k = 0; k <= layout.intervals; ++k) {
-    const TrajectorySample s = k == layout.intervals ? initial->Evaluate(span) : initial->Evaluate(span * k / layout.intervals);
+    const TrajectorySample s = initial->Evaluate(knot_times[k]);
     for (int i = 0; i < n; ++i) {
       warm[layout.q(k, i)] = s.q[i];
       warm[layout.v(k, i)] = std::clamp(s.qd[i], -limits.max_velocity[i], limits.max_velocity[i]);
       warm[layout.a(k, i)] = std::clamp(s.qdd[i], -limits.max_acceleration[i], limits.max_acceleration[i]);
     }
-    if (k < layout.intervals) warm[layout.h(k)] = t.nominal_interval;
+    if (k < layout.intervals) {
+      warm[layout.h(k)] = knot_times[k + 1] - knot_times[k];
+      t.min_interval = std::min(t.min_interval, std::max(0.5 * warm[layout.h(k)], 1e-3 * t.min_interval));
+    }
+  }
+  if (along) {
+    for (int k = 1; k < layout.intervals; ++k) {
+      AddCorridorRows(following, k, options.corridor * (1.0 - kCorridorMargin), &t.corridor);
+    }
   }
   for (int i = 0; i < n; ++i) {
     warm[layout.v(0, i)] = t.start_v[i];
@@ -535,24 +743,56 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     }
     x = nlp->solution();
     report.objective = Objective(layout, x, options.jerk_weight);
-    if (guard == nullptr) {
-      solved = true;
-      break;
+    bool again = false, contact = false;
+    if (along) {
+      // The exact bound of the solution's distance to the path. Rows sit at knots only (their
+      // curvature is exact there); an interval that bulges beyond the corridor between them
+      // tightens its two knots' segment rows by twice the excess for the next solve.
+      double correction = 0.0;
+      std::vector<double> per_interval;
+      const double bound = CorridorBound(ExactChain(layout, x, t, &correction), following, &per_interval);
+      report.path_deviation = bound;
+      if (bound > options.corridor) {
+        const int worst = static_cast<int>(std::max_element(per_interval.begin(), per_interval.end()) - per_interval.begin());
+        if (rounds + 1 >= kMaxClearanceRounds) {
+          failure = "the trajectory leaves the path's corridor of " + FormatNumber(options.corridor) + " rad by " +
+                    FormatNumber(bound - options.corridor) + " rad in interval " + std::to_string(worst) + " after " +
+                    std::to_string(rounds + 1) + " solves";
+          break;
+        }
+        for (int k = 0; k < layout.intervals; ++k) {
+          const double excess = per_interval[k] - options.corridor * (1.0 - kCorridorMargin);
+          if (per_interval[k] <= options.corridor) continue;
+          for (CorridorRow& row : t.corridor) {
+            if (row.direction.size() == 0 || (row.at.interval != k && row.at.interval != k + 1)) continue;
+            row.radius = std::max(row.radius - 2 * excess, 0.1 * options.corridor);
+            row.inset = std::min(row.inset + 2 * excess, row.length / 4);
+          }
+        }
+        again = true;
+      }
     }
-    const ClearanceFindings found = guard->Check(x, &t.pairs);
-    if (std::isinf(found.worst)) {
-      solved = true;
-      break;
+    if (guard != nullptr) {
+      const ClearanceFindings found = guard->Check(x, &t.pairs);
+      if (!std::isinf(found.worst)) {
+        if (found.added == 0 || rounds + 1 >= kMaxClearanceRounds) {
+          failure = "clearance of link '" + found.link + "' is " + FormatNumber(-found.worst) +
+                    " m short in interval " + std::to_string(found.where.interval) + " at " +
+                    FormatNumber(found.where.fraction) + " of its duration after " + std::to_string(rounds + 1) +
+                    " solves";
+          break;
+        }
+        t.bounded_motion = true;
+        contact = found.contact;
+        again = true;
+      }
     }
-    if (found.added == 0 || rounds + 1 >= kMaxClearanceRounds) {
-      failure = "clearance of link '" + found.link + "' is " + FormatNumber(-found.worst) + " m short in interval " +
-                std::to_string(found.where.interval) + " at " + FormatNumber(found.where.fraction) +
-                " of its duration after " + std::to_string(rounds + 1) + " solves";
+    if (!again) {
+      solved = true;
       break;
     }
     // Continue from the solution, unless it touches an obstacle (no distance gradient there).
-    t.bounded_motion = true;
-    start = found.contact ? warm : x;
+    start = contact ? warm : x;
   }
   app = nullptr;  // MUMPS' instance ends with the application, still under the lock
   lock.unlock();
@@ -562,15 +802,21 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     return result;
   }
 
-  // The trajectory, its continuity and its exact limits between knots.
-  TimedTrajectory trajectory = BuildTrajectory(layout, x, t.end_q);
-  double position_jump, velocity_jump;
-  DefectJumps(layout, x, trajectory, &position_jump, &velocity_jump);
-  const double velocity_tolerance = kJumpTolerance * std::max(1.0, limits.max_velocity.maxCoeff());
+  // The trajectory with its defects closed exactly, and its exact limits between knots.
+  double correction = 0.0;
+  TimedTrajectory trajectory = ExactChain(layout, x, t, &correction);
   std::string problem;
-  if (!(position_jump <= kJumpTolerance) || !(velocity_jump <= velocity_tolerance)) {
-    problem = "the collocation defects are not closed: positions jump " + FormatNumber(position_jump) +
-              " rad and velocities " + FormatNumber(velocity_jump) + " rad/s between intervals";
+  if (!(correction <= kCorrectionTolerance)) {
+    problem = "the collocation defects are not closed: closing them changes a knot acceleration by " +
+              FormatNumber(correction) + " of its limit (at most " + FormatNumber(kCorrectionTolerance) + ")";
+  }
+  if (problem.empty() && along) {
+    std::vector<double> per_interval;
+    report.path_deviation = CorridorBound(trajectory, following, &per_interval);
+    if (report.path_deviation > options.corridor) {
+      problem = "the trajectory leaves the path's corridor of " + FormatNumber(options.corridor) + " rad (" +
+                FormatNumber(report.path_deviation) + " rad)";
+    }
   }
   if (problem.empty() && checker != nullptr) {
     const Eigen::VectorXd& lower = checker->robot().lower_limits();
@@ -629,7 +875,10 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   }
   result.trajectory = std::move(trajectory);
   report.ok = true;
-  report.message = std::to_string(options.knots) + " knots, " + std::to_string(report.iterations) +
+  report.message = std::string(along ? "along the path within " + FormatNumber(report.path_deviation) + " rad (corridor " +
+                                           FormatNumber(options.corridor) + "), "
+                                     : "free of the path, ") +
+                   std::to_string(knots) + " knots, " + std::to_string(report.iterations) +
                    " Ipopt iterations in " + std::to_string(rounds + 1) + " solve" + (rounds > 0 ? "s" : "") +
                    (t.pairs.empty() ? "" : ", " + std::to_string(t.pairs.size()) + " clearance constraints") +
                    ", duration " + FormatNumber(result.trajectory.duration()) + " s" +

@@ -67,8 +67,16 @@ CollocationNlp::CollocationNlp(const Transcription& transcription, Eigen::Vector
   const int points = static_cast<int>(torque_points_.size());
   rows_torque_ = n * points;
   rows_clearance_ = static_cast<int>(t_.pairs.size());
+  for (const CorridorRow& row : t_.corridor) {
+    rows_corridor_ += row.direction.size() != 0 ? 2 : 1;
+    if (row.at.fraction == 0.0 &&
+        (corridor_knots_.empty() || corridor_knots_.back() != row.at.interval)) {
+      corridor_knots_.push_back(row.at.interval);
+    }
+  }
   rows_motion_ = t_.bounded_motion ? 2 * intervals : 0;
-  motion_start_ = rows_defects_ + rows_velocity_ + rows_jerk_ + rows_torque_ + rows_clearance_;
+  corridor_start_ = rows_defects_ + rows_velocity_ + rows_jerk_ + rows_torque_ + rows_clearance_;
+  motion_start_ = corridor_start_ + rows_corridor_;
   if (rows_torque_ > 0) {
     torque_.resize(n, points);
     torque_jac_.assign(points, Eigen::MatrixXd(n, 3 * n));
@@ -127,16 +135,10 @@ void CollocationNlp::BuildStructure() {
       }
     }
   }
-  for (const ClearancePair& pair : t_.pairs) {
-    const int k = pair.at.interval;
-    for (int j = 0; j < n; ++j) jac(row, L.q(k, j));
-    if (pair.at.fraction != 0.0) {
-      for (int j = 0; j < n; ++j) jac(row, L.v(k, j));
-      for (int j = 0; j < n; ++j) jac(row, L.a(k, j));
-      for (int j = 0; j < n; ++j) jac(row, L.a(k + 1, j));
-      jac(row, L.h(k));
-    }
-    ++row;
+  for (const ClearancePair& pair : t_.pairs) AddInstantColumns(row++, pair.at);
+  for (const CorridorRow& corridor : t_.corridor) {
+    AddInstantColumns(row++, corridor.at);
+    if (corridor.direction.size() != 0) AddInstantColumns(row++, corridor.at);
   }
   for (int k = 0; k < (t_.bounded_motion ? L.intervals : 0); ++k) {
     for (int half = 0; half < 2; ++half, ++row) {
@@ -171,12 +173,53 @@ void CollocationNlp::BuildStructure() {
   for (int k = 0; k <= L.intervals; ++k) {
     for (int i = 0; i < n; ++i) hess(L.a(k, i), L.a(k, i));
   }
+  for (int k : corridor_knots_) {
+    for (int r = 0; r < n; ++r) {
+      for (int c = 0; c <= r; ++c) hess(L.q(k, r), L.q(k, c));
+    }
+  }
+}
+
+void CollocationNlp::AddInstantColumns(int row, Instant at) {
+  const Layout& L = layout_;
+  const int k = at.interval;
+  const auto jac = [&](int col) {
+    jac_rows_.push_back(row);
+    jac_cols_.push_back(col);
+  };
+  for (int j = 0; j < L.n; ++j) jac(L.q(k, j));
+  if (at.fraction == 0.0) return;
+  for (int j = 0; j < L.n; ++j) jac(L.v(k, j));
+  for (int j = 0; j < L.n; ++j) jac(L.a(k, j));
+  for (int j = 0; j < L.n; ++j) jac(L.a(k + 1, j));
+  jac(L.h(k));
+}
+
+void CollocationNlp::WriteInstantGradient(const double* x, Instant at, const Eigen::VectorXd& grad,
+                                          double** out) const {
+  const Layout& L = layout_;
+  const int n = L.n;
+  for (int j = 0; j < n; ++j) *(*out)++ = grad[j];
+  if (at.fraction == 0.0) return;
+  // q(σh) = qₖ + q̇ₖσh + (q̈ₖσ²/2 + (q̈ₖ₊₁ − q̈ₖ)σ³/6)h² (PositionAt).
+  const int k = at.interval;
+  const double h = x[L.h(k)], sg = at.fraction;
+  const double c1 = (sg * sg / 2 - sg * sg * sg / 6) * h * h, c2 = sg * sg * sg / 6 * h * h;
+  for (int j = 0; j < n; ++j) *(*out)++ = grad[j] * sg * h;
+  for (int j = 0; j < n; ++j) *(*out)++ = grad[j] * c1;
+  for (int j = 0; j < n; ++j) *(*out)++ = grad[j] * c2;
+  double dh = 0.0;
+  for (int j = 0; j < n; ++j) {
+    const double a0 = x[L.a(k, j)], a1 = x[L.a(k + 1, j)];
+    dh += grad[j] * (x[L.v(k, j)] * sg + (a0 * sg * sg / 2 + (a1 - a0) * sg * sg * sg / 6) * 2 * h);
+  }
+  *(*out)++ = dh;
 }
 
 bool CollocationNlp::get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g,
                                   Ipopt::Index& nnz_h_lag, IndexStyleEnum& index_style) {
   n = layout_.size();
-  m = rows_defects_ + rows_velocity_ + rows_jerk_ + rows_torque_ + rows_clearance_ + rows_motion_;
+  m = motion_start_ + rows_motion_;
   nnz_jac_g = static_cast<Ipopt::Index>(jac_rows_.size());
   nnz_h_lag = static_cast<Ipopt::Index>(hess_rows_.size());
   index_style = C_STYLE;
@@ -212,7 +255,7 @@ void CollocationNlp::Bounds(std::vector<double>* x_l, std::vector<double>* x_u, 
     if (t_.start_at_rest_acceleration) fix(L.a(0, i), 0.0);
     if (t_.end_at_rest_acceleration) fix(L.a(L.intervals, i), 0.0);
   }
-  const int m = rows_defects_ + rows_velocity_ + rows_jerk_ + rows_torque_ + rows_clearance_ + rows_motion_;
+  const int m = motion_start_ + rows_motion_;
   g_l->assign(m, 0.0);
   g_u->assign(m, 0.0);
   int row = rows_defects_;
@@ -237,6 +280,15 @@ void CollocationNlp::Bounds(std::vector<double>* x_l, std::vector<double>* x_u, 
   for (const ClearancePair& pair : t_.pairs) {
     (*g_l)[row] = pair.minimum;
     (*g_u)[row] = kIpoptInf;
+    ++row;
+  }
+  for (const CorridorRow& corridor : t_.corridor) {
+    (*g_l)[row] = -kIpoptInf;
+    (*g_u)[row] = corridor.radius * corridor.radius;
+    ++row;
+    if (corridor.direction.size() == 0) continue;
+    (*g_l)[row] = corridor.inset;
+    (*g_u)[row] = corridor.length - corridor.inset;
     ++row;
   }
   for (int r = 0; r < rows_motion_; ++r, ++row) {
@@ -285,6 +337,10 @@ bool CollocationNlp::get_scaling_parameters(Ipopt::Number& obj_scaling, bool& us
   for (int r = 0; r < rows_jerk_; ++r, ++row) g_scaling[row] = 1.0 / t_.max_acceleration[(r / 2) % n];
   for (int r = 0; r < rows_torque_; ++r, ++row) g_scaling[row] = 1.0 / t_.max_effort[r % n];
   for (int r = 0; r < rows_clearance_; ++r, ++row) g_scaling[row] = 1.0;
+  for (const CorridorRow& corridor : t_.corridor) {
+    g_scaling[row++] = 1.0 / (corridor.radius * corridor.radius);
+    if (corridor.direction.size() != 0) g_scaling[row++] = 1.0 / corridor.radius;
+  }
   for (int r = 0; r < rows_motion_; ++r, ++row) g_scaling[row] = 1.0 / (t_.max_step * t_.max_step);
   return true;
 }
@@ -478,6 +534,16 @@ bool CollocationNlp::eval_g(Ipopt::Index, const Ipopt::Number* x, bool new_x, Ip
     UpdateClearances(x);
     for (double d : distance_) g[row++] = d;
   }
+  for (const CorridorRow& corridor : t_.corridor) {
+    const Eigen::VectorXd e = PositionAt(L, x, corridor.at) - corridor.origin;
+    if (corridor.direction.size() == 0) {
+      g[row++] = e.squaredNorm();
+      continue;
+    }
+    const double along = corridor.direction.dot(e);
+    g[row++] = (e - along * corridor.direction).squaredNorm();
+    g[row++] = along;
+  }
   for (int k = 0; k < (t_.bounded_motion ? L.intervals : 0); ++k) {
     for (int half = 0; half < 2; ++half) {
       double sum = 0.0;
@@ -575,25 +641,17 @@ bool CollocationNlp::eval_jac_g(Ipopt::Index, const Ipopt::Number* x, bool new_x
   }
   if (rows_clearance_ > 0) {
     UpdateClearances(x);
-    for (std::size_t p = 0; p < t_.pairs.size(); ++p) {
-      const Eigen::VectorXd& grad = distance_grad_[p];
-      const Instant at = t_.pairs[p].at;
-      for (int j = 0; j < n; ++j) *out++ = grad[j];
-      if (at.fraction != 0.0) {
-        const int k = at.interval;
-        const double h = x[L.h(k)], sg = at.fraction;
-        const double c1 = (sg * sg / 2 - sg * sg * sg / 6) * h * h, c2 = sg * sg * sg / 6 * h * h;
-        for (int j = 0; j < n; ++j) *out++ = grad[j] * sg * h;
-        for (int j = 0; j < n; ++j) *out++ = grad[j] * c1;
-        for (int j = 0; j < n; ++j) *out++ = grad[j] * c2;
-        double dh = 0.0;
-        for (int j = 0; j < n; ++j) {
-          const double a0 = x[L.a(k, j)], a1 = x[L.a(k + 1, j)];
-          dh += grad[j] * (x[L.v(k, j)] * sg + (a0 * sg * sg / 2 + (a1 - a0) * sg * sg * sg / 6) * 2 * h);
-        }
-        *out++ = dh;
-      }
+    for (std::size_t p = 0; p < t_.pairs.size(); ++p) WriteInstantGradient(x, t_.pairs[p].at, distance_grad_[p], &out);
+  }
+  for (const CorridorRow& corridor : t_.corridor) {
+    // ∇‖Pe‖² = 2Pe (P symmetric and idempotent); ∇(d̂ᵀe) = d̂.
+    const Eigen::VectorXd e = PositionAt(L, x, corridor.at) - corridor.origin;
+    if (corridor.direction.size() == 0) {
+      WriteInstantGradient(x, corridor.at, 2 * e, &out);
+      continue;
     }
+    WriteInstantGradient(x, corridor.at, 2 * (e - corridor.direction.dot(e) * corridor.direction), &out);
+    WriteInstantGradient(x, corridor.at, corridor.direction, &out);
   }
   for (int k = 0; k < (t_.bounded_motion ? L.intervals : 0); ++k) {
     const double h = x[L.h(k)];
@@ -681,6 +739,23 @@ bool CollocationNlp::eval_h(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::N
     if (inner) *out++ = -2 * spacing;                                         // (hₖ, hₖ₋₁)
   }
   for (double value : diagonal) *out++ = value;
+  // Corridor rows at knots: λ·2P on qₖ (lower triangle), summed over the knot's rows.
+  std::size_t next = 0;
+  int row = corridor_start_;
+  for (int k : corridor_knots_) {
+    Eigen::MatrixXd block = Eigen::MatrixXd::Zero(n, n);
+    for (; next < t_.corridor.size() && t_.corridor[next].at.interval <= k; ++next) {
+      const CorridorRow& corridor = t_.corridor[next];
+      const double l = lambda[row];
+      row += corridor.direction.size() != 0 ? 2 : 1;
+      if (corridor.at.interval != k || corridor.at.fraction != 0.0) continue;
+      block.diagonal().array() += 2 * l;
+      if (corridor.direction.size() != 0) block -= 2 * l * corridor.direction * corridor.direction.transpose();
+    }
+    for (int r = 0; r < n; ++r) {
+      for (int c = 0; c <= r; ++c) *out++ = block(r, c);
+    }
+  }
   return out - values == static_cast<std::ptrdiff_t>(hess_rows_.size());
 }
 

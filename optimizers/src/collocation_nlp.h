@@ -21,10 +21,14 @@
 //   jerk limits                2n per interval: q̈ₖ₊₁ − q̈ₖ ± Jhₖ (linear), with max_jerk
 //   torques                    n per knot (and interval midpoint if asked), with max_effort
 //   clearances                 one per (instant, link) pair
+//   corridor                   per corridor row: ‖P(q − w)‖² <= δ² (P = I − d̂d̂ᵀ for a segment
+//                              from w along the unit d̂, I for a waypoint) and, for a segment,
+//                              0 <= d̂ᵀ(q − w) <= its length
 //   half-interval motion       2 per interval with clearance pairs: ‖q(hₖ/2) − qₖ‖² and
 //                              ‖qₖ₊₁ − q(hₖ/2)‖² <= max_step²
 // Hessian: exact for the objective, defects, velocity control points and motion rows (all
-// polynomial); torque and clearance rows contribute no curvature. Measured against Ipopt's
+// polynomial) and for corridor rows at knots (2λP on qₖ); torque and clearance rows, and
+// corridor rows between knots, contribute no curvature. Measured against Ipopt's
 // limited-memory mode: a Panda segment at K = 30 took 181 instead of 26 iterations, and with
 // torque limits or around the planar post it did not finish within 5 s.
 
@@ -55,6 +59,18 @@ struct ClearancePair {
   Instant at;
   int link = 0;          ///< index into RobotModel::links()
   double minimum = 0.0;  ///< required distance [m]
+};
+
+/// A corridor constraint at an instant: the position within `radius` of the line from `origin`
+/// along the unit `direction`, its projection within [inset, length − inset] (or within
+/// `radius` of the point `origin` when `direction` is empty).
+struct CorridorRow {
+  Instant at;
+  Eigen::VectorXd origin;
+  Eigen::VectorXd direction;  ///< unit; empty = a waypoint
+  double length = 0.0;
+  double radius = 0.0;        ///< [rad] > 0
+  double inset = 0.0;         ///< [rad] >= 0
 };
 
 /// Everything the transcription needs; sizes are checked by the caller.
@@ -89,6 +105,7 @@ struct Transcription {
   DynamicsOptions dynamics;
   const ObstacleProximity* proximity = nullptr;
   std::vector<ClearancePair> pairs;  ///< sorted by instant
+  std::vector<CorridorRow> corridor;  ///< path-following rows, sorted by instant (empty = free)
   std::function<bool()> stop;
 };
 
@@ -152,6 +169,11 @@ class CollocationNlp : public Ipopt::TNLP {
   /// Joint i's motion over the first (half 0) or second (half 1) half of interval k.
   double HalfMotion(const double* x, int k, int i, int half) const;
   void UpdateClearances(const double* x);
+  /// Jacobian structure of a row that depends on the position at `at` only.
+  void AddInstantColumns(int row, Instant at);
+  /// Writes that row's values: ∂q(at)/∂x chained with `grad` = ∂row/∂q (the columns of
+  /// AddInstantColumns, in that order).
+  void WriteInstantGradient(const double* x, Instant at, const Eigen::VectorXd& grad, double** out) const;
   void Bounds(std::vector<double>* x_l, std::vector<double>* x_u, std::vector<double>* g_l,
               std::vector<double>* g_u) const;
 
@@ -160,7 +182,10 @@ class CollocationNlp : public Ipopt::TNLP {
   Eigen::VectorXd initial_, solution_;
   double violation_ = 0.0;
   bool stopped_ = false;
-  int rows_defects_ = 0, rows_velocity_ = 0, rows_jerk_ = 0, rows_torque_ = 0, rows_clearance_ = 0, rows_motion_ = 0;
+  int rows_defects_ = 0, rows_velocity_ = 0, rows_jerk_ = 0, rows_torque_ = 0, rows_clearance_ = 0,
+      rows_corridor_ = 0, rows_motion_ = 0;
+  int corridor_start_ = 0;  ///< first corridor row
+  std::vector<int> corridor_knots_;  ///< distinct knots with corridor rows (their q-blocks in the Hessian)
   std::vector<int> jac_rows_, jac_cols_, hess_rows_, hess_cols_;
   // Caches for the current x (Ipopt's new_x).
   bool torques_valid_ = false, torque_derivatives_valid_ = false, clearances_valid_ = false;

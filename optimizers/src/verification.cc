@@ -438,6 +438,15 @@ VerificationReport VerifyTrajectory(const TimedTrajectory& trajectory, const Eig
 
 namespace {
 
+/// square += row² (polynomial product; square has 2·row.size() − 1 coefficients).
+void AddSquare(const std::vector<double>& row, std::vector<double>* square) {
+  const std::size_t size = row.size();
+  for (std::size_t a = 0; a < size; ++a) {
+    if (row[a] == 0.0) continue;
+    for (std::size_t b = 0; b < size; ++b) (*square)[a + b] += row[a] * row[b];
+  }
+}
+
 /// The least distance [rad] from w to the piece's positions over τ ∈ [0, duration]: the least of
 /// Σᵢ (cᵢ(τ) − wᵢ)², a polynomial of twice the piece's degree, by poly::Range (its ends and the
 /// real roots of its derivative).
@@ -448,10 +457,7 @@ double DistanceToPiece(const Eigen::VectorXd& w, const Piece& piece) {
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < size; ++j) row[j] = piece.coefficients(i, j);
     row[0] -= w[i];
-    for (int a = 0; a < size; ++a) {
-      if (row[a] == 0.0) continue;
-      for (int b = 0; b < size; ++b) square[a + b] += row[a] * row[b];
-    }
+    AddSquare(row, &square);
   }
   double lo, hi;
   poly::Range(square.data(), 2 * size - 1, piece.duration, &lo, &hi);
@@ -724,6 +730,33 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
         [&](const Eigen::VectorXd& w, std::size_t k) { return DistanceToPiece(w, trajectory.pieces()[k]); });
   }
   return out;
+}
+
+double MaxDistanceToSegment(const Piece& piece, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const int n = static_cast<int>(piece.coefficients.rows());
+  const int size = static_cast<int>(piece.coefficients.cols());
+  const Eigen::VectorXd ab = b - a;
+  const double length = ab.norm();
+  const Eigen::VectorXd d = length > 0.0 ? Eigen::VectorXd(ab / length) : Eigen::VectorXd::Zero(n);
+  // e(τ) = q(τ) − a per joint, and along(τ) = d̂ᵀe(τ).
+  Eigen::MatrixXd e = piece.coefficients;
+  e.col(0) -= a;
+  const Eigen::RowVectorXd along = d.transpose() * e;
+  std::vector<double> square(static_cast<std::size_t>(2 * size - 1), 0.0), row(static_cast<std::size_t>(size));
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < size; ++j) row[j] = e(i, j) - along[j] * d[i];
+    AddSquare(row, &square);
+  }
+  double lo, hi;
+  poly::Range(square.data(), 2 * size - 1, piece.duration, &lo, &hi);
+  double excess = 0.0;
+  if (length > 0.0) {
+    const std::vector<double> s(along.data(), along.data() + size);
+    double s_lo, s_hi;
+    poly::Range(s.data(), size, piece.duration, &s_lo, &s_hi);
+    excess = std::max({0.0, -s_lo, s_hi - length});
+  }
+  return std::sqrt(std::max(0.0, hi) + excess * excess);
 }
 
 }  // namespace chasles

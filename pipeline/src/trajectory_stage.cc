@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -28,6 +29,34 @@ void CheckVector(const Eigen::VectorXd& v, int n, const std::string& field) {
       ThrowInvalid("trajectory." + field + "[" + std::to_string(i) + "] = " + FormatNumber(v[i]) + " must be finite and > 0");
     }
   }
+}
+
+/// ∫‖q⃛‖² dt over the trajectory, exactly; +inf when an acceleration jumps between pieces (a
+/// step has unbounded jerk), as TOPP's do.
+double JerkIntegral(const TimedTrajectory& trajectory) {
+  double total = 0.0;
+  const std::vector<TimedTrajectory::Piece>& pieces = trajectory.pieces();
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    const TimedTrajectory::Piece& piece = pieces[k];
+    const int n = static_cast<int>(piece.coefficients.rows()), size = static_cast<int>(piece.coefficients.cols());
+    if (k + 1 < pieces.size()) {
+      for (int i = 0; i < n; ++i) {
+        const double end = piece.Derivative(i, 2, piece.duration), next = pieces[k + 1].Derivative(i, 2, 0.0);
+        if (std::abs(end - next) > 1e-9 * std::max(1.0, std::abs(next))) return std::numeric_limits<double>::infinity();
+      }
+    }
+    // q⃛ᵢ(τ) = Σₘ m(m−1)(m−2) cₘ τ^(m−3); its square integrated term by term.
+    for (int i = 0; i < n; ++i) {
+      for (int a = 3; a < size; ++a) {
+        for (int b = 3; b < size; ++b) {
+          const double ca = a * (a - 1) * (a - 2) * piece.coefficients(i, a);
+          const double cb = b * (b - 1) * (b - 2) * piece.coefficients(i, b);
+          total += ca * cb * std::pow(piece.duration, a + b - 5) / (a + b - 5);
+        }
+      }
+    }
+  }
+  return total;
 }
 
 }  // namespace
@@ -137,7 +166,36 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
   // 2. The requested optimiser, warm-started from the exact trajectory.
   TimedTrajectory chosen = exact;
   out.optimizer.used = exact_kind;
-  if (method == PostProcessing::kCollocation || method == PostProcessing::kSpline) {
+  const bool optimise = method == PostProcessing::kCollocation || method == PostProcessing::kSpline;
+  const double corridor = spec.collocation_corridor > 0.0 ? spec.collocation_corridor : spec.max_deviation;
+  const bool along = method == PostProcessing::kCollocation && !spec.collocation_free;
+  if (along && !(corridor > 0.0)) {
+    ThrowInvalid("trajectory.max_deviation = 0 leaves COLLOCATION along the path no corridor: set "
+                 "trajectory.collocation.corridor > 0, or use NONE to stop at every waypoint");
+  }
+  if (method == PostProcessing::kCollocation && spec.collocation_free && path.size() > 1 &&
+      path.front() == path.back() && (spec.start_velocity.size() == 0 || spec.start_velocity.isZero(0.0)) &&
+      (spec.end_velocity.size() == 0 || spec.end_velocity.isZero(0.0))) {
+    ThrowInvalid("trajectory.collocation.path_mode = FREE keeps only the path's ends, and path[0] = path[" +
+                 std::to_string(path.size() - 1) + "] with both ends at rest: the minimum-time trajectory would "
+                 "not move; use ALONG_PATH to follow the path");
+  }
+  if (optimise) {
+    // The reference for the response's duration ratio: TOPP on the same path and limits.
+    if (exact_kind == PostProcessing::kTimeOptimal) {
+      out.optimizer.topp_duration = exact.duration();
+    } else {
+      KinematicLimits unjerked = limits;
+      unjerked.max_jerk.resize(0);
+      try {
+        out.optimizer.topp_duration =
+            ParameterizeTimeOptimal(path, unjerked, time_optimal_options(spec.max_deviation), &checker).duration();
+      } catch (const Error& e) {
+        if (e.code() != ErrorCode::kFailedPrecondition) throw;
+      }
+    }
+  }
+  if (optimise) {
     t = Clock::now();
     const char* name = method == PostProcessing::kCollocation ? "collocation" : "spline smoothing";
     OptimizerReport report;
@@ -145,7 +203,15 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
     if (method == PostProcessing::kCollocation) {
       CollocationOptions options = spec.collocation;
       options.stop = stop;
-      CollocationResult result = OptimizeByCollocation(exact, limits, options, &checker);
+      options.corridor = along ? corridor : 0.05;
+      // Along the path the warm start must be inside the corridor: TOPP's blends are redone
+      // within it when max_deviation is wider.
+      TimedTrajectory narrower;
+      if (along && exact_kind == PostProcessing::kTimeOptimal && spec.max_deviation > corridor) {
+        narrower = ParameterizeTimeOptimal(path, limits, time_optimal_options(corridor), &checker);
+      }
+      CollocationResult result = OptimizeByCollocation(narrower.empty() ? exact : narrower, limits, options, &checker,
+                                                       along ? &path : nullptr);
       report = result.report;
       candidate = std::move(result.trajectory);
     } else {
@@ -165,11 +231,24 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
       t = Clock::now();
       const VerificationReport checked = VerifyTrajectory(candidate, path.front(), path.back(), checker, limits, verify);
       out.verify_seconds += SecondsSince(t);
-      if (checked.ok) {
+      // The better under the optimiser's objective T + w·∫‖q⃛‖²: TOPP's acceleration steps have
+      // unbounded jerk, so with w > 0 only a jerk-limited warm start can win.
+      const double w = method == PostProcessing::kCollocation ? spec.collocation.jerk_weight : spec.spline.jerk_weight;
+      const auto objective = [w](const TimedTrajectory& trajectory) {
+        return trajectory.duration() + (w > 0.0 ? w * JerkIntegral(trajectory) : 0.0);
+      };
+      const double mine = objective(candidate), theirs = objective(exact);
+      if (checked.ok && !(mine > theirs)) {
         chosen = std::move(candidate);
         out.optimizer.used = method;
         out.verification = checked;
         out.optimizer.message = std::string(name) + ": " + report.message;
+      } else if (checked.ok) {
+        out.optimizer.fell_back = true;
+        out.optimizer.message = std::string(name) + " gave a worse trajectory than its warm start under its objective (" +
+                                FormatNumber(mine) + " against " + FormatNumber(theirs) + "; durations " +
+                                FormatNumber(candidate.duration()) + " s against " + FormatNumber(exact.duration()) +
+                                " s); returned the warm start";
       } else {
         out.optimizer.fell_back = true;
         out.optimizer.message = std::string(name) + " result failed dense verification (" + checked.reason +
@@ -223,6 +302,7 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
   }
   t = Clock::now();
   out.quality = MeasureTrajectory(chosen, limits, path, &checker, std::max(max_joint_step, 0.01));
+  if (out.optimizer.topp_duration > 0.0) out.optimizer.duration_ratio_to_topp = chosen.duration() / out.optimizer.topp_duration;
   out.quality_seconds = SecondsSince(t);
   out.trajectory = std::move(chosen);
   out.code = TrajectoryStageCode::kSuccess;

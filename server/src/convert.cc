@@ -791,7 +791,17 @@ TrajectorySpec TrajectorySpecFromProto(const v1::TrajectoryOptions& options, con
     ThrowInvalid(cf + ".max_iterations = " + std::to_string(c.max_iterations()) + " must be >= 1 (0 = 500)");
   }
   spec.collocation.max_iterations = c.max_iterations() == 0 ? 500 : c.max_iterations();
-  spec.collocation.time_budget = BudgetFromProto(c.time_budget(), 5.0, cf + ".time_budget");
+  spec.collocation.time_budget = BudgetFromProto(c.time_budget(), 60.0, cf + ".time_budget");
+  if (c.path_mode() != v1::CollocationOptions::ALONG_PATH && c.path_mode() != v1::CollocationOptions::FREE) {
+    ThrowInvalid(cf + ".path_mode = " + std::to_string(c.path_mode()) + " is not one of ALONG_PATH, FREE");
+  }
+  spec.collocation_free = c.path_mode() == v1::CollocationOptions::FREE;
+  if (c.has_corridor()) {
+    if (!(std::isfinite(c.corridor()) && c.corridor() > 0.0 && c.corridor() <= 1.0)) {
+      ThrowInvalid(cf + ".corridor = " + FormatNumber(c.corridor()) + " must be in (0, 1] rad");
+    }
+    spec.collocation_corridor = c.corridor();
+  }
 
   const v1::SplineOptions& b = options.spline();
   const std::string sf = field + ".spline";
@@ -854,6 +864,9 @@ void OptimizerToProto(const OptimizerSummary& summary, v1::OptimizerStatistics* 
   out->set_time_scale(summary.report.time_scale);
   out->set_blends(summary.time_optimal.blends);
   out->set_blends_tightened(summary.time_optimal.blends_tightened);
+  out->set_duration_ratio_to_topp(summary.duration_ratio_to_topp);
+  out->set_topp_duration(summary.topp_duration);
+  out->set_path_deviation(summary.report.path_deviation);
 }
 
 void VerificationToProto(const VerificationReport& report, double max_joint_step, v1::Verification* out) {

@@ -90,10 +90,10 @@ double Defaulted(double value, double fallback) { return value == 0.0 ? fallback
 /// The post-processing's own budget [s] (collocation and spline solves run after planning).
 double PostProcessingBudget(const v1::TrajectoryOptions& options) {
   switch (options.post_processing()) {
-    case v1::TrajectoryOptions::COLLOCATION: return Defaulted(options.collocation().time_budget(), 5.0);
+    case v1::TrajectoryOptions::COLLOCATION: return Defaulted(options.collocation().time_budget(), 60.0);
     case v1::TrajectoryOptions::SPLINE: return Defaulted(options.spline().time_budget(), 5.0);
     case v1::TrajectoryOptions::POST_PROCESSING_UNSPECIFIED:
-      return options.max_jerk_size() > 0 ? Defaulted(options.collocation().time_budget(), 5.0) : 0.0;
+      return options.max_jerk_size() > 0 ? Defaulted(options.collocation().time_budget(), 60.0) : 0.0;
     default: return 0.0;
   }
 }

@@ -108,10 +108,55 @@ TEST_F(OptimizeTest, EveryPostProcessingReturnsAVerifiedTrajectoryOfTheUsersPath
           EXPECT_GE(o.time_scale(), 1.0);
           EXPECT_GT(response.timings().optimize(), 0.0);
         }
+        // Never slower than TOPP without saying so (no jerk weight: the objective is the duration).
+        EXPECT_NEAR(o.topp_duration(), topp, 1e-9);
+        EXPECT_NEAR(o.duration_ratio_to_topp(), response.duration() / topp, 1e-12);
+        EXPECT_LE(o.duration_ratio_to_topp(), 1.0 + 1e-12);
+        if (method == v1::TrajectoryOptions::COLLOCATION && !o.fell_back()) {
+          // Along the path (the default): within max_deviation of it, by an exact bound.
+          EXPECT_GE(o.path_deviation(), 0.0);
+          EXPECT_LE(o.path_deviation(), 0.05);
+        }
         break;
     }
   }
   EXPECT_LE(topp, none * (1 + 1e-9));  // blending never takes longer than stopping
+}
+
+TEST_F(OptimizeTest, CollocationFollowsAClosedPathAndItsFreeModeSaysWhyItCannot) {
+  // A path out and back to its start: along the path (the default) it moves through both
+  // waypoints; FREE keeps only the ends, which are equal, so it is refused by name.
+  const v1::PlanRequest plan = LoadRequest("planar_2r_posts");
+  ASSERT_EQ(Planned().outcome(), v1::SUCCESS);
+  v1::OptimizeRequest request;
+  *request.mutable_robot() = plan.robot();
+  *request.mutable_scene() = plan.scene();
+  const v1::JointState start = Planned().path(0);
+  v1::JointState out = start, further = start;
+  out.set_positions(0, start.positions(0) + 0.05);
+  further.set_positions(0, start.positions(0) + 0.05);
+  further.set_positions(1, start.positions(1) + 0.05);
+  for (const v1::JointState& q : {start, out, further, start}) *request.add_path() = q;
+  request.mutable_options()->set_post_processing(v1::TrajectoryOptions::COLLOCATION);
+  request.mutable_options()->set_max_deviation(0.01);
+  v1::OptimizeResponse response;
+  const grpc::Status status = Optimize(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  EXPECT_EQ(response.optimizer().used(), "collocation") << response.optimizer().message();
+  EXPECT_GT(response.duration(), 0.5 * response.optimizer().topp_duration());
+  EXPECT_LE(response.optimizer().path_deviation(), 0.01);
+  EXPECT_LE(response.quality().max_deviation(), 0.01);
+  request.mutable_options()->mutable_collocation()->set_path_mode(v1::CollocationOptions::FREE);
+  ExpectError(request, "path_mode = FREE keeps only the path's ends, and path[0] = path[3]");
+  request.mutable_options()->mutable_collocation()->set_path_mode(static_cast<v1::CollocationOptions::PathMode>(7));
+  ExpectError(request, "options.collocation.path_mode = 7 is not one of ALONG_PATH, FREE");
+  request.mutable_options()->mutable_collocation()->set_path_mode(v1::CollocationOptions::ALONG_PATH);
+  request.mutable_options()->mutable_collocation()->set_corridor(0.0);
+  ExpectError(request, "options.collocation.corridor = 0 must be in (0, 1] rad");
+  request.mutable_options()->mutable_collocation()->clear_corridor();
+  request.mutable_options()->set_max_deviation(0.0);
+  ExpectError(request, "max_deviation = 0 leaves COLLOCATION along the path no corridor");
 }
 
 TEST_F(OptimizeTest, ATimedTrajectoryIsReoptimisedAndItsDurationReported) {

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 
 #include "chasles/collision/collision_checker.h"
+#include "chasles/robot/joint_path.h"
 #include "chasles/optimizers/optimizer_report.h"
 #include "chasles/optimizers/time_parameterization.h"
 #include "chasles/optimizers/timed_trajectory.h"
@@ -25,10 +26,16 @@ struct CollocationOptions {
   /// along the warm start is constrained at every knot and midpoint from the first solve; any
   /// other link found too close after a solve is added, and the problem solved again.
   double activation_distance = 0.05;
-  int max_iterations = 500;     ///< Ipopt max_iter per solve, >= 1
+  /// With a path to follow: the trajectory stays within this distance of the path and passes
+  /// within it of every interior waypoint, in order [rad, Euclidean in joint space]; in (0, 1].
+  double corridor = 0.05;
+  /// Ipopt max_iter per solve, >= 1: the budget that decides the result (the same on any machine).
+  int max_iterations = 500;
   double tolerance = 1e-8;      ///< Ipopt tol, finite and > 0
-  /// [s] > 0 for the whole call: Ipopt's max_cpu_time, and a wall-clock check every iteration.
-  double time_budget = 5.0;
+  /// [s] > 0 for the whole call: a safety cap (Ipopt's max_cpu_time, and a wall-clock check
+  /// every iteration), far above what max_iterations takes, so that results do not depend on
+  /// the machine's load; a call it cuts short is not ok and says so.
+  double time_budget = 60.0;
   /// Optional: polled every iteration; true stops the solve (the result is then not ok).
   std::function<bool()> stop;
 };
@@ -42,7 +49,26 @@ struct CollocationResult {
 /// piecewise-constant jerk u and a free duration hₖ per interval, so each interval is an
 /// exact cubic (Hermite–Simpson collocation is exact for it). The start and end states
 /// (position, velocity) are those of `warm_start`, which also initialises every variable (its
-/// states at K evenly spaced times). The result has one cubic piece per interval.
+/// states at the knot times). The result has one cubic piece per interval.
+///
+/// Along a path (`path` given with two or more distinct waypoints; its ends must be the warm
+/// start's): the warm start must follow it (TOPP's blends within `corridor`, or stops). A knot
+/// is put where the warm start passes closest to each interior waypoint, the others spread
+/// evenly in time between them (at least two intervals per segment; K is raised to 2W − 1 for
+/// W waypoints when smaller). Constraints: that knot within `corridor` of its waypoint, and
+/// every other interior knot between waypoints j and j+1 within `corridor` of segment j
+/// (distance to its line, and the projection within the segment), with exact curvature. After a
+/// solve the whole trajectory is bounded exactly (MaxDistanceToSegment per piece); an interval
+/// that bulges beyond `corridor` between its knots tightens their rows by twice the excess and
+/// the problem is solved again (within the same 5 solves as the clearance). The result is ok only within the corridor everywhere
+/// (report.path_deviation). Without a path (free): only the ends are kept, and a warm start that
+/// returns to its start at rest is not ok (its minimum-time trajectory would not move).
+///
+/// The pieces returned are exact: the knot accelerations are corrected by a least-norm Δ (at
+/// most 1e-4 of the limits, else not ok; every limit is then checked on the result exactly) so
+/// that the cubic chain integrated from the start with the solved durations ends exactly at the
+/// end state; positions, velocities and accelerations are then continuous to rounding at every
+/// knot.
 ///
 /// Objective: T + w·∫‖q⃛‖² dt, plus a tie-breaking term of at most 1e-3·T₀-relative size that
 /// keeps the knots evenly spread along a cruise and the joints that do not limit the time
@@ -87,12 +113,14 @@ struct CollocationResult {
 /// Cost is dominated by MUMPS factorising the KKT system (about 7·n·K rows).
 ///
 /// \throws Error(kInvalidArgument) naming the option for knots < 2, negative or non-finite
-///   weight/clearance/activation_distance, max_iterations < 1, tolerance not finite and > 0,
-///   time_budget not > 0, an empty warm start or one with a non-finite end state, a checker
+///   weight/clearance/activation_distance, corridor not in (0, 1], max_iterations < 1, tolerance not finite and > 0,
+///   time_budget not > 0, an empty warm start or one with a non-finite end state, a path whose
+///   ends are not the warm start's (or of another number of joints), a checker
 ///   whose robot has another number of joints, limits that fail Validate, or max_effort
 ///   without a checker whose robot has inertia.
 CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const KinematicLimits& limits,
                                         const CollocationOptions& options,
-                                        const CollisionChecker* checker = nullptr);
+                                        const CollisionChecker* checker = nullptr,
+                                        const JointPath* path = nullptr);
 
 }  // namespace chasles

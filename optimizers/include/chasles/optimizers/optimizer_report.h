@@ -20,6 +20,9 @@ struct OptimizerReport {
   /// ≥ 1: the solved trajectory was slowed by this factor afterwards so that it meets the
   /// limits between knots exactly (1 = not needed).
   double time_scale = 1.0;
+  /// Along a path: an upper bound [rad] on the distance from the result to the path, from exact
+  /// polynomial ranges (<= the corridor when ok); -1 when not measured.
+  double path_deviation = -1.0;
 };
 
 }  // namespace chasles

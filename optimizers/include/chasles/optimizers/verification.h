@@ -133,4 +133,11 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
                                     const JointPath& path, const CollisionChecker* checker,
                                     double max_joint_step = 0.01);
 
+/// An upper bound [rad] on the distance from every position of `piece` to the segment a–b
+/// (Euclidean in joint space), from exact polynomial ranges: with e(τ) = q(τ) − a, d̂ the unit
+/// direction and L the length, √(max ‖e − (d̂ᵀe)d̂‖² + E²) where E is how far d̂ᵀe leaves [0, L]
+/// (0 when it stays inside, and then the bound is the exact maximum). a = b: the exact largest
+/// distance to a.
+double MaxDistanceToSegment(const TimedTrajectory::Piece& piece, const Eigen::VectorXd& a, const Eigen::VectorXd& b);
+
 }  // namespace chasles

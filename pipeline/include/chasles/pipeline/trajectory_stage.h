@@ -44,6 +44,10 @@ struct TrajectorySpec {
   double max_deviation = 0.05;       ///< time-optimal blends [rad], >= 0
   Eigen::VectorXd start_velocity, end_velocity;  ///< empty = at rest (Optimize only)
   CollocationOptions collocation;
+  /// Collocation free of the path (only its ends kept); false = along the path within
+  /// collocation_corridor.
+  bool collocation_free = false;
+  double collocation_corridor = 0.0;  ///< [rad] > 0; 0 = max_deviation
   SplineOptions spline;
 };
 
@@ -67,6 +71,8 @@ struct OptimizerSummary {
   bool fell_back = false;   ///< the requested optimiser's result was not used (reason in `message`)
   std::string message;
   OptimizerReport report;   ///< of the collocation / spline solve (zeros otherwise)
+  double topp_duration = 0.0;           ///< [s] TOPP on the same path (COLLOCATION / SPLINE); 0 = unknown
+  double duration_ratio_to_topp = 0.0;  ///< returned duration / topp_duration; 0 = unknown
   TimeOptimalReport time_optimal;  ///< of the exact parameterisation
 };
 
