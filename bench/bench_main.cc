@@ -673,6 +673,7 @@ double MedianMillis(int repeats, Call&& call) {
 struct MethodRow {
   std::vector<double> ratio, ms, iterations, velocity, acceleration, deviation, clearance;
   int fell_back = 0, failed_verification = 0, runs = 0, fd_violations = 0;
+  std::map<std::string, int> reasons;  ///< why results were not ok: the message up to its first figure
 };
 
 /// Samples 1 ms apart whose finite differences exceed a limit by more than 1e-6 relative: the
@@ -704,6 +705,8 @@ void RecordMethod(MethodRow* row, const TimedTrajectory& trajectory, double ms, 
   ++row->runs;
   if (report != nullptr && !report->ok) {
     ++row->fell_back;
+    const std::size_t figure = report->message.find_first_of("0123456789");
+    ++row->reasons[report->message.substr(0, figure == std::string::npos ? report->message.size() : figure)];
     return;
   }
   const bool obstacles = !checker.scene().empty();
@@ -743,6 +746,12 @@ void PrintMethodRows(const std::string& what, const std::string& ratio_name, std
                 r.fd_violations, QuantileOrNan(r.deviation, 0.5), dmax,
                 std::isfinite(cmin) ? std::to_string(cmin).c_str() : "no obstacles", r.fell_back,
                 r.failed_verification > 0 ? (" (" + std::to_string(r.failed_verification) + " failed verification)").c_str() : "");
+  }
+  for (const std::string& m : order) {
+    if (rows.count(m) == 0 || rows[m].reasons.empty()) continue;
+    std::printf("\n%s, %s not ok:", what.c_str(), m.c_str());
+    for (const auto& [reason, count] : rows[m].reasons) std::printf(" %d× \"%s…\";", count, reason.c_str());
+    std::printf("\n");
   }
 }
 

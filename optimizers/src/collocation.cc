@@ -30,7 +30,7 @@ using collocation::Transcription;
 using Clock = std::chrono::steady_clock;
 using Piece = TimedTrajectory::Piece;
 
-constexpr int kMaxClearanceRounds = 5;       // solves with added clearance pairs
+constexpr int kMaxClearanceRounds = 8;       // solves in all: added clearance pairs, tightened corridor or position bounds
 constexpr int kMaxEffortScalings = 20;       // growing slow-downs tried for torques
 constexpr double kEffortStep = 0.005;        // [rad] torque recheck spacing (VerifyTrajectory's default)
 constexpr double kCollisionStep = 0.005;     // [rad] contact search spacing (VerifyTrajectory's default)
@@ -41,6 +41,8 @@ constexpr double kRegularization = 1e-3;      // ρ/T₀ of the tie-breaking ter
 constexpr double kCorrectionTolerance = 1e-4;  // of the acceleration limit: largest knot correction (ExactChain)
 constexpr double kCorridorMargin = 1e-4;     // relative: the knots' first corridor radius is δ(1 − this)
 constexpr int kWaypointSamples = 32;         // per warm-start piece, to find where it passes a waypoint
+constexpr double kWarmBarrier = 1e-4;        // Ipopt mu_init of a re-solve started from the last solution
+constexpr double kWarmPush = 1e-6;           // Ipopt warm_start_*_push / _frac of such a re-solve
 
 void ValidateOptions(const CollocationOptions& options) {
   if (options.knots < 2) ThrowInvalid("collocation knots = " + std::to_string(options.knots) + " must be >= 2");
@@ -178,6 +180,32 @@ double Objective(const Layout& L, const Eigen::VectorXd& x, double jerk_weight) 
     total += x[L.h(k)] + jerk_weight * jerk / x[L.h(k)];
   }
   return total;
+}
+
+/// Where a piece of `chain` leaves [lower, upper] (exact ranges), adds twice the excess to that
+/// joint's margin at both of the piece's knots (at most a quarter of the joint's range); returns
+/// the largest excess (0: inside everywhere).
+double PullInPositionBounds(const TimedTrajectory& chain, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+                            Eigen::MatrixXd* margin) {
+  const int n = chain.num_dofs();
+  const int knots = static_cast<int>(chain.pieces().size()) + 1;
+  double worst = 0.0;
+  for (int k = 0; k + 1 < knots; ++k) {
+    const Piece& piece = chain.pieces()[k];
+    for (int i = 0; i < n; ++i) {
+      const Eigen::VectorXd c = piece.coefficients.row(i).transpose();
+      double lo, hi;
+      poly::Range(c.data(), static_cast<int>(c.size()), piece.duration, &lo, &hi);
+      const double excess = std::max(lower[i] - lo, hi - upper[i]);
+      // Rounding (the final check's tolerance) is not an excess.
+      if (!(excess > 1e-12 * std::max({1.0, std::abs(lower[i]), std::abs(upper[i])}))) continue;
+      if (margin->size() == 0) *margin = Eigen::MatrixXd::Zero(knots, n);
+      const double cap = (upper[i] - lower[i]) / 4;
+      for (int knot : {k, k + 1}) (*margin)(knot, i) = std::min((*margin)(knot, i) + 2 * excess, cap);
+      worst = std::max(worst, excess);
+    }
+  }
+  return worst;
 }
 
 /// The path being followed: its distinct waypoints and, per interval, the segment it follows.
@@ -715,10 +743,22 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     }
   }
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = MakeIpopt(options);
+  collocation::Multipliers duals;  // of the last solve, when the next has the same rows
   for (;; ++rounds) {
     const double remaining = options.time_budget - elapsed();
     app->Options()->SetNumericValue("max_cpu_time", std::max(1e-3, std::min(remaining, 1e6)));
-    Ipopt::SmartPtr<CollocationNlp> nlp = new CollocationNlp(t, start);
+    // A re-solve whose rows are those of the last solve (bounds tightened) starts from its
+    // primal and dual solution with a small barrier parameter instead of from scratch.
+    const bool warm_duals = duals.rows.size() != 0;
+    app->Options()->SetStringValue("warm_start_init_point", warm_duals ? "yes" : "no");
+    if (warm_duals) {
+      app->Options()->SetNumericValue("mu_init", kWarmBarrier);
+      for (const char* push : {"warm_start_bound_push", "warm_start_bound_frac", "warm_start_mult_bound_push",
+                               "warm_start_slack_bound_push", "warm_start_slack_bound_frac"}) {
+        app->Options()->SetNumericValue(push, kWarmPush);
+      }
+    }
+    Ipopt::SmartPtr<CollocationNlp> nlp = new CollocationNlp(t, start, warm_duals ? duals : collocation::Multipliers{});
     const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::GetRawPtr(nlp));
     report.status = StatusName(status);
     Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics();
@@ -744,6 +784,7 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     x = nlp->solution();
     report.objective = Objective(layout, x, options.jerk_weight);
     bool again = false, contact = false;
+    const std::size_t pairs_before = t.pairs.size();
     if (along) {
       // The exact bound of the solution's distance to the path. Rows sit at knots only (their
       // curvature is exact there); an interval that bulges beyond the corridor between them
@@ -772,6 +813,21 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
         again = true;
       }
     }
+    if (checker != nullptr) {
+      // Position limits hold at the knots (variable bounds); a cubic that bulges past one
+      // between them pulls that joint's bounds at both knots in by twice the excess.
+      double correction = 0.0;
+      const TimedTrajectory chain = ExactChain(layout, x, t, &correction);
+      const double excess = PullInPositionBounds(chain, t.position_lower, t.position_upper, &t.position_margin);
+      if (excess > 0.0) {
+        if (rounds + 1 >= kMaxClearanceRounds) {
+          failure = "a joint leaves its position limits between knots by " + FormatNumber(excess) + " rad after " +
+                    std::to_string(rounds + 1) + " solves";
+          break;
+        }
+        again = true;
+      }
+    }
     if (guard != nullptr) {
       const ClearanceFindings found = guard->Check(x, &t.pairs);
       if (!std::isinf(found.worst)) {
@@ -793,6 +849,7 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     }
     // Continue from the solution, unless it touches an obstacle (no distance gradient there).
     start = contact ? warm : x;
+    duals = !contact && t.pairs.size() == pairs_before ? nlp->multipliers() : collocation::Multipliers{};
   }
   app = nullptr;  // MUMPS' instance ends with the application, still under the lock
   lock.unlock();

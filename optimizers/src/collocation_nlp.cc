@@ -51,8 +51,8 @@ Eigen::VectorXd PositionAt(const Layout& layout, const double* x, Instant at) {
   return q;
 }
 
-CollocationNlp::CollocationNlp(const Transcription& transcription, Eigen::VectorXd initial)
-    : t_(transcription), initial_(std::move(initial)) {
+CollocationNlp::CollocationNlp(const Transcription& transcription, Eigen::VectorXd initial, Multipliers multipliers)
+    : t_(transcription), initial_(std::move(initial)), start_multipliers_(std::move(multipliers)) {
   layout_.n = t_.num_dofs;
   layout_.intervals = t_.knots - 1;
   const int n = layout_.n, intervals = layout_.intervals;
@@ -234,8 +234,9 @@ void CollocationNlp::Bounds(std::vector<double>* x_l, std::vector<double>* x_u, 
   x_u->assign(L.size(), 0.0);
   for (int k = 0; k <= L.intervals; ++k) {
     for (int i = 0; i < n; ++i) {
-      (*x_l)[L.q(k, i)] = Bound(t_.position_lower[i]);
-      (*x_u)[L.q(k, i)] = Bound(t_.position_upper[i]);
+      const double margin = t_.position_margin.size() != 0 ? t_.position_margin(k, i) : 0.0;
+      (*x_l)[L.q(k, i)] = Bound(t_.position_lower[i] + margin);
+      (*x_u)[L.q(k, i)] = Bound(t_.position_upper[i] - margin);
       (*x_l)[L.v(k, i)] = -t_.max_velocity[i];
       (*x_u)[L.v(k, i)] = t_.max_velocity[i];
       (*x_l)[L.a(k, i)] = -t_.max_acceleration[i];
@@ -345,10 +346,21 @@ bool CollocationNlp::get_scaling_parameters(Ipopt::Number& obj_scaling, bool& us
   return true;
 }
 
-bool CollocationNlp::get_starting_point(Ipopt::Index n, bool init_x, Ipopt::Number* x, bool init_z, Ipopt::Number*,
-                                        Ipopt::Number*, Ipopt::Index, bool init_lambda, Ipopt::Number*) {
-  if (!init_x || init_z || init_lambda || n != initial_.size()) return false;
+bool CollocationNlp::get_starting_point(Ipopt::Index n, bool init_x, Ipopt::Number* x, bool init_z,
+                                        Ipopt::Number* z_L, Ipopt::Number* z_U, Ipopt::Index m, bool init_lambda,
+                                        Ipopt::Number* lambda) {
+  if (!init_x || n != initial_.size()) return false;
   std::copy(initial_.data(), initial_.data() + n, x);
+  const Multipliers& w = start_multipliers_;
+  if (init_z) {
+    if (w.lower.size() != n || w.upper.size() != n) return false;
+    std::copy(w.lower.data(), w.lower.data() + n, z_L);
+    std::copy(w.upper.data(), w.upper.data() + n, z_U);
+  }
+  if (init_lambda) {
+    if (w.rows.size() != m) return false;
+    std::copy(w.rows.data(), w.rows.data() + m, lambda);
+  }
   return true;
 }
 
@@ -760,10 +772,13 @@ bool CollocationNlp::eval_h(Ipopt::Index, const Ipopt::Number* x, bool, Ipopt::N
 }
 
 void CollocationNlp::finalize_solution(Ipopt::SolverReturn, Ipopt::Index n, const Ipopt::Number* x,
-                                       const Ipopt::Number*, const Ipopt::Number*, Ipopt::Index m,
-                                       const Ipopt::Number* g, const Ipopt::Number*, Ipopt::Number,
+                                       const Ipopt::Number* z_L, const Ipopt::Number* z_U, Ipopt::Index m,
+                                       const Ipopt::Number* g, const Ipopt::Number* lambda, Ipopt::Number,
                                        const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) {
   solution_ = Eigen::Map<const Eigen::VectorXd>(x, n);
+  multipliers_.lower = Eigen::Map<const Eigen::VectorXd>(z_L, n);
+  multipliers_.upper = Eigen::Map<const Eigen::VectorXd>(z_U, n);
+  multipliers_.rows = Eigen::Map<const Eigen::VectorXd>(lambda, m);
   std::vector<double> xl, xu, gl, gu;
   Bounds(&xl, &xu, &gl, &gu);
   violation_ = 0.0;

@@ -84,6 +84,9 @@ struct Transcription {
   /// without converging. Both terms are <= ρ·(T/h₀ + T) for any trajectory.
   double regularization = 0.0;
   Eigen::VectorXd position_lower, position_upper;  ///< ±inf when unknown
+  /// K × n, >= 0 (or empty): knot k's position bounds for joint i are pulled in by (k, i), so
+  /// that the cubic between knots stays inside where it bulged out of a solve.
+  Eigen::MatrixXd position_margin;
   Eigen::VectorXd max_velocity, max_acceleration;
   Eigen::VectorXd max_jerk;    ///< empty = none
   Eigen::VectorXd max_effort;  ///< empty = none (then `robot` may be null)
@@ -126,12 +129,19 @@ void PointState(const Layout& layout, const double* x, int point, Eigen::VectorX
 /// Position at an instant of the variable vector x.
 Eigen::VectorXd PositionAt(const Layout& layout, const double* x, Instant at);
 
+/// The multipliers of a solve, to start the next one of the same structure from.
+struct Multipliers {
+  Eigen::VectorXd lower, upper, rows;  ///< bound multipliers z_L, z_U and row multipliers λ
+};
+
 class CollocationNlp : public Ipopt::TNLP {
  public:
-  /// `initial` is the starting point (Layout::size() values).
-  CollocationNlp(const Transcription& transcription, Eigen::VectorXd initial);
+  /// `initial` is the starting point (Layout::size() values); `multipliers` (optional, sizes
+  /// matching) start the duals when Ipopt's warm_start_init_point asks for them.
+  CollocationNlp(const Transcription& transcription, Eigen::VectorXd initial, Multipliers multipliers = {});
 
   const Eigen::VectorXd& solution() const { return solution_; }
+  const Multipliers& multipliers() const { return multipliers_; }
   /// Largest violation of any constraint or bound at the solution, unscaled.
   double violation() const { return violation_; }
   bool stopped() const { return stopped_; }
@@ -180,6 +190,7 @@ class CollocationNlp : public Ipopt::TNLP {
   const Transcription& t_;
   Layout layout_;
   Eigen::VectorXd initial_, solution_;
+  Multipliers start_multipliers_, multipliers_;
   double violation_ = 0.0;
   bool stopped_ = false;
   int rows_defects_ = 0, rows_velocity_ = 0, rows_jerk_ = 0, rows_torque_ = 0, rows_clearance_ = 0,

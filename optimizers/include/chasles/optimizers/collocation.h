@@ -59,8 +59,9 @@ struct CollocationResult {
 /// every other interior knot between waypoints j and j+1 within `corridor` of segment j
 /// (distance to its line, and the projection within the segment), with exact curvature. After a
 /// solve the whole trajectory is bounded exactly (MaxDistanceToSegment per piece); an interval
-/// that bulges beyond `corridor` between its knots tightens their rows by twice the excess and
-/// the problem is solved again (within the same 5 solves as the clearance). The result is ok only within the corridor everywhere
+/// that bulges beyond `corridor` between its knots tightens its two knots' rows by twice the
+/// excess, and the problem is solved again (within the same 8 solves as
+/// the clearance and the position limits). The result is ok only within the corridor everywhere
 /// (report.path_deviation). Without a path (free): only the ends are kept, and a warm start that
 /// returns to its start at rest is not ok (its minimum-time trajectory would not move).
 ///
@@ -88,8 +89,11 @@ struct CollocationResult {
 /// the joint-space motion over each half interval at most max(0.05 rad, twice the warm start's
 /// average), so that a link cannot cross an obstacle between two checked instants. After each
 /// solve the checked instants are verified and the motion searched for contact every 0.005 rad;
-/// a violating link is then constrained everywhere and the problem solved again (at most 5
-/// solves; from the warm start again when a link touched).
+/// a violating link is then constrained everywhere and the problem solved again (at most 8
+/// solves; from the warm start again when a link touched). With a checker, a cubic that leaves
+/// a position limit between knots pulls that joint's bounds at both knots in by twice the
+/// excess for the next solve. A re-solve with the same rows (only bounds tightened) starts from
+/// the last primal and dual solution (Ipopt's warm start, mu_init 1e-4).
 ///
 /// Afterwards the exact maxima of velocity, acceleration and jerk over each cubic give
 /// r = max(velocity ratio, √acceleration ratio, ∛jerk ratio); r > 1 (rounding, bound
@@ -104,7 +108,7 @@ struct CollocationResult {
 /// Not ok (report.message says why; the caller falls back to an exact parameterisation):
 /// Ipopt did not converge (Infeasible_Problem_Detected, iteration or time limit, stop()),
 /// defects left open by more than 1e-7, position limits left between knots, a clearance still
-/// violated after 5 solves, torques no slow-down meets, a slow-down that would change a
+/// violated after 8 solves, torques no slow-down meets, a slow-down that would change a
 /// non-zero end velocity, or a failed verification.
 /// Deterministic for the same input (unless the time budget cuts a solve short).
 ///
