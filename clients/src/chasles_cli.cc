@@ -327,6 +327,11 @@ void PrintOptimizer(const v1::OptimizerStatistics& o, const v1::TrajectoryQualit
   if (o.blends() > 0 || o.blends_tightened() > 0) {
     std::printf("blends      %d corners blended (%d tightened off obstacles)\n", o.blends(), o.blends_tightened());
   }
+  if (o.duration_ratio_to_topp() > 0.0) {
+    std::printf("vs TOPP     %.6f of TOPP's %.4f s", o.duration_ratio_to_topp(), o.topp_duration());
+    if (o.path_deviation() >= 0.0) std::printf("; within %.6f rad of the path (exact bound)", o.path_deviation());
+    std::printf("\n");
+  }
   // An empty scene has no clearance to report (the server sends the largest double).
   char clearance[64];
   if (q.min_clearance() > 1e300) {

@@ -484,6 +484,79 @@ double DistanceToSegment(Eigen::Ref<const Eigen::VectorXd> x, Eigen::Ref<const E
   return std::sqrt(d2);
 }
 
+constexpr double kDeviationTolerance = 1e-9;  // [rad] how far max_deviation may stay below the true figure
+constexpr int kMaxDeviationSplits = 2000;     // spans split in all before that figure is left as sampled
+
+/// The piece's polynomials on [τ0, τ0 + h], re-expanded about τ0 (a Taylor shift), as a piece of
+/// duration h.
+Piece SubPiece(const Piece& piece, double tau0, double h) {
+  Piece out;
+  out.t0 = piece.t0 + tau0;
+  out.duration = h;
+  const int size = static_cast<int>(piece.coefficients.cols());
+  out.coefficients = Eigen::MatrixXd::Zero(piece.coefficients.rows(), size);
+  for (int m = 0; m < size; ++m) {
+    double binomial = 1.0, power = 1.0;  // C(m, j) and τ0^(m − j), from j = m down
+    for (int j = m; j >= 0; --j) {
+      out.coefficients.col(j) += binomial * power * piece.coefficients.col(m);
+      binomial = binomial * j / (m - j + 1);
+      power *= tau0;
+    }
+  }
+  return out;
+}
+
+/// Raises `deviation` — the largest distance from sampled trajectory states to the path's
+/// polyline, a true value — to the largest over the whole continuous trajectory, within
+/// kDeviationTolerance. A span whose bound (the least over segments of MaxDistanceToSegment, exact
+/// polynomial ranges) is above the figure by more is split in two and its midpoint's distance
+/// taken, at most kMaxDeviationSplits times in all; false when that was not enough.
+bool RefineDeviation(const TimedTrajectory& trajectory, const JointPath& path, double* deviation) {
+  struct Span {
+    std::size_t piece;
+    double tau0, h;
+  };
+  const std::vector<Piece>& pieces = trajectory.pieces();
+  std::vector<Span> spans;
+  for (std::size_t p = pieces.size(); p-- > 0;) {
+    if (pieces[p].duration > 0.0) spans.push_back({p, 0.0, pieces[p].duration});
+  }
+  const std::size_t segments = path.size() - 1;
+  int splits = 0;
+  while (!spans.empty()) {
+    const Span span = spans.back();
+    spans.pop_back();
+    const Piece sub = SubPiece(pieces[span.piece], span.tau0, span.h);
+    Eigen::VectorXd middle(sub.coefficients.rows());
+    for (Eigen::Index i = 0; i < middle.size(); ++i) {
+      middle[i] = poly::Eval(sub.coefficients.data() + i, static_cast<int>(sub.coefficients.cols()), span.h / 2,
+                             static_cast<int>(sub.coefficients.rows()));
+    }
+    // The segment nearest the span's middle first: usually the only one tried.
+    std::size_t nearest = 0;
+    double middle_distance = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < segments; ++k) {
+      const double d = DistanceToSegment(middle, path[k], path[k + 1]);
+      if (d < middle_distance) {
+        middle_distance = d;
+        nearest = k;
+      }
+    }
+    *deviation = std::max(*deviation, middle_distance);
+    const double enough = *deviation + kDeviationTolerance;
+    bool settled = false;
+    for (std::size_t i = 0; i < segments && !settled; ++i) {
+      const std::size_t k = (nearest + i) % segments;
+      settled = MaxDistanceToSegment(sub, path[k], path[k + 1]) <= enough;
+    }
+    if (settled) continue;
+    if (++splits > kMaxDeviationSplits) return false;
+    spans.push_back({span.piece, span.tau0 + span.h / 2, span.h / 2});
+    spans.push_back({span.piece, span.tau0, span.h / 2});
+  }
+  return true;
+}
+
 constexpr double kClearanceTolerance = 1e-4;  // [m]
 constexpr double kClearanceRelativeTolerance = 0.02;  // of the clearance: 1 mm at 5 cm
 constexpr int kMaxClearanceStates = 5000;
@@ -722,6 +795,8 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
     deviation(
         static_cast<std::size_t>(states.cols()), [&](std::size_t p) { return states.col(static_cast<Eigen::Index>(p)); },
         path.size() - 1, [&](const auto& x, std::size_t k) { return DistanceToSegment(x, path[k], path[k + 1]); });
+    // Between the sampled states, exactly (to 1e-9 rad) by bounds on spans of the pieces.
+    RefineDeviation(trajectory, path, &out.max_deviation);
     // Each waypoint to the trajectory itself, exactly: per piece the least of |q(τ) − w|² (a
     // polynomial, poly::Range), not chords between sampled states (which lie outside a blend's
     // curve and overstated the distance to the corner it cuts).

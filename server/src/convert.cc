@@ -866,7 +866,8 @@ void OptimizerToProto(const OptimizerSummary& summary, v1::OptimizerStatistics* 
   out->set_blends_tightened(summary.time_optimal.blends_tightened);
   out->set_duration_ratio_to_topp(summary.duration_ratio_to_topp);
   out->set_topp_duration(summary.topp_duration);
-  out->set_path_deviation(summary.report.path_deviation);
+  // Of the returned trajectory only: a collocation result that fell back says nothing of it.
+  out->set_path_deviation(summary.used == PostProcessing::kCollocation ? summary.report.path_deviation : -1.0);
 }
 
 void VerificationToProto(const VerificationReport& report, double max_joint_step, v1::Verification* out) {

@@ -329,6 +329,51 @@ TEST_F(VerificationTest, ABlendIsReportedWithinTheDeviationItWasBuiltFor) {
   }
 }
 
+TEST_F(VerificationTest, ADeviationBetweenSampledStatesIsFoundExactly) {
+  // One cubic piece along the x axis that bulges off it: y(τ) = 0.3·τ²(1 − τ) peaks at τ = 2/3
+  // with 0.3·4/27 = 0.0444…, between the states a coarse step samples (at 0.2: 0.0432).
+  TimedTrajectory::Piece piece;
+  piece.duration = 1.0;
+  piece.coefficients = Eigen::MatrixXd::Zero(2, 4);
+  piece.coefficients(0, 1) = 1.0;
+  piece.coefficients(1, 2) = 0.3;
+  piece.coefficients(1, 3) = -0.3;
+  const TimedTrajectory bulge({piece}, Eigen::Vector2d(1.0, 0.0));
+  const JointPath line = {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(1.0, 0.0)};
+  const double exact = 0.3 * 4.0 / 27.0;
+  KinematicLimits limits;
+  limits.max_velocity = Eigen::Vector2d(10.0, 10.0);
+  limits.max_acceleration = Eigen::Vector2d(10.0, 10.0);
+  for (double step : {0.01, 0.05, 0.2}) {
+    const TrajectoryQuality quality = MeasureTrajectory(bulge, limits, line, nullptr, step);
+    EXPECT_LE(quality.max_deviation, exact + 1e-12) << "step " << step;
+    EXPECT_NEAR(quality.max_deviation, exact, 1e-9) << "step " << step;
+  }
+  // Around a corner (the largest distance where the nearest segment changes): the blend's middle.
+  const JointPath corner = {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(1.0, 0.0), Eigen::Vector2d(1.0, 1.0)};
+  TimeOptimalOptions options;
+  options.max_deviation = 0.05;
+  const TimedTrajectory blended = ParameterizeTimeOptimal(corner, limits, options);
+  double farthest = 0.0;  // independently: states 1e-6 s apart, distance to the polyline
+  for (double t = 0.0; t <= blended.duration(); t += 1e-6) {
+    const Eigen::VectorXd q = blended.Evaluate(t).q;
+    double d = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k + 1 < corner.size(); ++k) {
+      const Eigen::VectorXd ab = corner[k + 1] - corner[k];
+      const double s = std::clamp((q - corner[k]).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+      d = std::min(d, (q - corner[k] - s * ab).norm());
+    }
+    farthest = std::max(farthest, d);
+  }
+  double to_corner = std::numeric_limits<double>::infinity();  // and the other way, from the corner
+  for (double t = 0.0; t <= blended.duration(); t += 1e-6) to_corner = std::min(to_corner, (blended.Evaluate(t).q - corner[1]).norm());
+  for (double step : {0.01, 0.2}) {
+    const TrajectoryQuality quality = MeasureTrajectory(blended, limits, corner, nullptr, step);
+    EXPECT_GE(quality.max_deviation, farthest - 1e-12) << "step " << step;
+    EXPECT_NEAR(quality.max_deviation, std::max(farthest, to_corner), 1e-5) << "step " << step;  // the dense spacing
+  }
+}
+
 TEST_F(VerificationTest, TrajectoryThroughTheObstacleFailsNamingLinkAndObstacle) {
   const TimedTrajectory straight = ParameterizeRestToRest({path_.front(), path_.back()}, limits_);
   const VerificationReport report = VerifyTrajectory(straight, path_.front(), path_.back(), *checker_, limits_);

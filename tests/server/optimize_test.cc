@@ -90,6 +90,7 @@ TEST_F(OptimizeTest, EveryPostProcessingReturnsAVerifiedTrajectoryOfTheUsersPath
       case v1::TrajectoryOptions::TOPP:
         topp = response.duration();
         EXPECT_EQ(o.used(), "topp");
+        EXPECT_EQ(o.path_deviation(), -1.0);  // collocation's bound only
         EXPECT_LE(response.quality().max_deviation(), 0.05 + 1e-3);
         break;
       case v1::TrajectoryOptions::NONE:
