@@ -183,10 +183,10 @@ double Objective(const Layout& L, const Eigen::VectorXd& x, double jerk_weight) 
 }
 
 /// Where a piece of `chain` leaves [lower, upper] (exact ranges), adds twice the excess to that
-/// joint's margin at both of the piece's knots (at most a quarter of the joint's range); returns
-/// the largest excess (0: inside everywhere).
+/// joint's margin at both of the piece's knots (at most `most`, and a quarter of the joint's
+/// range); returns the largest excess (0: inside everywhere).
 double PullInPositionBounds(const TimedTrajectory& chain, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
-                            Eigen::MatrixXd* margin) {
+                            double most, Eigen::MatrixXd* margin) {
   const int n = chain.num_dofs();
   const int knots = static_cast<int>(chain.pieces().size()) + 1;
   double worst = 0.0;
@@ -200,7 +200,7 @@ double PullInPositionBounds(const TimedTrajectory& chain, const Eigen::VectorXd&
       // Rounding (the final check's tolerance) is not an excess.
       if (!(excess > 1e-12 * std::max({1.0, std::abs(lower[i]), std::abs(upper[i])}))) continue;
       if (margin->size() == 0) *margin = Eigen::MatrixXd::Zero(knots, n);
-      const double cap = (upper[i] - lower[i]) / 4;
+      const double cap = std::min(most, (upper[i] - lower[i]) / 4);
       for (int knot : {k, k + 1}) (*margin)(knot, i) = std::min((*margin)(knot, i) + 2 * excess, cap);
       worst = std::max(worst, excess);
     }
@@ -818,7 +818,9 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
       // between them pulls that joint's bounds at both knots in by twice the excess.
       double correction = 0.0;
       const TimedTrajectory chain = ExactChain(layout, x, t, &correction);
-      const double excess = PullInPositionBounds(chain, t.position_lower, t.position_upper, &t.position_margin);
+      // Along a path at most half the corridor, so that a waypoint on a limit stays within reach.
+      const double most = along ? options.corridor / 2 : std::numeric_limits<double>::infinity();
+      const double excess = PullInPositionBounds(chain, t.position_lower, t.position_upper, most, &t.position_margin);
       if (excess > 0.0) {
         if (rounds + 1 >= kMaxClearanceRounds) {
           failure = "a joint leaves its position limits between knots by " + FormatNumber(excess) + " rad after " +
