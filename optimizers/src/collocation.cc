@@ -196,9 +196,11 @@ double PullInPositionBounds(const TimedTrajectory& chain, const Eigen::VectorXd&
       const Eigen::VectorXd c = piece.coefficients.row(i).transpose();
       double lo, hi;
       poly::Range(c.data(), static_cast<int>(c.size()), piece.duration, &lo, &hi);
-      const double excess = std::max(lower[i] - lo, hi - upper[i]);
-      // Rounding (the final check's tolerance) is not an excess.
-      if (!(excess > 1e-12 * std::max({1.0, std::abs(lower[i]), std::abs(upper[i])}))) continue;
+      // Rounding, 1e-12 of the limit, is not an excess.
+      const double below = lower[i] - lo, above = hi - upper[i];
+      const bool out = below > 1e-12 * std::max(1.0, std::abs(lower[i])) || above > 1e-12 * std::max(1.0, std::abs(upper[i]));
+      if (!out) continue;
+      const double excess = std::max(below, above);
       if (margin->size() == 0) *margin = Eigen::MatrixXd::Zero(knots, n);
       const double cap = std::min(most, (upper[i] - lower[i]) / 4);
       for (int knot : {k, k + 1}) (*margin)(knot, i) = std::min((*margin)(knot, i) + 2 * excess, cap);
@@ -728,6 +730,8 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   // thread of the process may use Ipopt at a time (IpoptLock).
   Eigen::VectorXd start = warm;
   Eigen::VectorXd x;
+  TimedTrajectory chain;    // x's pieces with the defects closed (ExactChain)
+  double correction = 0.0;  // ExactChain's largest knot correction for x
   bool solved = false;
   int rounds = 0;
   std::string failure;
@@ -783,15 +787,15 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     }
     x = nlp->solution();
     report.objective = Objective(layout, x, options.jerk_weight);
+    chain = ExactChain(layout, x, t, &correction);
     bool again = false, contact = false;
     const std::size_t pairs_before = t.pairs.size();
     if (along) {
       // The exact bound of the solution's distance to the path. Rows sit at knots only (their
       // curvature is exact there); an interval that bulges beyond the corridor between them
       // tightens its two knots' segment rows by twice the excess for the next solve.
-      double correction = 0.0;
       std::vector<double> per_interval;
-      const double bound = CorridorBound(ExactChain(layout, x, t, &correction), following, &per_interval);
+      const double bound = CorridorBound(chain, following, &per_interval);
       report.path_deviation = bound;
       if (bound > options.corridor) {
         const int worst = static_cast<int>(std::max_element(per_interval.begin(), per_interval.end()) - per_interval.begin());
@@ -802,8 +806,8 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
           break;
         }
         for (int k = 0; k < layout.intervals; ++k) {
-          const double excess = per_interval[k] - options.corridor * (1.0 - kCorridorMargin);
           if (per_interval[k] <= options.corridor) continue;
+          const double excess = per_interval[k] - options.corridor * (1.0 - kCorridorMargin);
           for (CorridorRow& row : t.corridor) {
             if (row.direction.size() == 0 || (row.at.interval != k && row.at.interval != k + 1)) continue;
             row.radius = std::max(row.radius - 2 * excess, 0.1 * options.corridor);
@@ -816,8 +820,6 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     if (checker != nullptr) {
       // Position limits hold at the knots (variable bounds); a cubic that bulges past one
       // between them pulls that joint's bounds at both knots in by twice the excess.
-      double correction = 0.0;
-      const TimedTrajectory chain = ExactChain(layout, x, t, &correction);
       // Along a path at most half the corridor, so that a waypoint on a limit stays within reach.
       const double most = along ? options.corridor / 2 : std::numeric_limits<double>::infinity();
       const double excess = PullInPositionBounds(chain, t.position_lower, t.position_upper, most, &t.position_margin);
@@ -861,37 +863,13 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     return result;
   }
 
-  // The trajectory with its defects closed exactly, and its exact limits between knots.
-  double correction = 0.0;
-  TimedTrajectory trajectory = ExactChain(layout, x, t, &correction);
+  // The trajectory: the last solve's chain, which the loop found inside the corridor and the
+  // position limits between knots (exactly; time scaling below keeps both); its exact limits.
+  TimedTrajectory trajectory = std::move(chain);
   std::string problem;
   if (!(correction <= kCorrectionTolerance)) {
     problem = "the collocation defects are not closed: closing them changes a knot acceleration by " +
               FormatNumber(correction) + " of its limit (at most " + FormatNumber(kCorrectionTolerance) + ")";
-  }
-  if (problem.empty() && along) {
-    std::vector<double> per_interval;
-    report.path_deviation = CorridorBound(trajectory, following, &per_interval);
-    if (report.path_deviation > options.corridor) {
-      problem = "the trajectory leaves the path's corridor of " + FormatNumber(options.corridor) + " rad (" +
-                FormatNumber(report.path_deviation) + " rad)";
-    }
-  }
-  if (problem.empty() && checker != nullptr) {
-    const Eigen::VectorXd& lower = checker->robot().lower_limits();
-    const Eigen::VectorXd& upper = checker->robot().upper_limits();
-    for (const Piece& piece : trajectory.pieces()) {
-      for (int i = 0; i < n && problem.empty(); ++i) {
-        const Eigen::VectorXd c = piece.coefficients.row(i).transpose();
-        double lo, hi;
-        poly::Range(c.data(), 4, piece.duration, &lo, &hi);
-        if (lo < lower[i] - 1e-12 * std::max(1.0, std::abs(lower[i])) ||
-            hi > upper[i] + 1e-12 * std::max(1.0, std::abs(upper[i]))) {
-          problem = "joint " + std::to_string(i) + " leaves its position limits between knots (t = " +
-                    FormatNumber(piece.t0) + " s … " + FormatNumber(piece.t0 + piece.duration) + " s)";
-        }
-      }
-    }
   }
   double scale = std::max(MaxRatio(trajectory, 1, limits.max_velocity),
                           std::sqrt(MaxRatio(trajectory, 2, limits.max_acceleration)));
