@@ -696,21 +696,9 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
       const double jerk = poly::MaxAbsDerivative(c.data(), size, 3, piece.duration);
       out.max_jerk = std::max(out.max_jerk, jerk);
       if (limits.max_jerk.size() == n) out.max_jerk_ratio = std::max(out.max_jerk_ratio, jerk / limits.max_jerk[i]);
-      // ∫ (q⃛ᵢ)² dτ of the jerk polynomial, exactly: square it, integrate term by term.
-      if (size >= 4) {
-        std::vector<double> j;
-        for (int p = 3; p < size; ++p) j.push_back(c[p] * p * (p - 1) * (p - 2));
-        double integral = 0.0;
-        for (std::size_t a = 0; a < j.size(); ++a) {
-          for (std::size_t b = 0; b < j.size(); ++b) {
-            const int power = static_cast<int>(a + b) + 1;
-            integral += j[a] * j[b] * std::pow(piece.duration, power) / power;
-          }
-        }
-        out.jerk_integral += integral;
-      }
     }
   }
+  out.jerk_integral = JerkIntegral(trajectory);
   // Sampled figures: states spaced by at most `step` of joint motion within each piece, and
   // every piece boundary (where a waypoint is passed exactly when the robot stops there).
   std::vector<double> travel;  // per piece
@@ -805,6 +793,28 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
         [&](const Eigen::VectorXd& w, std::size_t k) { return DistanceToPiece(w, trajectory.pieces()[k]); });
   }
   return out;
+}
+
+double JerkIntegral(const TimedTrajectory& trajectory) {
+  double total = 0.0;
+  for (const Piece& piece : trajectory.pieces()) {
+    const int size = static_cast<int>(piece.coefficients.cols());
+    if (size < 4) continue;
+    for (Eigen::Index i = 0; i < piece.coefficients.rows(); ++i) {
+      // ∫ (q⃛ᵢ)² dτ of the jerk polynomial, exactly: square it, integrate term by term.
+      std::vector<double> j;
+      for (int p = 3; p < size; ++p) j.push_back(piece.coefficients(i, p) * p * (p - 1) * (p - 2));
+      double integral = 0.0;
+      for (std::size_t a = 0; a < j.size(); ++a) {
+        for (std::size_t b = 0; b < j.size(); ++b) {
+          const int power = static_cast<int>(a + b) + 1;
+          integral += j[a] * j[b] * std::pow(piece.duration, power) / power;
+        }
+      }
+      total += integral;
+    }
+  }
+  return total;
 }
 
 double MaxDistanceToSegment(const Piece& piece, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {

@@ -31,32 +31,17 @@ void CheckVector(const Eigen::VectorXd& v, int n, const std::string& field) {
   }
 }
 
-/// ∫‖q⃛‖² dt over the trajectory, exactly; +inf when an acceleration jumps between pieces (a
-/// step has unbounded jerk), as TOPP's do.
-double JerkIntegral(const TimedTrajectory& trajectory) {
-  double total = 0.0;
+/// ∫‖q⃛‖² dt of the trajectory as an optimiser's objective sees it: JerkIntegral inside the
+/// pieces, +inf when an acceleration jumps between pieces (a step has unbounded jerk), as TOPP's do.
+double ObjectiveJerkIntegral(const TimedTrajectory& trajectory) {
   const std::vector<TimedTrajectory::Piece>& pieces = trajectory.pieces();
-  for (std::size_t k = 0; k < pieces.size(); ++k) {
-    const TimedTrajectory::Piece& piece = pieces[k];
-    const int n = static_cast<int>(piece.coefficients.rows()), size = static_cast<int>(piece.coefficients.cols());
-    if (k + 1 < pieces.size()) {
-      for (int i = 0; i < n; ++i) {
-        const double end = piece.Derivative(i, 2, piece.duration), next = pieces[k + 1].Derivative(i, 2, 0.0);
-        if (std::abs(end - next) > 1e-9 * std::max(1.0, std::abs(next))) return std::numeric_limits<double>::infinity();
-      }
-    }
-    // q⃛ᵢ(τ) = Σₘ m(m−1)(m−2) cₘ τ^(m−3); its square integrated term by term.
-    for (int i = 0; i < n; ++i) {
-      for (int a = 3; a < size; ++a) {
-        for (int b = 3; b < size; ++b) {
-          const double ca = a * (a - 1) * (a - 2) * piece.coefficients(i, a);
-          const double cb = b * (b - 1) * (b - 2) * piece.coefficients(i, b);
-          total += ca * cb * std::pow(piece.duration, a + b - 5) / (a + b - 5);
-        }
-      }
+  for (std::size_t k = 0; k + 1 < pieces.size(); ++k) {
+    for (int i = 0; i < trajectory.num_dofs(); ++i) {
+      const double end = pieces[k].Derivative(i, 2, pieces[k].duration), next = pieces[k + 1].Derivative(i, 2, 0.0);
+      if (std::abs(end - next) > 1e-9 * std::max(1.0, std::abs(next))) return std::numeric_limits<double>::infinity();
     }
   }
-  return total;
+  return JerkIntegral(trajectory);
 }
 
 }  // namespace
@@ -194,8 +179,6 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
         if (e.code() != ErrorCode::kFailedPrecondition) throw;
       }
     }
-  }
-  if (optimise) {
     t = Clock::now();
     const char* name = method == PostProcessing::kCollocation ? "collocation" : "spline smoothing";
     OptimizerReport report;
@@ -235,7 +218,7 @@ TrajectoryStageResult RunTrajectoryStage(const JointPath& path, const CollisionC
       // unbounded jerk, so with w > 0 only a jerk-limited warm start can win.
       const double w = method == PostProcessing::kCollocation ? spec.collocation.jerk_weight : spec.spline.jerk_weight;
       const auto objective = [w](const TimedTrajectory& trajectory) {
-        return trajectory.duration() + (w > 0.0 ? w * JerkIntegral(trajectory) : 0.0);
+        return trajectory.duration() + (w > 0.0 ? w * ObjectiveJerkIntegral(trajectory) : 0.0);
       };
       const double mine = objective(candidate), theirs = objective(exact);
       if (checked.ok && !(mine > theirs)) {

@@ -135,6 +135,11 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
                                     const JointPath& path, const CollisionChecker* checker,
                                     double max_joint_step = 0.01);
 
+/// ∫‖q⃛‖² dt over the pieces, exactly (each jerk polynomial squared and integrated term by
+/// term) [rad²/s⁵]; steps of acceleration between pieces are not counted
+/// (TrajectoryQuality::jerk_integral).
+double JerkIntegral(const TimedTrajectory& trajectory);
+
 /// An upper bound [rad] on the distance from every position of `piece` to the segment a–b
 /// (Euclidean in joint space), from exact polynomial ranges: with e(τ) = q(τ) − a, d̂ the unit
 /// direction and L the length, √(max ‖e − (d̂ᵀe)d̂‖² + E²) where E is how far d̂ᵀe leaves [0, L]
