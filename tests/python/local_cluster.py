@@ -5,12 +5,10 @@ gets SIGTERM when this process dies (PR_SET_PDEATHSIG).
 """
 from __future__ import annotations
 
-import ctypes
 import re
 import signal
 import socket
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -19,12 +17,18 @@ from typing import Callable, List, Optional
 ROOT = Path(__file__).resolve().parents[2]
 REDIS = "/usr/bin/redis-server"
 NGINX = "/usr/sbin/nginx"
+SETPRIV = "/usr/bin/setpriv"  # util-linux, Essential in Debian
 
 
-def _stop_with_this_process() -> None:
-    """In a child process: SIGTERM when the test process dies (even by SIGKILL)."""
-    if sys.platform.startswith("linux"):
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+def exits_with_this_process(args: List[str]) -> List[str]:
+    """`args` run under util-linux's setpriv, which sets PR_SET_PDEATHSIG (SIGTERM when this
+    process dies, even by SIGKILL) and execs them.
+
+    Not a preexec_fn: with one, subprocess must fork(), and a fork while grpcio's threads run
+    trips its fork handlers (grpc/grpc issue 31885: "assertion failed: state_ == State::kRunning"
+    in thread_pool.cc, which aborted this suite once in CI). Without one, Python spawns the child
+    with vfork/posix_spawn, which runs no fork handlers."""
+    return [SETPRIV, "--pdeathsig", "TERM", "--", *args]
 
 
 def free_port() -> int:
@@ -63,7 +67,7 @@ class LocalCluster:
 
     def spawn(self, args: List[str], log: Path) -> subprocess.Popen:
         with log.open("w") as out:
-            process = subprocess.Popen(args, stdout=out, stderr=out, preexec_fn=_stop_with_this_process)
+            process = subprocess.Popen(exits_with_this_process(args), stdout=out, stderr=out)
         self.processes.append(process)
         return process
 

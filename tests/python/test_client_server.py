@@ -29,7 +29,7 @@ from chasles_client._stubs import pb
 from chasles_client.plots import plot_benchmark, plot_trajectory
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from local_cluster import LocalCluster, _stop_with_this_process  # noqa: E402
+from local_cluster import LocalCluster, exits_with_this_process  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -51,8 +51,8 @@ def setUpModule() -> None:  # noqa: N802 - unittest's name
     _workdir = tempfile.TemporaryDirectory(prefix="chasles_python_test_")
     _server_log = Path(_workdir.name) / "server.log"
     with _server_log.open("w") as log:
-        _server = subprocess.Popen([binary, "--listen", "127.0.0.1:0", "--threads", "2"], stdout=log, stderr=log,
-                                   preexec_fn=_stop_with_this_process)
+        _server = subprocess.Popen(exits_with_this_process([binary, "--listen", "127.0.0.1:0", "--threads", "2"]),
+                                   stdout=log, stderr=log)
     deadline = time.monotonic() + 30.0
     while time.monotonic() < deadline:
         match = re.search(r"listening on \S+ \(port (\d+)\)", _server_log.read_text())

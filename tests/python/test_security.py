@@ -6,7 +6,6 @@ Certificates come from scripts/make-test-certs (openssl) in a temporary director
 
 from __future__ import annotations
 
-import ctypes
 import json
 import os
 import re
@@ -24,6 +23,9 @@ import grpc
 from chasles_client import ChaslesError, Client
 from chasles_client._stubs import pb
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from local_cluster import exits_with_this_process  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[2]
 PLAN_TOKEN = "py-plan-token-3c9d0e61a7b2"
 COMMIT_TOKEN = "py-commit-token-b81f4d2e95c0"
@@ -33,11 +35,6 @@ _server: Optional[subprocess.Popen] = None
 _workdir: Optional[tempfile.TemporaryDirectory] = None
 _certs = Path()
 _address = ""
-
-
-def _stop_with_this_process() -> None:
-    if sys.platform.startswith("linux"):
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 
 
 def setUpModule() -> None:  # noqa: N802 - unittest's name
@@ -53,10 +50,11 @@ def setUpModule() -> None:  # noqa: N802 - unittest's name
     log_path = Path(_workdir.name) / "server.log"
     with log_path.open("w") as log:
         _server = subprocess.Popen(
-            [binary, "--listen", "127.0.0.1:0", "--threads", "2", "--tls-cert", str(_certs / "server.pem"),
-             "--tls-key", str(_certs / "server.key"), "--tls-client-ca", str(_certs / "ca.pem"),
-             "--tokens", str(tokens)],
-            stdout=log, stderr=log, preexec_fn=_stop_with_this_process)
+            exits_with_this_process(
+                [binary, "--listen", "127.0.0.1:0", "--threads", "2", "--tls-cert", str(_certs / "server.pem"),
+                 "--tls-key", str(_certs / "server.key"), "--tls-client-ca", str(_certs / "ca.pem"),
+                 "--tokens", str(tokens)]),
+            stdout=log, stderr=log)
     deadline = time.monotonic() + 30.0
     while time.monotonic() < deadline:
         match = re.search(r"listening on \S+ \(port (\d+)\)", log_path.read_text())

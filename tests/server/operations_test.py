@@ -5,13 +5,10 @@ forge, colour or flood (text and JSON lines). Starts CHASLES_SERVER_BIN on 127.0
 
 from __future__ import annotations
 
-import ctypes
 import json
 import os
 import re
-import signal
 import subprocess
-import sys
 import tempfile
 import time
 import unittest
@@ -26,9 +23,11 @@ ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = json.loads((ROOT / "examples/requests/panda_table.json").read_text())
 
 
-def _stop_with_this_process() -> None:
-    if sys.platform.startswith("linux"):
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+def _exits_with_this_process(args: list) -> list:
+    """PR_SET_PDEATHSIG through util-linux's setpriv rather than a preexec_fn: a preexec_fn makes
+    subprocess fork(), and a fork while grpcio's threads run can abort in its fork handlers
+    (grpc/grpc issue 31885; tests/python/local_cluster.py says more)."""
+    return ["/usr/bin/setpriv", "--pdeathsig", "TERM", "--", *args]
 
 
 class Server:
@@ -41,8 +40,8 @@ class Server:
         self.dir = tempfile.TemporaryDirectory(prefix="chasles_operations_")
         self.log = Path(self.dir.name) / "server.log"
         with self.log.open("wb") as log:
-            self.process = subprocess.Popen([binary, "--listen", "127.0.0.1:0", "--threads", "2", *flags],
-                                            stdout=log, stderr=log, preexec_fn=_stop_with_this_process)
+            self.process = subprocess.Popen(_exits_with_this_process([binary, "--listen", "127.0.0.1:0", "--threads", "2",
+                                                                      *flags]), stdout=log, stderr=log)
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
             match = re.search(rb"listening on \S+ \(port (\d+)\)", self.log.read_bytes())
