@@ -8,6 +8,7 @@
 
 #include "chasles/robot/dynamics.h"
 #include "chasles/robot/error.h"
+#include "effort_parameterization.h"
 #include "piece_certification.h"
 
 namespace chasles {
@@ -17,6 +18,12 @@ using Piece = TimedTrajectory::Piece;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 /// Bisection levels of a blend span that does not certify at once (as in VerifyTrajectory).
 constexpr int kBlendBisections = 12;
+/// max_effort: joint motion between the torque checks of the velocity/acceleration-optimal
+/// trajectory [rad], the share of a limit it may reach and still stand (the rest covers the
+/// curvature between checks), and the grid of the torque-limited parameterisation [rad of path].
+constexpr double kEffortCheckStep = 0.005;
+constexpr double kKinematicEffortShare = 0.999;
+constexpr double kEffortGridStep = 0.0025;
 
 void ValidatePositive(const Eigen::VectorXd& values, const char* field, int num_dofs) {
   if (values.size() != num_dofs) {
@@ -126,26 +133,23 @@ struct Layout {
   std::vector<double> length, v, a;     // per segment: length, path speed and acceleration limits
 };
 
-/// The blended parameterisation for given corner deviations and per-segment limit scales.
+/// The blended parameterisation for given corner deviations.
 /// Owners: a straight piece's owner is its segment k ≥ 0; a blend's is −(corner + 1).
 TimedTrajectory Build(const JointPath& path, const Layout& L, const KinematicLimits& limits,
-                      const std::vector<double>& deviation, const std::vector<double>& scale, double start_speed,
+                      const std::vector<double>& deviation, double start_speed,
                       double end_speed, std::vector<int>* owners) {
   const int m = L.m;
   const int n = static_cast<int>(path.front().size());
   // Per corner j (between segment j−1 and j, j = 1..m−1): blend constant c and speed cap.
-  std::vector<double> c(m + 1, 0.0), cap(m + 1, 0.0), v(m), a(m);
-  for (int k = 0; k < m; ++k) {
-    v[k] = L.v[k] * std::sqrt(scale[k]);
-    a[k] = L.a[k] * scale[k];
-  }
+  std::vector<double> c(m + 1, 0.0), cap(m + 1, 0.0);
+  const std::vector<double>& v = L.v;
+  const std::vector<double>& a = L.a;
   cap[0] = start_speed;
   cap[m] = end_speed;
   for (int j = 1; j < m; ++j) {
     const Eigen::VectorXd dd = L.dir[j] - L.dir[j - 1];
-    const double lambda = std::min(scale[j - 1], scale[j]);
     double cj = 0.0;
-    for (int i = 0; i < n; ++i) cj = std::max(cj, std::abs(dd[i]) / (limits.max_acceleration[i] * lambda));
+    for (int i = 0; i < n; ++i) cj = std::max(cj, std::abs(dd[i]) / limits.max_acceleration[i]);
     const double norm = dd.norm();
     double u = std::min(v[j - 1], v[j]);
     if (cj > 0.0) {
@@ -274,6 +278,37 @@ EffortExcess WorstEffort(const TimedTrajectory& trajectory, const RobotModel& ro
     }
   }
   return worst;
+}
+
+/// The geometric path of a blended trajectory: per segment its straight part (one section over
+/// that segment's pieces), per blend its parabola by σ = u·τ (u its speed, |c₁|).
+std::vector<detail::PathSection> SectionsOf(const TimedTrajectory& trajectory, const std::vector<int>& owners,
+                                            const Layout& layout) {
+  std::vector<detail::PathSection> out;
+  const std::vector<Piece>& pieces = trajectory.pieces();
+  for (std::size_t p = 0; p < pieces.size();) {
+    const Piece& piece = pieces[p];
+    detail::PathSection section;
+    section.p0 = piece.coefficients.col(0);
+    if (owners[p] >= 0) {
+      std::size_t last = p;
+      while (last + 1 < pieces.size() && owners[last + 1] == owners[p]) ++last;
+      const Eigen::VectorXd& d = layout.dir[owners[p]];
+      const Eigen::VectorXd end = pieces[last].State(pieces[last].duration).q;
+      section.p1 = d;
+      section.p2 = Eigen::VectorXd::Zero(d.size());
+      section.length = (end - section.p0).dot(d);
+      p = last + 1;
+    } else {
+      const double u = piece.coefficients.col(1).norm();
+      section.p1 = piece.coefficients.col(1) / u;
+      section.p2 = piece.coefficients.col(2) / (u * u);
+      section.length = u * piece.duration;
+      ++p;
+    }
+    if (section.length > 0.0) out.push_back(std::move(section));
+  }
+  return out;
 }
 
 }  // namespace
@@ -407,12 +442,10 @@ TimedTrajectory ParameterizeTimeOptimal(const JointPath& path, const KinematicLi
   }
 
   std::vector<double> deviation(layout.m + 1, options.max_deviation);
-  std::vector<double> scale(layout.m, 1.0);
   std::vector<int> owners;
   TimedTrajectory trajectory;
-  constexpr int kMaxRounds = 40;
-  for (int round = 0;; ++round) {
-    trajectory = Build(waypoints, layout, limits, deviation, scale, start_speed, end_speed, &owners);
+  for (;;) {
+    trajectory = Build(waypoints, layout, limits, deviation, start_speed, end_speed, &owners);
     if (checker != nullptr && options.max_deviation > 0.0) {
       const std::vector<int> colliding = CollidingBlends(trajectory, owners, *checker, options.max_joint_step);
       if (!colliding.empty()) {
@@ -423,26 +456,23 @@ TimedTrajectory ParameterizeTimeOptimal(const JointPath& path, const KinematicLi
         continue;  // ends: a corner at deviation 0 has no blend
       }
     }
-    if (!effort) break;
+    break;
+  }
+  if (effort) {
+    // The velocity- and acceleration-optimal trajectory stands when its torques stay clear of
+    // the limits (checked every kEffortCheckStep of joint motion, holding still included);
+    // otherwise the same path — its segments and blends — is timed again with the torque in
+    // the parameterisation.
     DynamicsOptions dynamics;
     dynamics.gravity = limits.gravity;
-    const EffortExcess worst = WorstEffort(trajectory, checker->robot(), limits, 0.005, dynamics);
-    if (worst.ratio <= 1.0 + 1e-9) break;
-    if (round >= kMaxRounds) {
-      throw Error(ErrorCode::kFailedPrecondition,
-                  "max_effort cannot be met: after " + std::to_string(kMaxRounds) +
-                      " slow-downs a torque still exceeds its limit by a factor " + FormatNumber(worst.ratio));
+    const EffortExcess worst = WorstEffort(trajectory, checker->robot(), limits, kEffortCheckStep, dynamics);
+    if (worst.ratio > kKinematicEffortShare) {
+      detail::EffortRetimeReport retime;
+      trajectory = detail::RetimeUnderEffort(SectionsOf(trajectory, owners, layout), limits, checker->robot(), dynamics,
+                                             start_speed, end_speed, kEffortGridStep, &retime);
+      out.effort_passes = retime.solves;
+      out.effort_grid_intervals = retime.grid_intervals;
     }
-    const int owner = owners[worst.piece];
-    const double factor = std::max(0.25, std::min(0.9, 1.0 / (worst.ratio * worst.ratio)));
-    if (owner >= 0) {
-      scale[owner] *= factor;
-    } else {
-      const int j = -owner - 1;
-      scale[j - 1] *= factor;
-      scale[j] *= factor;
-    }
-    ++out.effort_iterations;
   }
   for (int owner : owners) out.blends += owner < 0 ? 1 : 0;
   out.message = std::to_string(layout.m) + " segments, " + std::to_string(out.blends) + " blended corners";
