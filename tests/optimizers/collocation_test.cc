@@ -29,6 +29,7 @@
 namespace chasles {
 namespace {
 
+using test::ReadFile;
 using ::testing::HasSubstr;
 
 /// Default options; the time budget (5 s) is scaled under the sanitizers (budget_scale.h).
@@ -57,13 +58,6 @@ double JointwiseMinimumTime(const Eigen::VectorXd& a, const Eigen::VectorXd& b, 
     best = std::max(best, v * v <= acc * d ? d / v + v / acc : 2.0 * std::sqrt(d / acc));
   }
   return best;
-}
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream out;
-  out << in.rdbuf();
-  return out.str();
 }
 
 /// The example Panda (inertia, friction, sphere geometry) in an empty scene or with a box.

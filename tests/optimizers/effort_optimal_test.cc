@@ -8,10 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <memory>
 #include <random>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -30,12 +28,7 @@
 namespace chasles {
 namespace {
 
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
+using test::ReadFile;
 
 std::shared_ptr<const RobotModel> Panda() {
   const std::string dir = std::string(CHASLES_SOURCE_DIR) + "/examples/robots/";

@@ -18,12 +18,7 @@
 namespace chasles {
 namespace {
 
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
+using test::ReadFile;
 
 std::shared_ptr<const CollisionChecker> PandaWithBox() {
   const std::string dir = std::string(CHASLES_SOURCE_DIR) + "/examples/robots/";

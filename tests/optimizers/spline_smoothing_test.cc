@@ -29,6 +29,8 @@
 namespace chasles {
 namespace {
 
+using test::ReadFile;
+
 constexpr double kPeriod = 1e-3;  // 1 kHz
 
 KinematicLimits Limits(int n, double velocity, double acceleration) {
@@ -263,13 +265,6 @@ TEST(SplineSmoothing, KeepsClearanceAroundThePost) {
   }
 }
 
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
 
 /// The example Panda (sphere geometry, SRDF self-collision rules) with a box in front of it.
 std::shared_ptr<const CollisionChecker> PandaWithBox() {

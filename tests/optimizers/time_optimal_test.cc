@@ -24,6 +24,7 @@
 namespace chasles {
 namespace {
 
+using test::ReadFile;
 using test::FirstExceeding;
 using test::Random;
 using test::RandomLimits;
@@ -335,13 +336,6 @@ TEST(TimeOptimal, ABlendThatGrazesAnObstacleBetweenDiscreteStatesIsTightenedOnTh
   const VerificationReport verified = VerifyTrajectory(traj, path.front(), path.back(), *pebbled, limits);
   EXPECT_TRUE(verified.ok) << verified.reason;
   EXPECT_EQ(verified.collision_guarantee, "certified");
-}
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream out;
-  out << in.rdbuf();
-  return out.str();
 }
 
 TEST(TimeOptimal, TorqueLimitsOnThePandaAreMetBySlowingDown) {
