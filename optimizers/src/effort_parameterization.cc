@@ -55,14 +55,10 @@ Node MakeNode(const PathSection& section, double s, const RobotModel& robot, con
   node.q = section.p0 + s * section.p1 + (s * s) * section.p2;
   node.d1 = section.p1 + (2.0 * s) * section.p2;
   node.d2 = 2.0 * section.p2;
-  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(node.q.size());
-  DynamicsOptions rigid = dynamics;
-  rigid.include_friction = false;
-  DynamicsOptions weightless = rigid;
-  weightless.gravity.setZero();
-  node.a = InverseDynamics(robot, node.q, zero, node.d1, weightless);
-  node.b = InverseDynamics(robot, node.q, node.d1, node.d2, weightless);
-  node.c = InverseDynamics(robot, node.q, zero, zero, rigid);
+  PathTorque torque = PathTorqueCoefficients(robot, node.q, node.d1, node.d2, dynamics.gravity);
+  node.a = std::move(torque.a);
+  node.b = std::move(torque.b);
+  node.c = std::move(torque.c);
   return node;
 }
 
@@ -74,7 +70,13 @@ int Sign(double v) { return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0); }
 /// Newton steps on its active pieces from the direct bounds inwards.
 class XRange {
  public:
-  explicit XRange(const std::vector<Row>& rows) {
+  /// Takes the rows (the line buffers are kept between calls).
+  void Load(const std::vector<Row>& rows) {
+    upper_.clear();
+    lower_.clear();
+    xlo_ = 0.0;
+    xhi_ = kInf;
+    empty_ = false;
     for (const Row& r : rows) {
       if (r.a > 0.0) {
         upper_.push_back({r.c / r.a, r.b / r.a});
@@ -292,6 +294,7 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
   for (std::size_t i = 0; i < intervals.size(); ++i) tangent[i] = std::max(kMinTangent, 0.25 * intervals[i].x_velocity);
 
   std::vector<Row> rows;
+  XRange range;
   // The rows of interval i in (u, x_i), with x_{i+1} = x_i + 2h·u in [klo, khi].
   const auto build_rows = [&](int i, double klo, double khi) {
     const Interval& iv = intervals[i];
@@ -375,7 +378,8 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
     for (int i = N - 1; i >= 0; --i) {
       build_rows(i, klo[i + 1], khi[i + 1]);
       double lo, hi;
-      const bool ok = XRange(rows).Solve(&lo, &hi);
+      range.Load(rows);
+      const bool ok = range.Solve(&lo, &hi);
       if (!ok || (stop[i] && lo > 1e-12)) {
         throw Error(ErrorCode::kFailedPrecondition,
                     "max_effort cannot be met: no speed along the path at s = " + FormatNumber(intervals[i].at) +
@@ -396,7 +400,8 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
       const Interval& iv = intervals[i];
       build_rows(i, klo[i + 1], khi[i + 1]);
       double lower, upper;
-      XRange(rows).URange(x[i], &lower, &upper);
+      range.Load(rows);
+      range.URange(x[i], &lower, &upper);
       double next = x[i] + 2.0 * iv.h * std::max(lower, upper);
       next = std::min(std::max(next, klo[i + 1]), khi[i + 1]);
       if (stop[i + 1]) next = 0.0;

@@ -303,6 +303,106 @@ Eigen::VectorXd InverseDynamics(const RobotModel& robot, const Eigen::VectorXd& 
   return Rnea(robot, q, &qd, &qdd, options.gravity, options.include_friction, /*armature=*/true);
 }
 
+PathTorque PathTorqueCoefficients(const RobotModel& robot, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
+                                  const Eigen::VectorXd& ddq, const Eigen::Vector3d& gravity) {
+  // Three Newton–Euler sweeps sharing each joint's transform: A (q̇ = 0, q̈ = q′, no gravity),
+  // B (q̇ = q′, q̈ = q″, no gravity) and C (at rest, gravity); B uses LinkState's w, dw, a, f, n.
+  struct Extra {
+    Vector3d dwA, aA, fA, nA, aC, fC, nC;
+  };
+  const int num_links = robot.num_links();
+  const std::vector<Joint>& joints = robot.joints();
+  const std::vector<Link>& links = robot.links();
+  std::vector<LinkState>& s = Workspace(num_links);
+  thread_local std::vector<Extra> extra;
+  if (static_cast<int>(extra.size()) < num_links) extra.resize(num_links);
+  assert(q.size() == robot.num_dofs() && dq.size() == robot.num_dofs() && ddq.size() == robot.num_dofs());
+
+  const int root = robot.root_link();
+  s[root].w.setZero();
+  s[root].dw.setZero();
+  s[root].a.setZero();
+  extra[root].dwA.setZero();
+  extra[root].aA.setZero();
+  extra[root].aC = -gravity;
+  for (const Joint& joint : joints) {
+    const LinkState& p = s[joint.parent_link];
+    const Extra& pe = extra[joint.parent_link];
+    LinkState& c = s[joint.child_link];
+    Extra& ce = extra[joint.child_link];
+    const double d1 = joint.dof >= 0 ? Rate(joint, dq[joint.dof]) : 0.0;
+    const double d2 = joint.dof >= 0 ? Rate(joint, ddq[joint.dof]) : 0.0;
+    JointTransform(joint, joint.Position(q), &c);
+    const Matrix3d Et = c.R.transpose();
+    c.a.noalias() = Et * (p.a + p.dw.cross(c.r) + p.w.cross(p.w.cross(c.r)));
+    ce.aA.noalias() = Et * (pe.aA + pe.dwA.cross(c.r));
+    ce.aC.noalias() = Et * pe.aC;
+    const Vector3d w_in = Et * p.w;
+    const Vector3d dw_in = Et * p.dw;
+    const Vector3d dwA_in = Et * pe.dwA;
+    if (IsPrismatic(joint)) {
+      c.w = w_in;
+      c.dw = dw_in;
+      c.a += 2.0 * w_in.cross(joint.axis * d1) + joint.axis * d2;
+      ce.dwA = dwA_in;
+      ce.aA += joint.axis * d1;
+    } else {
+      c.w = w_in + joint.axis * d1;
+      c.dw = dw_in + joint.axis * d2 + w_in.cross(joint.axis * d1);
+      ce.dwA = dwA_in + joint.axis * d1;
+    }
+    const std::optional<Inertial>& in = links[joint.child_link].inertial;
+    if (in) {
+      c.f = in->mass * (c.a + c.dw.cross(in->com) + c.w.cross(c.w.cross(in->com)));
+      c.n = in->inertia * c.dw + c.w.cross(in->inertia * c.w) + in->com.cross(c.f);
+      ce.fA = in->mass * (ce.aA + ce.dwA.cross(in->com));
+      ce.nA = in->inertia * ce.dwA + in->com.cross(ce.fA);
+      ce.fC = in->mass * ce.aC;
+      ce.nC = in->com.cross(ce.fC);
+    } else {
+      c.f.setZero();
+      c.n.setZero();
+      ce.fA.setZero();
+      ce.nA.setZero();
+      ce.fC.setZero();
+      ce.nC.setZero();
+    }
+  }
+  PathTorque out;
+  out.a = Eigen::VectorXd::Zero(robot.num_dofs());
+  out.b = Eigen::VectorXd::Zero(robot.num_dofs());
+  out.c = Eigen::VectorXd::Zero(robot.num_dofs());
+  for (int j = static_cast<int>(joints.size()) - 1; j >= 0; --j) {
+    const Joint& joint = joints[j];
+    LinkState& c = s[joint.child_link];
+    Extra& ce = extra[joint.child_link];
+    if (joint.dof >= 0) {
+      const bool prismatic = IsPrismatic(joint);
+      double ta = joint.axis.dot(prismatic ? ce.fA : ce.nA);
+      double tb = joint.axis.dot(prismatic ? c.f : c.n);
+      const double tc = joint.axis.dot(prismatic ? ce.fC : ce.nC);
+      ta += joint.armature * Rate(joint, dq[joint.dof]);
+      tb += joint.armature * Rate(joint, ddq[joint.dof]);
+      const double m = joint.mimic ? joint.mimic->multiplier : 1.0;
+      out.a[joint.dof] += m * ta;
+      out.b[joint.dof] += m * tb;
+      out.c[joint.dof] += m * tc;
+    }
+    if (joint.parent_link != root) {
+      LinkState& p = s[joint.parent_link];
+      Extra& pe = extra[joint.parent_link];
+      const Vector3d fp = c.R * c.f, fpA = c.R * ce.fA, fpC = c.R * ce.fC;
+      p.f += fp;
+      p.n += c.R * c.n + c.r.cross(fp);
+      pe.fA += fpA;
+      pe.nA += c.R * ce.nA + c.r.cross(fpA);
+      pe.fC += fpC;
+      pe.nC += c.R * ce.nC + c.r.cross(fpC);
+    }
+  }
+  return out;
+}
+
 Eigen::MatrixXd MassMatrix(const RobotModel& robot, const Eigen::VectorXd& q) {
   assert(q.size() == robot.num_dofs());
   const int n = robot.num_moving_joints();  // M_θ over the moving joints; = M without mimics

@@ -224,6 +224,32 @@ TEST(DynamicsTest, InverseDynamicsEqualsMassMatrixPlusBiasTerms) {
   }
 }
 
+TEST(DynamicsTest, PathTorqueCoefficientsAreTheMassMatrixCoriolisAndGravityTerms) {
+  for (const Case& rc : Robots()) {
+    SCOPED_TRACE(rc.name);
+    const RobotModel& robot = *rc.robot;
+    const int n = robot.num_dofs();
+    std::mt19937 rng(Seed() + 7);
+    DynamicsOptions rigid;
+    rigid.include_friction = false;
+    for (int t = 0; t < Cases(50); ++t) {
+      const VectorXd q = RandomQ(robot, rng), d1 = Uniform(rng, n, -1, 1), d2 = Uniform(rng, n, -3, 3);
+      rigid.gravity = Uniform(rng, 3, -10, 10);
+      const PathTorque path = PathTorqueCoefficients(robot, q, d1, d2, rigid.gravity);
+      // Against the composite-rigid-body mass matrix and the separate recursions.
+      const MatrixXd M = MassMatrix(robot, q);
+      EXPECT_LT(RelErr(path.a, VectorXd(M * d1)), 1e-12);
+      EXPECT_LT(RelErr(path.b, VectorXd(M * d2 + CoriolisTorques(robot, q, d1))), 1e-12);
+      EXPECT_LT(RelErr(path.c, GravityTorques(robot, q, rigid.gravity)), 1e-12);
+      // And τ = a s̈ + b ṡ² + c is InverseDynamics at q̇ = q′ṡ, q̈ = q′s̈ + q″ṡ².
+      const double sd = std::uniform_real_distribution<double>(0.0, 2.0)(rng);
+      const double sdd = std::uniform_real_distribution<double>(-5.0, 5.0)(rng);
+      const VectorXd tau = InverseDynamics(robot, q, d1 * sd, d1 * sdd + d2 * (sd * sd), rigid);
+      EXPECT_LT(RelErr(VectorXd(path.a * sdd + path.b * (sd * sd) + path.c), tau), 1e-12);
+    }
+  }
+}
+
 TEST(DynamicsTest, CoriolisMatrixIsChristoffelConsistent) {
   for (const Case& rc : Robots()) {
     SCOPED_TRACE(rc.name);
