@@ -16,16 +16,9 @@
 #include "chasles/collision/scene.h"
 #include "chasles/robot/robot_model.h"
 #include "chasles/v1/chasles.pb.h"
+#include "../read_file.h"
 
 namespace chasles::test {
-
-inline std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  EXPECT_TRUE(in.good()) << "cannot open " << path;
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 inline std::string ExamplePath(const std::string& rel) {
   return std::string(CHASLES_SOURCE_DIR) + "/examples/" + rel;

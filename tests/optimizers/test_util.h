@@ -6,22 +6,14 @@
 #include <cstdlib>
 #include <cstring>
 #include <algorithm>
-#include <fstream>
-#include <sstream>
 #include <random>
 #include <string>
 
 #include <Eigen/Core>
 
-namespace chasles::test {
+#include "../read_file.h"
 
-/// The whole file at `path` (empty when it cannot be read: the parser then names the problem).
-inline std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
+namespace chasles::test {
 
 inline std::uint64_t TestSeed() {
   const char* env = std::getenv("CHASLES_TEST_SEED");
