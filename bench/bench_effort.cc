@@ -139,10 +139,9 @@ void BenchEffort(const EffortBenchOptions& options) {
       std::snprintf(buffer, sizeof buffer, format, QuantileOrNan(v, p));
       return std::string(buffer);
     };
-    const double max_ratio = r.ratio_reference.empty() ? NAN : *std::max_element(r.ratio_reference.begin(), r.ratio_reference.end());
     std::printf("| %s | %.1f | %d | %d | %d | %s | %s | %s | %s | %s | %d | %s | %s | %s |\n", r.group.c_str(), r.scale, r.cases,
                 r.bound, r.failed, f(r.ratio_reference, 0.5, "%.4f").c_str(), f(r.ratio_reference, 0.95, "%.4f").c_str(),
-                r.ratio_reference.empty() ? "—" : (std::to_string(max_ratio).substr(0, 6)).c_str(),
+                f(r.ratio_reference, 1.0, "%.4f").c_str(),
                 f(r.ratio_kinematic, 0.5, "%.3f").c_str(), f(r.effort_peak, 0.5, "%.6f").c_str(), r.violations,
                 f(r.solve_ms, 0.5, "%.2f").c_str(), f(r.solve_ms, 0.95, "%.2f").c_str(), f(r.kinematic_ms, 0.5, "%.3f").c_str());
   }

@@ -32,10 +32,31 @@ struct Row {
   double a, b, c;
 };
 
-/// The path and its torque coefficients at one parameter of one section.
-struct Node {
-  Eigen::VectorXd q, d1, d2;  // q, q′, q″
-  Eigen::VectorXd a, b, c;    // rigid-body τ = a·u + b·x + c
+/// The path and its torque coefficients at grid nodes, one column per node: q, q′, q″ and the
+/// rigid-body τ = a·u + b·x + c (no allocation per node).
+class Nodes {
+ public:
+  Nodes(int dofs, int count) : q(dofs, count), d1(dofs, count), d2(dofs, count), a(dofs, count), b(dofs, count), c(dofs, count) {}
+
+  /// Node `k` at parameter s of the section.
+  void Set(int k, const PathSection& section, double s, const RobotModel& robot, const Eigen::Vector3d& gravity) {
+    q.col(k) = section.p0 + s * section.p1 + (s * s) * section.p2;
+    d1.col(k) = section.p1 + (2.0 * s) * section.p2;
+    d2.col(k) = 2.0 * section.p2;
+    column_q_ = q.col(k);
+    column_d1_ = d1.col(k);
+    column_d2_ = d2.col(k);
+    PathTorqueCoefficients(robot, column_q_, column_d1_, column_d2_, gravity, &torque_);
+    a.col(k) = torque_.a;
+    b.col(k) = torque_.b;
+    c.col(k) = torque_.c;
+  }
+
+  Eigen::MatrixXd q, d1, d2, a, b, c;
+
+ private:
+  Eigen::VectorXd column_q_, column_d1_, column_d2_;
+  PathTorque torque_;
 };
 
 struct Interval {
@@ -49,18 +70,6 @@ struct Interval {
   Eigen::VectorXd coulomb_hi, coulomb_lo;  // Coulomb torque bounds over the interval
   Eigen::VectorXd margin;                  // per joint, taken off both torque limits [N·m]
 };
-
-Node MakeNode(const PathSection& section, double s, const RobotModel& robot, const DynamicsOptions& dynamics) {
-  Node node;
-  node.q = section.p0 + s * section.p1 + (s * s) * section.p2;
-  node.d1 = section.p1 + (2.0 * s) * section.p2;
-  node.d2 = 2.0 * section.p2;
-  PathTorque torque = PathTorqueCoefficients(robot, node.q, node.d1, node.d2, dynamics.gravity);
-  node.a = std::move(torque.a);
-  node.b = std::move(torque.b);
-  node.c = std::move(torque.c);
-  return node;
-}
 
 int Sign(double v) { return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0); }
 
@@ -179,21 +188,24 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
 
   // The grid: intervals of at most grid_step along each section, nodes at their ends and
   // midpoints (a section's intervals share their end nodes).
-  std::vector<Node> nodes;
+  int count = 0;
+  for (const PathSection& section : sections) {
+    if (section.length > 0.0) count += 1 + 2 * std::max(1, static_cast<int>(std::ceil(section.length / grid_step)));
+  }
+  Nodes nodes(n, count);
   std::vector<Interval> intervals;
   std::vector<int> stops;  // intervals whose start must be at rest (the tangent jumps there)
   double along = 0.0;
+  int next_node = 0;
   for (std::size_t k = 0; k < sections.size(); ++k) {
     const PathSection& section = sections[k];
     if (!(section.length > 0.0)) continue;
     const int m = std::max(1, static_cast<int>(std::ceil(section.length / grid_step)));
-    bool jump = false;
     if (!intervals.empty()) {
-      const Node& last = nodes[intervals.back().n1];
-      jump = (last.d1 - section.p1).norm() > kTangentJump * std::max(1.0, section.p1.norm());
+      const double jump = (nodes.d1.col(intervals.back().n1) - section.p1).norm();
+      if (jump > kTangentJump * std::max(1.0, section.p1.norm())) stops.push_back(static_cast<int>(intervals.size()));
     }
-    if (jump) stops.push_back(static_cast<int>(intervals.size()));
-    nodes.push_back(MakeNode(section, 0.0, robot, dynamics));
+    nodes.Set(next_node++, section, 0.0, robot, dynamics.gravity);
     for (int i = 0; i < m; ++i) {
       Interval iv;
       iv.section = static_cast<int>(k);
@@ -201,11 +213,11 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
       const double s1 = i + 1 == m ? section.length : section.length * (i + 1) / m;
       iv.h = s1 - iv.s0;
       iv.at = along + iv.s0;
-      iv.n0 = static_cast<int>(nodes.size()) - 1;
-      nodes.push_back(MakeNode(section, iv.s0 + 0.5 * iv.h, robot, dynamics));
-      iv.mid = static_cast<int>(nodes.size()) - 1;
-      nodes.push_back(MakeNode(section, s1, robot, dynamics));
-      iv.n1 = static_cast<int>(nodes.size()) - 1;
+      iv.n0 = next_node - 1;
+      iv.mid = next_node;
+      nodes.Set(next_node++, section, iv.s0 + 0.5 * iv.h, robot, dynamics.gravity);
+      iv.n1 = next_node;
+      nodes.Set(next_node++, section, s1, robot, dynamics.gravity);
       intervals.push_back(std::move(iv));
     }
     along += section.length;
@@ -223,7 +235,7 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
   for (const Interval& iv : intervals) {
     for (int e : {iv.n0, iv.mid, iv.n1}) {
       for (int j = 0; j < n; ++j) {
-        const double hold = nodes[e].c[j];
+        const double hold = nodes.c(j, e);
         if (std::abs(hold) > limits.max_effort[j]) {
           const double s = e == iv.n0 ? iv.at : (e == iv.n1 ? iv.at + iv.h : iv.at + 0.5 * iv.h);
           throw Error(ErrorCode::kFailedPrecondition,
@@ -238,18 +250,17 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
   // torque's bounds, no margin yet.
   for (int i = 0; i < N; ++i) {
     Interval& iv = intervals[i];
-    const Node& A = nodes[iv.n0];
-    const Node& B = nodes[iv.n1];
+    const int A = iv.n0, B = iv.n1, M = iv.mid;
     iv.coulomb_hi = Eigen::VectorXd::Zero(n);
     iv.coulomb_lo = Eigen::VectorXd::Zero(n);
     iv.margin = Eigen::VectorXd::Zero(n);
     for (int j = 0; j < n; ++j) {
-      const double speed = std::max(std::abs(A.d1[j]), std::abs(B.d1[j]));
+      const double speed = std::max(std::abs(nodes.d1(j, A)), std::abs(nodes.d1(j, B)));
       if (speed > 0.0) {
         iv.x_velocity = std::min(iv.x_velocity, limits.max_velocity[j] * limits.max_velocity[j] / (speed * speed));
       }
       const double f = friction[j].friction;
-      const int sa = Sign(A.d1[j]), sb = Sign(B.d1[j]);
+      const int sa = Sign(nodes.d1(j, A)), sb = Sign(nodes.d1(j, B));
       if (sa == sb && sa != 0) {
         // At rest (an end of the interval) InverseDynamics has no Coulomb torque.
         const bool still = rest[i] || rest[i + 1];
@@ -266,23 +277,22 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
     // x ≤ the velocity limit): with x linear in s, the gap is
     // (a_m − ā)u + (b_m − b̄)x_m − (b₁ − b₀)(x₁ − x₀)/4 + (c_m − c̄), |x₁ − x₀| = 2h|u|.
     double u_bound = kInf;
-    for (const Node* node : {&A, &B}) {
+    for (int node : {A, B}) {
       double at = kInf;
       for (int j = 0; j < n; ++j) {
-        if (node->d1[j] != 0.0) {
-          at = std::min(at, (limits.max_acceleration[j] + std::abs(node->d2[j]) * iv.x_velocity) / std::abs(node->d1[j]));
-        }
+        const double d1 = nodes.d1(j, node);
+        if (d1 != 0.0) at = std::min(at, (limits.max_acceleration[j] + std::abs(nodes.d2(j, node)) * iv.x_velocity) / std::abs(d1));
       }
       u_bound = std::min(u_bound, at);
     }
     if (!std::isfinite(u_bound)) u_bound = 0.0;
     iv.u_bound = u_bound;
-    iv.straight = A.d2.isZero(0.0) && B.d2.isZero(0.0);
-    const Node& M = nodes[iv.mid];
+    iv.straight = nodes.d2.col(A).isZero(0.0) && nodes.d2.col(B).isZero(0.0);
     for (int j = 0; j < n; ++j) {
-      const double gap = std::abs(M.a[j] - 0.5 * (A.a[j] + B.a[j])) * u_bound +
-                         std::abs(M.b[j] - 0.5 * (A.b[j] + B.b[j])) * iv.x_velocity +
-                         0.5 * std::abs(B.b[j] - A.b[j]) * iv.h * u_bound + std::abs(M.c[j] - 0.5 * (A.c[j] + B.c[j]));
+      const double gap = std::abs(nodes.a(j, M) - 0.5 * (nodes.a(j, A) + nodes.a(j, B))) * u_bound +
+                         std::abs(nodes.b(j, M) - 0.5 * (nodes.b(j, A) + nodes.b(j, B))) * iv.x_velocity +
+                         0.5 * std::abs(nodes.b(j, B) - nodes.b(j, A)) * iv.h * u_bound +
+                         std::abs(nodes.c(j, M) - 0.5 * (nodes.c(j, A) + nodes.c(j, B)));
       iv.margin[j] = 2.0 * gap;
     }
   }
@@ -294,7 +304,7 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
   for (std::size_t i = 0; i < intervals.size(); ++i) tangent[i] = std::max(kMinTangent, 0.25 * intervals[i].x_velocity);
 
   std::vector<Row> rows;
-  XRange range;
+  std::vector<XRange> ranges(intervals.size());  // per interval, its last rows
   // The rows of interval i in (u, x_i), with x_{i+1} = x_i + 2h·u in [klo, khi].
   const auto build_rows = [&](int i, double klo, double khi) {
     const Interval& iv = intervals[i];
@@ -315,26 +325,27 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
       return std::abs(a) * iv.u_bound + std::max(b, 0.0) * iv.x_velocity > c;
     };
     for (int e = 0; e < 2; ++e) {
-      const Node& node = nodes[e == 0 ? iv.n0 : iv.n1];
+      const int node = e == 0 ? iv.n0 : iv.n1;
       const double shift = e == 0 ? 0.0 : h2;  // x_e = x + shift·u
       for (int j = 0; j < n; ++j) {
         // Acceleration q′u + q″x_e.
-        const double aa = node.d1[j] + shift * node.d2[j], ab = node.d2[j];
+        const double aa = nodes.d1(j, node) + shift * nodes.d2(j, node), ab = nodes.d2(j, node);
         if (!iv.straight && (aa != 0.0 || ab != 0.0)) {
           rows.push_back({aa, ab, limits.max_acceleration[j]});
           rows.push_back({-aa, -ab, limits.max_acceleration[j]});
         }
         // Torque ±(a u + b x_e + c + Coulomb + k√x_e) ≤ τmax − margin, k = damping·q′.
-        const double k = friction[j].damping * node.d1[j];
+        const double k = friction[j].damping * nodes.d1(j, node);
+        const double ta = nodes.a(j, node), tb = nodes.b(j, node), tc = nodes.c(j, node);
         const double x0 = tangent[i];
         for (int side : {+1, -1}) {
           const double ks = side * k;
           const double coulomb = side > 0 ? iv.coulomb_hi[j] : -iv.coulomb_lo[j];
-          const double room = kLimitShare * limits.max_effort[j] - iv.margin[j] - side * node.c[j] - coulomb;
+          const double room = kLimitShare * limits.max_effort[j] - iv.margin[j] - side * tc - coulomb;
           // ks·√x_e ≤ slope·x_e + offset on every row pushed.
           const auto push = [&](double slope, double offset) {
-            const double bx = side * node.b[j] + slope;
-            const Row row{side * node.a[j] + shift * bx, bx, room - offset};
+            const double bx = side * tb + slope;
+            const Row row{side * ta + shift * bx, bx, room - offset};
             if (binding(row.a, row.b, row.c)) rows.push_back(row);
           };
           if (ks > 0.0) {  // √x below its tangent at x0
@@ -356,15 +367,11 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
     }
   };
 
-  // Exact torque at a state along interval iv: local parameter s, x, u (friction included).
-  const auto torque = [&](const Node& node, double x, double u) {
-    Eigen::VectorXd tau = node.a * u + node.b * x + node.c;
-    const double sd = std::sqrt(std::max(0.0, x));
-    for (int j = 0; j < n; ++j) {
-      const double qd = node.d1[j] * sd;
-      tau[j] += friction[j].damping * qd + friction[j].friction * Sign(qd);
-    }
-    return tau;
+  // Exact torque of joint j at node k at x, u (friction included).
+  const auto torque = [&](int k, int j, double x, double u) {
+    const double qd = nodes.d1(j, k) * std::sqrt(std::max(0.0, x));
+    return nodes.a(j, k) * u + nodes.b(j, k) * x + nodes.c(j, k) + friction[j].damping * qd +
+           friction[j].friction * Sign(qd);
   };
 
   const bool damping =
@@ -378,8 +385,8 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
     for (int i = N - 1; i >= 0; --i) {
       build_rows(i, klo[i + 1], khi[i + 1]);
       double lo, hi;
-      range.Load(rows);
-      const bool ok = range.Solve(&lo, &hi);
+      ranges[i].Load(rows);
+      const bool ok = ranges[i].Solve(&lo, &hi);
       if (!ok || (stop[i] && lo > 1e-12)) {
         throw Error(ErrorCode::kFailedPrecondition,
                     "max_effort cannot be met: no speed along the path at s = " + FormatNumber(intervals[i].at) +
@@ -398,10 +405,8 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
     x[0] = std::min(std::max(x_start, klo[0]), khi[0]);
     for (int i = 0; i < N; ++i) {
       const Interval& iv = intervals[i];
-      build_rows(i, klo[i + 1], khi[i + 1]);
       double lower, upper;
-      range.Load(rows);
-      range.URange(x[i], &lower, &upper);
+      ranges[i].URange(x[i], &lower, &upper);  // the backward pass's rows: the same K_{i+1}
       double next = x[i] + 2.0 * iv.h * std::max(lower, upper);
       next = std::min(std::max(next, klo[i + 1]), khi[i + 1]);
       if (stop[i + 1]) next = 0.0;
@@ -416,19 +421,16 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
     for (int i = 0; i < N; ++i) {
       Interval& iv = intervals[i];
       const double xm = 0.5 * (x[i] + x[i + 1]);
-      const Eigen::VectorXd t0 = torque(nodes[iv.n0], x[i], u[i]);
-      const Eigen::VectorXd t1 = torque(nodes[iv.n1], x[i + 1], u[i]);
-      const Eigen::VectorXd tm = torque(nodes[iv.mid], xm, u[i]);
-      const Eigen::VectorXd rigid_gap = (nodes[iv.mid].a - 0.5 * (nodes[iv.n0].a + nodes[iv.n1].a)) * u[i] +
-                                        nodes[iv.mid].b * xm -
-                                        0.5 * (nodes[iv.n0].b * x[i] + nodes[iv.n1].b * x[i + 1]) + nodes[iv.mid].c -
-                                        0.5 * (nodes[iv.n0].c + nodes[iv.n1].c);
       for (int j = 0; j < n; ++j) {
         const double limit = limits.max_effort[j];
-        const double worst = std::max({std::abs(t0[j]), std::abs(t1[j]), std::abs(tm[j])});
+        const double worst = std::max({std::abs(torque(iv.n0, j, x[i], u[i])), std::abs(torque(iv.n1, j, x[i + 1], u[i])),
+                                       std::abs(torque(iv.mid, j, xm, u[i]))});
         out.worst_effort = std::max(out.worst_effort, worst / limit);
+        const double rigid_gap = (nodes.a(j, iv.mid) - 0.5 * (nodes.a(j, iv.n0) + nodes.a(j, iv.n1))) * u[i] +
+                                 nodes.b(j, iv.mid) * xm - 0.5 * (nodes.b(j, iv.n0) * x[i] + nodes.b(j, iv.n1) * x[i + 1]) +
+                                 nodes.c(j, iv.mid) - 0.5 * (nodes.c(j, iv.n0) + nodes.c(j, iv.n1));
         // Covered while the margin holds the gap; else twice the gap.
-        const double gap = std::abs(rigid_gap[j]);
+        const double gap = std::abs(rigid_gap);
         if (gap > iv.margin[j]) {
           iv.margin[j] = 2.0 * gap;
           margins_grew = true;

@@ -305,6 +305,13 @@ Eigen::VectorXd InverseDynamics(const RobotModel& robot, const Eigen::VectorXd& 
 
 PathTorque PathTorqueCoefficients(const RobotModel& robot, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
                                   const Eigen::VectorXd& ddq, const Eigen::Vector3d& gravity) {
+  PathTorque out;
+  PathTorqueCoefficients(robot, q, dq, ddq, gravity, &out);
+  return out;
+}
+
+void PathTorqueCoefficients(const RobotModel& robot, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
+                            const Eigen::VectorXd& ddq, const Eigen::Vector3d& gravity, PathTorque* result) {
   // Three Newton–Euler sweeps sharing each joint's transform: A (q̇ = 0, q̈ = q′, no gravity),
   // B (q̇ = q′, q̈ = q″, no gravity) and C (at rest, gravity); B uses LinkState's w, dw, a, f, n.
   struct Extra {
@@ -368,10 +375,10 @@ PathTorque PathTorqueCoefficients(const RobotModel& robot, const Eigen::VectorXd
       ce.nC.setZero();
     }
   }
-  PathTorque out;
-  out.a = Eigen::VectorXd::Zero(robot.num_dofs());
-  out.b = Eigen::VectorXd::Zero(robot.num_dofs());
-  out.c = Eigen::VectorXd::Zero(robot.num_dofs());
+  PathTorque& out = *result;
+  out.a.setZero(robot.num_dofs());
+  out.b.setZero(robot.num_dofs());
+  out.c.setZero(robot.num_dofs());
   for (int j = static_cast<int>(joints.size()) - 1; j >= 0; --j) {
     const Joint& joint = joints[j];
     LinkState& c = s[joint.child_link];
@@ -400,7 +407,6 @@ PathTorque PathTorqueCoefficients(const RobotModel& robot, const Eigen::VectorXd
       pe.nC += c.R * ce.nC + c.r.cross(fpC);
     }
   }
-  return out;
 }
 
 Eigen::MatrixXd MassMatrix(const RobotModel& robot, const Eigen::VectorXd& q) {

@@ -65,6 +65,9 @@ struct PathTorque {
 PathTorque PathTorqueCoefficients(const RobotModel& robot, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
                                   const Eigen::VectorXd& ddq,
                                   const Eigen::Vector3d& gravity = Eigen::Vector3d(0.0, 0.0, -9.81));
+/// The same into *out, reusing its vectors (no allocation once they have num_dofs() entries).
+void PathTorqueCoefficients(const RobotModel& robot, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
+                            const Eigen::VectorXd& ddq, const Eigen::Vector3d& gravity, PathTorque* out);
 /// M(q), symmetric positive definite, including the joint armature on the diagonal.
 Eigen::MatrixXd MassMatrix(const RobotModel& robot, const Eigen::VectorXd& q);
 /// c(q, q̇) = C(q, q̇) q̇: Coriolis and centrifugal torques.
