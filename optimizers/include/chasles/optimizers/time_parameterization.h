@@ -86,8 +86,8 @@ struct TimeOptimalReport {
 /// it, limits at both ends of every grid interval with a margin for the curvature between them,
 /// and checked at every interval's ends and midpoint). The result has one quadratic (straight)
 /// or quartic (blend) piece per grid interval and rides the binding limit; its duration is
-/// within 0.06–0.64 % of a 20× finer independent solver on random Panda segments (issue 23;
-/// tests/optimizers/effort_optimal_test.cc).
+/// 0.2–0.4 % (median) over an independent reference solver on random Panda paths
+/// (tests/optimizers/effort_reference.h; `chasles-bench --section effort`).
 /// max_jerk must be empty: this profile's acceleration steps have unbounded jerk.
 ///
 /// \throws Error(kInvalidArgument) for an invalid path or limits (as ParameterizeRestToRest),
