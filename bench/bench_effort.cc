@@ -16,9 +16,12 @@
 #include <string>
 #include <vector>
 
-#include "bench_pipeline.h"  // ReadFile, QuantileOrNan
+#include "bench_pipeline.h"  // ReadFile, QuantileOrNan, RandomConfiguration
+#include "bench_robots.h"    // RobotsBenchScene
 #include "chasles/collision/collision_checker.h"
 #include "chasles/optimizers/time_parameterization.h"
+#include "chasles/pipeline/plan_pipeline.h"
+#include "chasles/planners/registry.h"
 #include "chasles/robot/dynamics.h"
 #include "chasles/robot/robot_model.h"
 #include "effort_reference.h"
@@ -79,6 +82,39 @@ void BenchEffort(const EffortBenchOptions& options) {
   for (int c = 0; c < options.cases; ++c) groups[0].paths.push_back(random_path(2));
   for (int c = 0; c < options.cases; ++c) groups[1].paths.push_back(random_path(5));
   groups[2].paths = groups[1].paths;
+  // Planner paths: RRT-Connect through the pipeline (shortcut) in the robots section's scene,
+  // between free states at least 1 rad apart whose straight segment collides.
+  {
+    PlannerRegistry registry;
+    RegisterDefaultPlanners(&registry);
+    const PlanningPipeline pipeline(registry);
+    const auto scene_checker = std::make_shared<const CollisionChecker>(robot, RobotsBenchScene());
+    std::mt19937_64 plan_rng(options.seed + 1);
+    const auto valid = [&] {
+      for (;;) {
+        Eigen::VectorXd q = RandomConfiguration(*robot, &plan_rng);
+        if (scene_checker->IsValid(q)) return q;
+      }
+    };
+    groups.push_back({"planner paths (RRT-Connect, shortcut), stops", {}, 0.0});
+    for (int c = 0, tries = 0; c < options.cases && tries < 20 * options.cases; ++tries) {
+      Eigen::VectorXd a, b;
+      do {
+        a = valid();
+        b = valid();
+      } while ((a - b).cwiseAbs().maxCoeff() < 1.0 || scene_checker->IsMotionValid(a, b, 0.005));
+      PlanQuery query;
+      query.checker = scene_checker;
+      query.start = a;
+      query.goal = b;
+      query.seed = options.seed + static_cast<std::uint64_t>(tries);
+      const PlanOutcome planned = pipeline.Plan(query, Termination::After(std::chrono::duration<double>(1.0)));
+      if (planned.code != PlanOutcomeCode::kSuccess) continue;
+      groups.back().paths.push_back(planned.path);
+      ++c;
+    }
+    groups.push_back({"planner paths, blended 0.05 rad", groups.back().paths, 0.05});
+  }
   groups.push_back({"shelf path (examples/requests), stops", {}, 0.0});
   {
     Eigen::VectorXd a(7), b(7), c(7), d(7);

@@ -24,9 +24,8 @@
 #include "chasles/robot/robot_model.h"
 
 namespace chasles {
-namespace {
 
-std::shared_ptr<Scene> ShelfScene() {
+std::shared_ptr<Scene> RobotsBenchScene() {
   auto scene = std::make_shared<Scene>();
   const auto box = [&](const char* name, double sx, double sy, double sz, double x, double y, double z) {
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
@@ -39,6 +38,8 @@ std::shared_ptr<Scene> ShelfScene() {
   box("post_right", 0.04, 0.04, 1.0, 0.45, -0.5, 0.6);
   return scene;
 }
+
+namespace {
 
 /// States every `step` of joint motion along each piece, and the end, on `fcl`: true when one collides.
 bool TouchesAtRecheck(const TimedTrajectory& trajectory, const CollisionChecker& fcl, double step) {
@@ -68,7 +69,7 @@ void BenchRobots(const RobotsBenchOptions& options) {
   PlannerRegistry registry;
   RegisterDefaultPlanners(&registry);
   const PlanningPipeline pipeline(registry);
-  const std::shared_ptr<const Scene> scene = ShelfScene();
+  const std::shared_ptr<const Scene> scene = RobotsBenchScene();
   std::vector<Row> rows;
   for (const std::string& name : options.robots) {
     const auto robot = RobotModel::FromUrdf(ReadFile(options.examples_dir + "/robots/" + name + ".urdf"),

@@ -7,10 +7,16 @@
 /// path every 0.002 rad (or m).
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "chasles/collision/scene.h"
+
 namespace chasles {
+
+/// The scene of that section: a table, a shelf board over it and two posts, in reach of each arm.
+std::shared_ptr<Scene> RobotsBenchScene();
 
 struct RobotsBenchOptions {
   std::string examples_dir;  ///< holds robots/<name>.urdf and .srdf
