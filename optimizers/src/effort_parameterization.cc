@@ -19,8 +19,8 @@ constexpr int kMaxSolves = 10;
 constexpr double kMinTangent = 1e-4;
 /// Passes after which the damping tangents are no longer moved to the last profile's speeds.
 constexpr int kTangentSolves = 3;
-/// Pieces of the interpolant that bounds damping where it takes torque away.
-constexpr int kDampingPieces = 4;
+/// Knots of the interpolant that bounds damping where it takes torque away.
+constexpr int kDampingKnots = 6;
 /// Share of each torque limit the passes use: the rest absorbs the tolerance of the exact 2-D
 /// solutions, so the returned torques meet the limits themselves.
 constexpr double kLimitShare = 1.0 - 1e-9;
@@ -351,13 +351,18 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
           if (ks > 0.0) {  // √x below its tangent at x0
             push(ks / (2.0 * std::sqrt(x0)), 0.5 * ks * std::sqrt(x0));
           } else if (ks < 0.0) {
-            // ks·√x is convex: below its interpolant through ṡ = 0, ¼, ½, ¾, 1 of the velocity
-            // limit, which is the largest of its pieces' lines.
-            const double top = std::sqrt(iv.x_velocity);
-            for (int piece = 0; piece < kDampingPieces; ++piece) {
-              const double va = top * piece / kDampingPieces, vb = top * (piece + 1) / kDampingPieces;
+            // ks·√x is convex: below its interpolant through ṡ = 0, ½v₀, 0.9v₀, v₀, 1.1v₀ and the
+            // velocity limit (v₀² the tangent point: the last pass's speed there), which is the
+            // largest of its pieces' lines — narrow where the profile runs.
+            const double top = std::sqrt(iv.x_velocity), v0 = std::sqrt(x0);
+            double knots[kDampingKnots] = {0.0, 0.5 * v0, 0.9 * v0, v0, 1.1 * v0, top};
+            double va = 0.0;
+            for (int k = 1; k < kDampingKnots; ++k) {
+              const double vb = std::min(knots[k], top);
+              if (!(vb > va)) continue;
               const double slope = ks / (va + vb);  // through (va², ks·va) and (vb², ks·vb)
               push(slope, ks * va - slope * va * va);
+              va = vb;
             }
           } else {
             push(0.0, 0.0);
