@@ -196,5 +196,30 @@ TEST(EffortOptimal, BlendedCornersAndAMovingStartMeetEveryLimit) {
   }
 }
 
+/// A start too fast to brake within the torque limits (the acceleration limits would allow it)
+/// is a named failure, not a trajectory over the limits.
+TEST(EffortOptimal, AStartTooFastToBrakeWithinTheTorqueLimitsIsANamedFailure) {
+  const auto robot = Panda();
+  const auto checker = std::make_shared<CollisionChecker>(robot, std::make_shared<Scene>());
+  const Eigen::VectorXd a = Vec({0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785});
+  const Eigen::VectorXd d = Vec({0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0});  // the shoulder, against gravity
+  const JointPath path{a, Eigen::VectorXd(a + 0.05 * d)};
+  KinematicLimits limits;
+  limits.max_velocity = robot->velocity_limits();
+  limits.max_acceleration = 1000.0 * robot->velocity_limits();
+  limits.max_effort = 1.05 * StaticNeed(*robot, path).cwiseMax(Eigen::VectorXd::Constant(7, 1.0));
+  TimeOptimalOptions options;
+  options.max_deviation = 0.0;
+  options.start_velocity = 2.0 * d;
+  try {
+    ParameterizeTimeOptimal(path, limits, options, checker.get());
+    FAIL() << "expected kFailedPrecondition";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition);
+    EXPECT_NE(std::string(e.what()).find("max_effort cannot be met: from the start speed 2 rad/s"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace chasles
