@@ -40,6 +40,14 @@ std::shared_ptr<const RobotModel> Panda() {
   return RobotModel::FromUrdf(ReadFile(dir + "panda.urdf"), ReadFile(dir + "panda.srdf"));
 }
 
+/// The Panda's velocity limits, accelerations `acceleration_scale` times them, torques unlimited.
+KinematicLimits PandaLimits(const RobotModel& robot, double acceleration_scale) {
+  KinematicLimits limits;
+  limits.max_velocity = robot.velocity_limits();
+  limits.max_acceleration = acceleration_scale * robot.velocity_limits();
+  return limits;
+}
+
 Eigen::VectorXd Vec(std::initializer_list<double> values) {
   Eigen::VectorXd v(static_cast<Eigen::Index>(values.size()));
   int i = 0;
@@ -90,9 +98,7 @@ TEST(EffortOptimal, TheShelfPathOfTheIssueComesBackNearItsOptimum) {
                        Vec({0.48292, -0.229452, -1.593533, -0.677452, 0.158394, 2.147618, 1.521398}),
                        Vec({0.775164, -0.268651, -1.362654, -0.869069, 0.135445, 2.068276, 1.414705}),
                        Vec({2.5, -0.5, 0.0, -2.0, 0.0, 1.6, 0.785})};
-  KinematicLimits limits;
-  limits.max_velocity = robot->velocity_limits();
-  limits.max_acceleration = 2.0 * robot->velocity_limits();
+  KinematicLimits limits = PandaLimits(*robot, 2.0);
   limits.max_effort = Vec({10.44, 14.922, 11.878, 26.26, 1.44, 3.243, 1.44});
   TimeOptimalOptions options;
   options.max_deviation = 0.0;
@@ -131,9 +137,7 @@ TEST(EffortOptimal, RandomStraightSegmentsAreWithinOnePercentOfTheReference) {
     for (int i = 0; i < 7; ++i) q[i] = lo[i] + (hi[i] - lo[i]) * (0.1 + 0.8 * unit(rng));
     return q;
   };
-  KinematicLimits limits;
-  limits.max_velocity = robot->velocity_limits();
-  limits.max_acceleration = 5.0 * robot->velocity_limits();
+  KinematicLimits limits = PandaLimits(*robot, 5.0);
   int bound = 0;
   for (int c = 0; c < test::TestCases(4); ++c) {
     const JointPath path{random_q(), random_q()};
@@ -167,9 +171,7 @@ TEST(EffortOptimal, BlendedCornersAndAMovingStartMeetEveryLimit) {
   const auto checker = std::make_shared<CollisionChecker>(robot, std::make_shared<Scene>());
   const JointPath path{Vec({0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785}), Vec({0.8, 0.3, 0.2, -1.2, 0.1, 1.9, 0.3}),
                        Vec({-0.9, -0.2, -0.3, -2.0, 0.4, 1.2, 1.2}), Vec({0.3, 0.1, 0.5, -1.5, -0.3, 2.2, 0.0})};
-  KinematicLimits limits;
-  limits.max_velocity = robot->velocity_limits();
-  limits.max_acceleration = 5.0 * robot->velocity_limits();
+  KinematicLimits limits = PandaLimits(*robot, 5.0);
   limits.max_effort = 1.3 * StaticNeed(*robot, path).cwiseMax(Eigen::VectorXd::Constant(7, 0.5));
   TimeOptimalOptions options;
   options.max_deviation = 0.05;
@@ -204,9 +206,7 @@ TEST(EffortOptimal, AStartTooFastToBrakeWithinTheTorqueLimitsIsANamedFailure) {
   const Eigen::VectorXd a = Vec({0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785});
   const Eigen::VectorXd d = Vec({0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0});  // the shoulder, against gravity
   const JointPath path{a, Eigen::VectorXd(a + 0.05 * d)};
-  KinematicLimits limits;
-  limits.max_velocity = robot->velocity_limits();
-  limits.max_acceleration = 1000.0 * robot->velocity_limits();
+  KinematicLimits limits = PandaLimits(*robot, 1000.0);
   limits.max_effort = 1.05 * StaticNeed(*robot, path).cwiseMax(Eigen::VectorXd::Constant(7, 1.0));
   TimeOptimalOptions options;
   options.max_deviation = 0.0;

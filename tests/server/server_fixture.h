@@ -14,6 +14,7 @@
 
 #include "chasles/server/planning_server.h"
 #include "chasles/v1/chasles.grpc.pb.h"
+#include "../read_file.h"
 
 namespace chasles::testing {
 
@@ -21,13 +22,7 @@ inline std::string ExamplePath(const std::string& relative) {
   return std::string(CHASLES_SOURCE_DIR) + "/examples/" + relative;
 }
 
-inline std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  EXPECT_TRUE(in.good()) << "cannot read " << path;
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
+inline std::string ReadText(const std::string& path) { return test::ReadFile(path); }
 
 inline v1::PlanRequest LoadRequest(const std::string& name) {
   v1::PlanRequest request;
