@@ -1,6 +1,7 @@
 #include "chasles/optimizers/collocation.h"
 
 #include <algorithm>
+#include <functional>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -553,31 +554,41 @@ Ipopt::SmartPtr<Ipopt::IpoptApplication> MakeIpopt(const CollocationOptions& opt
 
 }  // namespace
 
-CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const KinematicLimits& limits,
-                                        const CollocationOptions& options, const CollisionChecker* checker,
-                                        const JointPath* path) {
-  const Clock::time_point started = Clock::now();
+namespace {
+
+/// Phase 1 of OptimizeByCollocation: the inputs, checked.
+struct CheckedInputs {
+  int n = 0;
+  double total = 0.0;
+  TrajectorySample first, last;  // the warm start's ends
+  bool along = false;            // a path with at least one move to follow
+  bool effort = false;           // torque limits
+};
+
+CheckedInputs CheckInputs(const TimedTrajectory& warm_start, const KinematicLimits& limits,
+                          const CollocationOptions& options, const CollisionChecker* checker, const JointPath* path) {
   ValidateOptions(options);
   if (warm_start.empty()) ThrowInvalid("collocation warm_start is empty");
-  const int n = warm_start.num_dofs();
+  CheckedInputs in;
+  const int n = in.n = warm_start.num_dofs();
   limits.Validate(n);
   if (checker != nullptr && checker->robot().num_dofs() != n) {
     ThrowInvalid("collocation warm_start has " + std::to_string(n) + " joints, robot has " +
                  std::to_string(checker->robot().num_dofs()));
   }
-  const bool effort = limits.max_effort.size() != 0;
-  if (effort && (checker == nullptr || !HasInertia(checker->robot()))) {
+  in.effort = limits.max_effort.size() != 0;
+  if (in.effort && (checker == nullptr || !HasInertia(checker->robot()))) {
     ThrowInvalid("max_effort needs a robot with inertia on every moving link (pass its checker to collocation)");
   }
-  const double total = warm_start.duration();
-  const TrajectorySample first = warm_start.Evaluate(0.0);
-  const TrajectorySample last = warm_start.Evaluate(total);
+  const double total = in.total = warm_start.duration();
+  const TrajectorySample& first = in.first = warm_start.Evaluate(0.0);
+  const TrajectorySample& last = in.last = warm_start.Evaluate(total);
   if (!std::isfinite(total) || !first.q.allFinite() || !first.qd.allFinite() || !last.q.allFinite() ||
       !last.qd.allFinite()) {
     ThrowInvalid("collocation warm_start has a non-finite duration or end state");
   }
 
-  bool along = false;
+  bool& along = in.along;
   if (path != nullptr && !path->empty()) {
     for (std::size_t k = 0; k < path->size(); ++k) {
       const Eigen::VectorXd& w = (*path)[k];
@@ -595,36 +606,36 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     }
     for (std::size_t k = 1; k < path->size() && !along; ++k) along = (*path)[k] != (*path)[k - 1];
   }
+  return in;
+}
 
-  CollocationResult result;
-  OptimizerReport& report = result.report;
-  const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - started).count(); };
-  if (!(total > 0.0)) {
-    Piece rest;
-    rest.coefficients = Eigen::MatrixXd::Zero(n, 4);
-    rest.coefficients.col(0) = first.q;
-    result.trajectory = TimedTrajectory({rest}, last.q);
-    report.ok = true;
-    report.message = "the warm start does not move: nothing to optimise";
-    report.solve_seconds = elapsed();
-    return result;
-  }
+/// Phase 2: the problem around the warm start — knots (along a path, at its waypoints), the
+/// transcription, the initial variables and the clearance pairs. Built in place: the clearance
+/// guard keeps references to the layout and the proximity object.
+struct Problem {
+  bool start_rest = false, end_rest = false, jerk_limited = false;
+  int knots = 0;
+  PathFollowing following;
+  Transcription t;
+  Layout layout;
+  Eigen::VectorXd warm;
+  std::unique_ptr<ObstacleProximity> proximity;
+  std::unique_ptr<ClearanceGuard> guard;
+};
 
-  const double rest_tolerance = 1e-9 * std::max(1.0, limits.max_velocity.maxCoeff());
-  const bool start_rest = first.qd.cwiseAbs().maxCoeff() <= rest_tolerance;
-  const bool end_rest = last.qd.cwiseAbs().maxCoeff() <= rest_tolerance;
-  if (!along && start_rest && end_rest && first.q == last.q) {
-    report.message = "free collocation (no path to follow) of a warm start that returns to its start at rest: the "
-                     "minimum-time trajectory between equal ends does not move; follow the path instead";
-    report.solve_seconds = elapsed();
-    return result;
-  }
-
+void BuildProblem(const CheckedInputs& in, const TimedTrajectory& warm_start, const KinematicLimits& limits,
+                  const CollocationOptions& options, const CollisionChecker* checker, const JointPath* path,
+                  Problem* p) {
   // The warm start; with max_effort and both ends at rest, first slowed down until its torques
   // are within their limits (when a slow-down can).
+  const int n = in.n;
+  const TrajectorySample& first = in.first;
+  const TrajectorySample& last = in.last;
+  const double total = in.total;
+  const bool start_rest = p->start_rest, end_rest = p->end_rest;
   TimedTrajectory slowed;
   const TimedTrajectory* initial = &warm_start;
-  if (effort && start_rest && end_rest) {
+  if (in.effort && start_rest && end_rest) {
     double ratio = 0.0, where = 0.0;
     const double slow = EffortSlowDown(warm_start, checker->robot(), limits, &ratio, &where);
     if (std::isfinite(slow) && slow > 1.0) {
@@ -635,16 +646,16 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   const double span = initial->duration();
   // The knot times: along a path, one where the warm start passes each interior waypoint;
   // otherwise evenly spread.
-  int knots = options.knots;
-  PathFollowing following;
-  if (along) following = FollowPath(*initial, *path, options.corridor, &knots);
+  int& knots = p->knots = options.knots;
+  PathFollowing& following = p->following;
+  if (in.along) following = FollowPath(*initial, *path, options.corridor, &knots);
   std::vector<double> knot_times = following.knot_times;
-  if (!along) {
+  if (!in.along) {
     for (int k = 0; k < knots; ++k) knot_times.push_back(k + 1 == knots ? span : span * k / (knots - 1));
   }
 
   // The transcription.
-  Transcription t;
+  Transcription& t = p->t;
   t.num_dofs = n;
   t.knots = knots;
   t.jerk_weight = options.jerk_weight;
@@ -659,25 +670,24 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   t.end_q = last.q;
   t.start_v = start_rest ? Eigen::VectorXd::Zero(n) : first.qd;
   t.end_v = end_rest ? Eigen::VectorXd::Zero(n) : last.qd;
-  const bool jerk_limited = limits.max_jerk.size() != 0;
+  const bool jerk_limited = p->jerk_limited = limits.max_jerk.size() != 0;
   t.start_at_rest_acceleration = jerk_limited && start_rest;
   t.end_at_rest_acceleration = jerk_limited && end_rest;
-  const Layout layout{n, knots - 1};
+  p->layout = Layout{n, knots - 1};
+  const Layout& layout = p->layout;
   // hₖ >= a tenth of an even split of a lower bound on the duration (no joint can beat
   // |Δqᵢ|/vᵢ), and never below a thousandth of the warm start's interval.
   double lower_bound = 0.0;
   for (int i = 0; i < n; ++i) lower_bound = std::max(lower_bound, std::abs(last.q[i] - first.q[i]) / limits.max_velocity[i]);
   t.min_interval = kMinIntervalFraction * std::max(lower_bound, 0.01 * total) / layout.intervals;
-  if (effort) {
+  if (in.effort) {
     t.robot = &checker->robot();
     t.dynamics.gravity = limits.gravity;
   }
-  const double deadline = std::isfinite(options.time_budget) ? options.time_budget : 1e300;
-  t.stop = [&] { return (options.stop && options.stop()) || elapsed() > deadline; };
-
   t.nominal_interval = span / layout.intervals;
   t.regularization = kRegularization * span;
-  Eigen::VectorXd warm(layout.size());
+  Eigen::VectorXd& warm = p->warm;
+  warm.resize(layout.size());
   for (int k = 0; k <= layout.intervals; ++k) {
     const TrajectorySample s = initial->Evaluate(knot_times[k]);
     for (int i = 0; i < n; ++i) {
@@ -690,7 +700,7 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
       t.min_interval = std::min(t.min_interval, std::max(0.5 * warm[layout.h(k)], 1e-3 * t.min_interval));
     }
   }
-  if (along) {
+  if (in.along) {
     for (int k = 1; k < layout.intervals; ++k) {
       AddCorridorRows(following, k, options.corridor * (1.0 - kCorridorMargin), &t.corridor);
     }
@@ -703,16 +713,14 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   }
 
   // Clearance: only with obstacles.
-  std::unique_ptr<ObstacleProximity> proximity;
-  std::unique_ptr<ClearanceGuard> guard;
   if (checker != nullptr && !checker->scene().empty()) {
     // Non-owning: the proximity object lives only during this call.
-    proximity = std::make_unique<ObstacleProximity>(std::shared_ptr<const CollisionChecker>(
+    p->proximity = std::make_unique<ObstacleProximity>(std::shared_ptr<const CollisionChecker>(
         std::shared_ptr<const CollisionChecker>(), checker));
-    t.proximity = proximity.get();
-    guard = std::make_unique<ClearanceGuard>(*checker, *proximity, layout, warm, options.clearance,
-                                             options.activation_distance);
-    t.pairs = guard->Initial();
+    t.proximity = p->proximity.get();
+    p->guard = std::make_unique<ClearanceGuard>(*checker, *p->proximity, layout, warm, options.clearance,
+                                                options.activation_distance);
+    t.pairs = p->guard->Initial();
   }
 
   // With clearance pairs, no interval may carry the robot far between the instants checked
@@ -725,25 +733,37 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   }
   t.max_step = std::max(kSweepStep, length / layout.intervals);
   t.bounded_motion = !t.pairs.empty();
+}
 
-  // The solves: one, plus one per round of clearance pairs added after a violation. Only one
-  // thread of the process may use Ipopt at a time (IpoptLock).
-  Eigen::VectorXd start = warm;
-  Eigen::VectorXd x;
-  TimedTrajectory chain;    // x's pieces with the defects closed (ExactChain)
-  double correction = 0.0;  // ExactChain's largest knot correction for x
+/// Phase 3: the solves — one, plus one per round of rows tightened or clearance pairs added
+/// after a violation. False when stopped while waiting for another solve (the report says so).
+struct Solves {
   bool solved = false;
+  TimedTrajectory chain;    // the last solution's pieces with the defects closed (ExactChain)
+  double correction = 0.0;  // ExactChain's largest knot correction for it
   int rounds = 0;
+};
+
+bool SolveRounds(Problem& p, bool along, const CollocationOptions& options, const CollisionChecker* checker,
+                 const std::function<double()>& elapsed, OptimizerReport* report, Solves* out) {
+  // Only one thread of the process may use Ipopt at a time (IpoptLock).
+  Transcription& t = p.t;
+  const Layout& layout = p.layout;
+  const PathFollowing& following = p.following;
+  Eigen::VectorXd start = p.warm;
+  Eigen::VectorXd x;
+  TimedTrajectory& chain = out->chain;
+  double& correction = out->correction;
+  int& rounds = out->rounds;
   std::string failure;
   std::unique_lock<std::timed_mutex> lock(IpoptLock(), std::defer_lock);
   while (!lock.try_lock_for(std::chrono::milliseconds(10))) {
     if (t.stop()) {
-      report.status = "User_Requested_Stop";
-      report.message = options.stop && options.stop() ? "stopped by the caller while waiting for another solve"
-                                                      : "time budget of " + FormatNumber(options.time_budget) +
-                                                            " s exceeded while waiting for another solve";
-      report.solve_seconds = elapsed();
-      return result;
+      report->status = "User_Requested_Stop";
+      report->message = options.stop && options.stop() ? "stopped by the caller while waiting for another solve"
+                                                       : "time budget of " + FormatNumber(options.time_budget) +
+                                                             " s exceeded while waiting for another solve";
+      return false;
     }
   }
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = MakeIpopt(options);
@@ -764,15 +784,15 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     }
     Ipopt::SmartPtr<CollocationNlp> nlp = new CollocationNlp(t, start, warm_duals ? duals : collocation::Multipliers{});
     const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(Ipopt::GetRawPtr(nlp));
-    report.status = StatusName(status);
+    report->status = StatusName(status);
     Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics();
     if (Ipopt::IsValid(stats)) {
-      report.iterations += stats->IterationCount();
+      report->iterations += stats->IterationCount();
       double dual, primal, complementarity, kkt;
       stats->Infeasibilities(dual, primal, complementarity, kkt);
-      report.constraint_violation = primal;
+      report->constraint_violation = primal;
     } else {
-      report.constraint_violation = nlp->violation();
+      report->constraint_violation = nlp->violation();
     }
     if (status != Ipopt::Solve_Succeeded && status != Ipopt::Solved_To_Acceptable_Level) {
       if (nlp->stopped() && options.stop && options.stop()) {
@@ -780,13 +800,13 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
       } else if (nlp->stopped() || status == Ipopt::Maximum_CpuTime_Exceeded) {
         failure = "time budget of " + FormatNumber(options.time_budget) + " s exceeded";
       } else {
-        failure = "Ipopt ended with " + report.status;
+        failure = "Ipopt ended with " + report->status;
       }
-      failure += " after " + std::to_string(report.iterations) + " iterations";
+      failure += " after " + std::to_string(report->iterations) + " iterations";
       break;
     }
     x = nlp->solution();
-    report.objective = Objective(layout, x, options.jerk_weight);
+    report->objective = Objective(layout, x, options.jerk_weight);
     chain = ExactChain(layout, x, t, &correction);
     bool again = false, contact = false;
     const std::size_t pairs_before = t.pairs.size();
@@ -796,7 +816,7 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
       // tightens its two knots' segment rows by twice the excess for the next solve.
       std::vector<double> per_interval;
       const double bound = CorridorBound(chain, following, &per_interval);
-      report.path_deviation = bound;
+      report->path_deviation = bound;
       if (bound > options.corridor) {
         const int worst = static_cast<int>(std::max_element(per_interval.begin(), per_interval.end()) - per_interval.begin());
         if (rounds + 1 >= kMaxClearanceRounds) {
@@ -832,8 +852,8 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
         again = true;
       }
     }
-    if (guard != nullptr) {
-      const ClearanceFindings found = guard->Check(x, &t.pairs);
+    if (p.guard != nullptr) {
+      const ClearanceFindings found = p.guard->Check(x, &t.pairs);
       if (!std::isinf(found.worst)) {
         if (found.added == 0 || rounds + 1 >= kMaxClearanceRounds) {
           failure = "clearance of link '" + found.link + "' is " + FormatNumber(-found.worst) +
@@ -848,24 +868,30 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
       }
     }
     if (!again) {
-      solved = true;
+      out->solved = true;
       break;
     }
     // Continue from the solution, unless it touches an obstacle (no distance gradient there).
-    start = contact ? warm : x;
+    start = contact ? p.warm : x;
     duals = !contact && t.pairs.size() == pairs_before ? nlp->multipliers() : collocation::Multipliers{};
   }
   app = nullptr;  // MUMPS' instance ends with the application, still under the lock
   lock.unlock();
-  report.message = failure;
-  if (!solved) {
-    report.solve_seconds = elapsed();
-    return result;
-  }
+  report->message = failure;
+  return true;
+}
 
+/// Phase 4: the last chain's exact limits (slowed down within them when both ends are at rest),
+/// torques and the whole contract; the report's message.
+void Finish(const CheckedInputs& in, Problem& p, Solves& s, const KinematicLimits& limits,
+            const CollocationOptions& options, const CollisionChecker* checker, CollocationResult* result) {
   // The trajectory: the last solve's chain, which the loop found inside the corridor and the
   // position limits between knots (exactly; time scaling below keeps both); its exact limits.
-  TimedTrajectory trajectory = std::move(chain);
+  OptimizerReport& report = result->report;
+  const Transcription& t = p.t;
+  const bool start_rest = p.start_rest, end_rest = p.end_rest;
+  TimedTrajectory trajectory = std::move(s.chain);
+  const double correction = s.correction;
   std::string problem;
   if (!(correction <= kCorrectionTolerance)) {
     problem = "the collocation defects are not closed: closing them changes a knot acceleration by " +
@@ -873,7 +899,7 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
   }
   double scale = std::max(MaxRatio(trajectory, 1, limits.max_velocity),
                           std::sqrt(MaxRatio(trajectory, 2, limits.max_acceleration)));
-  if (jerk_limited) scale = std::max(scale, std::cbrt(MaxRatio(trajectory, 3, limits.max_jerk)));
+  if (p.jerk_limited) scale = std::max(scale, std::cbrt(MaxRatio(trajectory, 3, limits.max_jerk)));
   const bool moving_ends = !start_rest || !end_rest;
   const auto rescale = [&](double factor) {
     if (moving_ends) {
@@ -885,7 +911,7 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     trajectory = trajectory.TimeScaled(factor);
   };
   if (problem.empty() && scale > 1.0) rescale(scale);
-  if (problem.empty() && effort) {
+  if (problem.empty() && in.effort) {
     // Torques between the checked points: the smallest further slow-down that meets them at the
     // states VerifyTrajectory checks.
     double ratio = 0.0, where = 0.0;
@@ -905,21 +931,66 @@ CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const
     const VerificationReport verified = VerifyTrajectory(trajectory, t.start_q, t.end_q, *checker, limits, verification);
     if (!verified.ok) problem = "the solution fails verification: " + verified.reason;
   }
-  report.solve_seconds = elapsed();
   if (!problem.empty()) {
     report.message = problem;
-    return result;
+    return;
   }
-  result.trajectory = std::move(trajectory);
+  result->trajectory = std::move(trajectory);
   report.ok = true;
-  report.message = std::string(along ? "along the path within " + FormatNumber(report.path_deviation) + " rad (corridor " +
+  report.message = std::string(in.along ? "along the path within " + FormatNumber(report.path_deviation) + " rad (corridor " +
                                            FormatNumber(options.corridor) + "), "
                                      : "free of the path, ") +
-                   std::to_string(knots) + " knots, " + std::to_string(report.iterations) +
-                   " Ipopt iterations in " + std::to_string(rounds + 1) + " solve" + (rounds > 0 ? "s" : "") +
+                   std::to_string(p.knots) + " knots, " + std::to_string(report.iterations) +
+                   " Ipopt iterations in " + std::to_string(s.rounds + 1) + " solve" + (s.rounds > 0 ? "s" : "") +
                    (t.pairs.empty() ? "" : ", " + std::to_string(t.pairs.size()) + " clearance constraints") +
-                   ", duration " + FormatNumber(result.trajectory.duration()) + " s" +
+                   ", duration " + FormatNumber(result->trajectory.duration()) + " s" +
                    (report.time_scale > 1.0 ? ", slowed by " + FormatNumber(report.time_scale) : "");
+}
+
+}  // namespace
+
+CollocationResult OptimizeByCollocation(const TimedTrajectory& warm_start, const KinematicLimits& limits,
+                                        const CollocationOptions& options, const CollisionChecker* checker,
+                                        const JointPath* path) {
+  const Clock::time_point started = Clock::now();
+  const std::function<double()> elapsed = [&] { return std::chrono::duration<double>(Clock::now() - started).count(); };
+  const CheckedInputs in = CheckInputs(warm_start, limits, options, checker, path);
+  const int n = in.n;
+  const TrajectorySample& first = in.first;
+  const TrajectorySample& last = in.last;
+  CollocationResult result;
+  OptimizerReport& report = result.report;
+  if (!(in.total > 0.0)) {
+    Piece rest;
+    rest.coefficients = Eigen::MatrixXd::Zero(n, 4);
+    rest.coefficients.col(0) = first.q;
+    result.trajectory = TimedTrajectory({rest}, last.q);
+    report.ok = true;
+    report.message = "the warm start does not move: nothing to optimise";
+    report.solve_seconds = elapsed();
+    return result;
+  }
+
+  const double rest_tolerance = 1e-9 * std::max(1.0, limits.max_velocity.maxCoeff());
+  const bool start_rest = first.qd.cwiseAbs().maxCoeff() <= rest_tolerance;
+  const bool end_rest = last.qd.cwiseAbs().maxCoeff() <= rest_tolerance;
+  if (!in.along && start_rest && end_rest && first.q == last.q) {
+    report.message = "free collocation (no path to follow) of a warm start that returns to its start at rest: the "
+                     "minimum-time trajectory between equal ends does not move; follow the path instead";
+    report.solve_seconds = elapsed();
+    return result;
+  }
+
+  Problem problem;
+  problem.start_rest = start_rest;
+  problem.end_rest = end_rest;
+  BuildProblem(in, warm_start, limits, options, checker, path, &problem);
+  const double deadline = std::isfinite(options.time_budget) ? options.time_budget : 1e300;
+  problem.t.stop = [&] { return (options.stop && options.stop()) || elapsed() > deadline; };
+  Solves solves;
+  const bool ran = SolveRounds(problem, in.along, options, checker, elapsed, &report, &solves);
+  if (ran && solves.solved) Finish(in, problem, solves, limits, options, checker, &result);
+  report.solve_seconds = elapsed();
   return result;
 }
 
