@@ -45,30 +45,6 @@ constexpr int kWaypointSamples = 32;         // per warm-start piece, to find wh
 constexpr double kWarmBarrier = 1e-4;        // Ipopt mu_init of a re-solve started from the last solution
 constexpr double kWarmPush = 1e-6;           // Ipopt warm_start_*_push / _frac of such a re-solve
 
-void ValidateOptions(const CollocationOptions& options) {
-  if (options.knots < 2) ThrowInvalid("collocation knots = " + std::to_string(options.knots) + " must be >= 2");
-  const auto finite_nonnegative = [](double value, const char* name) {
-    if (!std::isfinite(value) || !(value >= 0.0)) {
-      ThrowInvalid(std::string("collocation ") + name + " = " + FormatNumber(value) + " must be finite and >= 0");
-    }
-  };
-  finite_nonnegative(options.jerk_weight, "jerk_weight");
-  finite_nonnegative(options.clearance, "clearance");
-  finite_nonnegative(options.activation_distance, "activation_distance");
-  if (!std::isfinite(options.corridor) || !(options.corridor > 0.0) || options.corridor > 1.0) {
-    ThrowInvalid("collocation corridor = " + FormatNumber(options.corridor) + " must be in (0, 1] rad");
-  }
-  if (options.max_iterations < 1) {
-    ThrowInvalid("collocation max_iterations = " + std::to_string(options.max_iterations) + " must be >= 1");
-  }
-  if (!std::isfinite(options.tolerance) || !(options.tolerance > 0.0)) {
-    ThrowInvalid("collocation tolerance = " + FormatNumber(options.tolerance) + " must be finite and > 0");
-  }
-  if (!(options.time_budget > 0.0)) {
-    ThrowInvalid("collocation time_budget = " + FormatNumber(options.time_budget) + " must be > 0");
-  }
-}
-
 std::string StatusName(Ipopt::ApplicationReturnStatus status) {
   switch (status) {
     case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
@@ -554,6 +530,30 @@ Ipopt::SmartPtr<Ipopt::IpoptApplication> MakeIpopt(const CollocationOptions& opt
 
 }  // namespace
 
+void CollocationOptions::Validate(const std::string& field_prefix) const {
+  const auto field = [&](const char* name) { return field_prefix + name; };
+  if (knots < 2 || knots > kMaxKnots) {
+    ThrowInvalid(field("knots") + " = " + std::to_string(knots) +
+                 (knots < 2 ? " must be >= 2" : " must be at most " + std::to_string(kMaxKnots)));
+  }
+  const auto finite_nonnegative = [&](double value, const char* name) {
+    if (!std::isfinite(value) || !(value >= 0.0)) {
+      ThrowInvalid(field(name) + " = " + FormatNumber(value) + " must be finite and >= 0");
+    }
+  };
+  finite_nonnegative(jerk_weight, "jerk_weight");
+  finite_nonnegative(clearance, "clearance");
+  finite_nonnegative(activation_distance, "activation_distance");
+  if (!std::isfinite(corridor) || !(corridor > 0.0) || corridor > 1.0) {
+    ThrowInvalid(field("corridor") + " = " + FormatNumber(corridor) + " must be in (0, 1] rad");
+  }
+  if (max_iterations < 1) ThrowInvalid(field("max_iterations") + " = " + std::to_string(max_iterations) + " must be >= 1");
+  if (!std::isfinite(tolerance) || !(tolerance > 0.0)) {
+    ThrowInvalid(field("tolerance") + " = " + FormatNumber(tolerance) + " must be finite and > 0");
+  }
+  if (!(time_budget > 0.0)) ThrowInvalid(field("time_budget") + " = " + FormatNumber(time_budget) + " must be > 0");
+}
+
 namespace {
 
 /// Phase 1 of OptimizeByCollocation: the inputs, checked.
@@ -567,7 +567,7 @@ struct CheckedInputs {
 
 CheckedInputs CheckInputs(const TimedTrajectory& warm_start, const KinematicLimits& limits,
                           const CollocationOptions& options, const CollisionChecker* checker, const JointPath* path) {
-  ValidateOptions(options);
+  options.Validate();
   if (warm_start.empty()) ThrowInvalid("collocation warm_start is empty");
   CheckedInputs in;
   const int n = in.n = warm_start.num_dofs();

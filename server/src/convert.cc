@@ -780,28 +780,23 @@ TrajectorySpec TrajectorySpecFromProto(const v1::TrajectoryOptions& options, con
   };
   const v1::CollocationOptions& c = options.collocation();
   const std::string cf = field + ".collocation";
-  if (c.knots() != 0 && c.knots() < 2) {
-    ThrowInvalid(cf + ".knots = " + std::to_string(c.knots()) + " must be >= 2 (0 = 50)");
-  }
-  if (c.knots() > 2000) ThrowInvalid(cf + ".knots = " + std::to_string(c.knots()) + " must be at most 2000");
+  // Proto defaults mapped here (0 = 50 knots, 0 = 500 iterations, corridor unset = the
+  // trajectory's max_deviation); the rules are CollocationOptions::Validate's.
   spec.collocation.knots = c.knots() == 0 ? 50 : c.knots();
-  spec.collocation.jerk_weight = weight(c.jerk_weight(), cf + ".jerk_weight");
-  if (c.has_clearance()) spec.collocation.clearance = weight(c.clearance(), cf + ".clearance");
-  if (c.max_iterations() < 0) {
-    ThrowInvalid(cf + ".max_iterations = " + std::to_string(c.max_iterations()) + " must be >= 1 (0 = 500)");
-  }
+  spec.collocation.jerk_weight = c.jerk_weight();
+  if (c.has_clearance()) spec.collocation.clearance = c.clearance();
   spec.collocation.max_iterations = c.max_iterations() == 0 ? 500 : c.max_iterations();
   spec.collocation.time_budget = BudgetFromProto(c.time_budget(), 60.0, cf + ".time_budget");
   if (c.path_mode() != v1::CollocationOptions::ALONG_PATH && c.path_mode() != v1::CollocationOptions::FREE) {
     ThrowInvalid(cf + ".path_mode = " + std::to_string(c.path_mode()) + " is not one of ALONG_PATH, FREE");
   }
   spec.collocation_free = c.path_mode() == v1::CollocationOptions::FREE;
-  if (c.has_corridor()) {
-    if (!(std::isfinite(c.corridor()) && c.corridor() > 0.0 && c.corridor() <= 1.0)) {
-      ThrowInvalid(cf + ".corridor = " + FormatNumber(c.corridor()) + " must be in (0, 1] rad");
-    }
-    spec.collocation_corridor = c.corridor();
+  {
+    CollocationOptions checked = spec.collocation;
+    if (c.has_corridor()) checked.corridor = c.corridor();
+    checked.Validate(cf + ".");
   }
+  if (c.has_corridor()) spec.collocation_corridor = c.corridor();
 
   const v1::SplineOptions& b = options.spline();
   const std::string sf = field + ".spline";

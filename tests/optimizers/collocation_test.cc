@@ -438,6 +438,8 @@ TEST(Collocation, NamedErrors) {
     return [options, &warm, &limits] { OptimizeByCollocation(warm, limits, options); };
   };
   ExpectInvalid(with([](CollocationOptions& o) { o.knots = 1; }), "collocation knots = 1 must be >= 2");
+  ExpectInvalid(with([](CollocationOptions& o) { o.knots = 2001; }), "collocation knots = 2001 must be at most 2000");
+  ExpectInvalid(with([](CollocationOptions& o) { o.corridor = 1.5; }), "collocation corridor = 1.5 must be in (0, 1] rad");
   ExpectInvalid(with([](CollocationOptions& o) { o.jerk_weight = -1.0; }),
                 "collocation jerk_weight = -1 must be finite and >= 0");
   ExpectInvalid(with([](CollocationOptions& o) { o.jerk_weight = std::nan(""); }),

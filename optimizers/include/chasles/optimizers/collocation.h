@@ -3,6 +3,7 @@
 /// Minimum-time (plus jerk) trajectories by direct collocation, solved with Ipopt.
 
 #include <functional>
+#include <string>
 
 #include <Eigen/Core>
 
@@ -38,6 +39,14 @@ struct CollocationOptions {
   double time_budget = 60.0;
   /// Optional: polled every iteration; true stops the solve (the result is then not ok).
   std::function<bool()> stop;
+
+  /// The one owner of these rules (OptimizeByCollocation checks them; the server calls it after
+  /// mapping its defaults): knots in [2, kMaxKnots], weights and distances finite and >= 0,
+  /// corridor in (0, 1], max_iterations >= 1, tolerance finite and > 0, time_budget > 0.
+  /// \throws Error(kInvalidArgument) naming the field as `field_prefix` + its name, e.g.
+  ///   `collocation knots = 1 must be >= 2`, `options.collocation.corridor = 0 must be in (0, 1] rad`.
+  void Validate(const std::string& field_prefix = "collocation ") const;
+  static constexpr int kMaxKnots = 2000;
 };
 
 struct CollocationResult {
