@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "bench_pipeline.h"  // ReadFile, QuantileOrNan, RandomConfiguration
+#include "bench_pipeline.h"  // ReadFile, QuantileOrNan, MedianMillis, RandomBlockedPair
 #include "bench_robots.h"    // RobotsBenchScene
 #include "chasles/collision/collision_checker.h"
 #include "chasles/optimizers/time_parameterization.h"
@@ -29,26 +29,12 @@
 namespace chasles {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 struct Row {
   std::string group;
   double scale = 0;
   std::vector<double> ratio_reference, ratio_kinematic, solve_ms, kinematic_ms, effort_peak;
   int violations = 0, failed = 0, bound = 0, cases = 0;
 };
-
-/// Median of `repeats` timed calls [ms]; the last result in *out.
-template <typename F>
-double TimeMedian(int repeats, F&& call) {
-  std::vector<double> ms;
-  for (int r = 0; r < repeats; ++r) {
-    const auto t0 = Clock::now();
-    call();
-    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-  }
-  return QuantileOrNan(ms, 0.5);
-}
 
 }  // namespace
 
@@ -90,19 +76,9 @@ void BenchEffort(const EffortBenchOptions& options) {
     const PlanningPipeline pipeline(registry);
     const auto scene_checker = std::make_shared<const CollisionChecker>(robot, RobotsBenchScene());
     std::mt19937_64 plan_rng(options.seed + 1);
-    const auto valid = [&] {
-      for (;;) {
-        Eigen::VectorXd q = RandomConfiguration(*robot, &plan_rng);
-        if (scene_checker->IsValid(q)) return q;
-      }
-    };
     groups.push_back({"planner paths (RRT-Connect, shortcut), stops", {}, 0.0});
     for (int c = 0, tries = 0; c < options.cases && tries < 20 * options.cases; ++tries) {
-      Eigen::VectorXd a, b;
-      do {
-        a = valid();
-        b = valid();
-      } while ((a - b).cwiseAbs().maxCoeff() < 1.0 || scene_checker->IsMotionValid(a, b, 0.005));
+      auto [a, b] = RandomBlockedPair(*scene_checker, &plan_rng);
       PlanQuery query;
       query.checker = scene_checker;
       query.start = a;
@@ -139,11 +115,11 @@ void BenchEffort(const EffortBenchOptions& options) {
         topp.max_deviation = group.deviation;
         ++row.cases;
         TimedTrajectory kinematic, traj;
-        row.kinematic_ms.push_back(TimeMedian(options.repeats, [&] { kinematic = ParameterizeTimeOptimal(path, limits, topp); }));
+        row.kinematic_ms.push_back(MedianMillis(options.repeats, [&] { kinematic = ParameterizeTimeOptimal(path, limits, topp); }));
         limits.max_effort = scale * reference::StaticNeed(*robot, path).cwiseMax(Eigen::VectorXd::Constant(7, 1.0));
         TimeOptimalReport report;
         try {
-          row.solve_ms.push_back(TimeMedian(options.repeats, [&] {
+          row.solve_ms.push_back(MedianMillis(options.repeats, [&] {
             traj = ParameterizeTimeOptimal(path, limits, topp, checker.get(), &report);
           }));
         } catch (const std::exception& e) {

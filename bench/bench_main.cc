@@ -659,17 +659,6 @@ void BenchKinematics(const Options& options) {
 // smoothing on straight segments (against the exact minimum time T*) and on planner paths
 // (against the time-optimal parameterisation of the same path), in one run.
 
-/// Median over `repeats` runs of the time of `call()` [ms].
-template <typename Call>
-double MedianMillis(int repeats, Call&& call) {
-  std::vector<double> ms;
-  for (int r = 0; r < repeats; ++r) {
-    const auto t0 = Clock::now();
-    call();
-    ms.push_back(1e3 * std::chrono::duration<double>(Clock::now() - t0).count());
-  }
-  return QuantileOrNan(ms, 0.5);
-}
 
 struct MethodRow {
   std::vector<double> ratio, ms, iterations, velocity, acceleration, deviation, clearance;

@@ -45,6 +45,21 @@ double QuantileOrNan(std::vector<double> values, double p) {
   return values.empty() ? std::nan("") : ::chasles::Quantile(std::move(values), p);
 }
 
+std::pair<Eigen::VectorXd, Eigen::VectorXd> RandomBlockedPair(const CollisionChecker& checker, std::mt19937_64* rng) {
+  const auto valid = [&] {
+    for (;;) {
+      Eigen::VectorXd q = RandomConfiguration(checker.robot(), rng);
+      if (checker.IsValid(q)) return q;
+    }
+  };
+  Eigen::VectorXd a, b;
+  do {
+    a = valid();
+    b = valid();
+  } while ((a - b).cwiseAbs().maxCoeff() < 1.0 || checker.IsMotionValid(a, b, 0.005));
+  return {std::move(a), std::move(b)};
+}
+
 BenchServer StartBenchServer(int max_message_mb) {
   ServerOptions options;
   options.listen = "127.0.0.1:0";

@@ -4,6 +4,7 @@
 /// time-parameterise (TOPP), certify — on the Panda scenes, in-process against the same queries
 /// through the FCL path, and as a Plan RPC over loopback against the in-process pipeline.
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -31,6 +32,22 @@ Eigen::VectorXd RandomConfiguration(const RobotModel& robot, std::mt19937_64* rn
 
 /// The report's quantile (linear interpolation), but nan for no values: a table cell, not a 0.
 double QuantileOrNan(std::vector<double> values, double p);
+
+/// Median over `repeats` runs of the time of `call()` [ms].
+template <typename Call>
+double MedianMillis(int repeats, Call&& call) {
+  std::vector<double> ms;
+  for (int r = 0; r < repeats; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    call();
+    ms.push_back(1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return QuantileOrNan(ms, 0.5);
+}
+
+/// A planning problem worth planning: two valid configurations (drawn by RandomConfiguration)
+/// at least 1 rad (or m) apart in some joint whose straight segment collides.
+std::pair<Eigen::VectorXd, Eigen::VectorXd> RandomBlockedPair(const CollisionChecker& checker, std::mt19937_64* rng);
 
 /// A planning server in this process on a loopback port (one planning worker, no request log)
 /// and a stub to it, messages up to `max_message_mb` [MiB] both ways (the server's cap too).

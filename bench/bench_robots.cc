@@ -17,7 +17,7 @@
 #include <utility>
 #include <vector>
 
-#include "bench_pipeline.h"  // ReadFile, QuantileOrNan, RandomConfiguration
+#include "bench_pipeline.h"  // ReadFile, QuantileOrNan, RandomBlockedPair
 #include "chasles/collision/collision_checker.h"
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/planners/registry.h"
@@ -84,18 +84,8 @@ void BenchRobots(const RobotsBenchOptions& options) {
     row.fast = checker->certifies_motion();
     for (const Link& link : robot->links()) row.spheres += static_cast<int>(link.collision.size());
     std::mt19937_64 rng(options.seed);
-    const auto valid = [&] {
-      for (;;) {
-        Eigen::VectorXd q = RandomConfiguration(*robot, &rng);
-        if (checker->IsValid(q)) return q;
-      }
-    };
     for (int k = 0; k < options.queries; ++k) {
-      Eigen::VectorXd a, b;
-      do {
-        a = valid();
-        b = valid();
-      } while ((a - b).cwiseAbs().maxCoeff() < 1.0 || checker->IsMotionValid(a, b, 0.005));
+      auto [a, b] = RandomBlockedPair(*checker, &rng);
       PlanQuery query;
       query.checker = checker;
       query.start = a;
