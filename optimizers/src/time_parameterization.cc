@@ -241,29 +241,17 @@ std::vector<int> CollidingBlends(const TimedTrajectory& trajectory, const std::v
   return out;
 }
 
-struct EffortExcess {
-  double ratio = 0.0;
-  std::size_t piece = 0;
-};
-
 /// The largest |τᵢ|/τmaxᵢ over states sampled every `step` of joint motion and at piece ends.
-EffortExcess WorstEffort(const TimedTrajectory& trajectory, const RobotModel& robot, const KinematicLimits& limits,
-                         double step, const DynamicsOptions& dynamics) {
-  EffortExcess worst;
-  for (std::size_t p = 0; p < trajectory.pieces().size(); ++p) {
-    const Piece& piece = trajectory.pieces()[p];
+double WorstEffort(const TimedTrajectory& trajectory, const RobotModel& robot, const KinematicLimits& limits,
+                   double step, const DynamicsOptions& dynamics) {
+  double worst = 0.0;
+  for (const Piece& piece : trajectory.pieces()) {
     const int samples = std::max(2, static_cast<int>(std::ceil(piece.MaxJointTravel() / step)) + 1);
     for (int s = 0; s < samples; ++s) {
       // This piece's own state, also at its end (where Evaluate would take the next piece).
       const TrajectorySample own = piece.State(piece.duration * s / (samples - 1));
       const Eigen::VectorXd tau = InverseDynamics(robot, own.q, own.qd, own.qdd, dynamics);
-      for (int i = 0; i < tau.size(); ++i) {
-        const double ratio = std::abs(tau[i]) / limits.max_effort[i];
-        if (ratio > worst.ratio) {
-          worst.ratio = ratio;
-          worst.piece = p;
-        }
-      }
+      for (int i = 0; i < tau.size(); ++i) worst = std::max(worst, std::abs(tau[i]) / limits.max_effort[i]);
       // Holding still must be possible at all.
       const Eigen::VectorXd hold = InverseDynamics(robot, own.q, Eigen::VectorXd::Zero(own.q.size()),
                                                    Eigen::VectorXd::Zero(own.q.size()), dynamics);
@@ -465,8 +453,7 @@ TimedTrajectory ParameterizeTimeOptimal(const JointPath& path, const KinematicLi
     // the parameterisation.
     DynamicsOptions dynamics;
     dynamics.gravity = limits.gravity;
-    const EffortExcess worst = WorstEffort(trajectory, checker->robot(), limits, kEffortCheckStep, dynamics);
-    if (worst.ratio > kKinematicEffortShare) {
+    if (WorstEffort(trajectory, checker->robot(), limits, kEffortCheckStep, dynamics) > kKinematicEffortShare) {
       detail::EffortRetimeReport retime;
       trajectory = detail::RetimeUnderEffort(SectionsOf(trajectory, owners, layout), limits, checker->robot(), dynamics,
                                              start_speed, end_speed, kEffortGridStep, &retime);
