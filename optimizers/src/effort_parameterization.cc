@@ -190,9 +190,12 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
 
   // The grid: intervals of at most grid_step along each section, nodes at their ends and
   // midpoints (a section's intervals share their end nodes).
+  const auto intervals_on = [&](const PathSection& section) {
+    return std::max(1, static_cast<int>(std::ceil(section.length / grid_step)));
+  };
   int count = 0;
   for (const PathSection& section : sections) {
-    if (section.length > 0.0) count += 1 + 2 * std::max(1, static_cast<int>(std::ceil(section.length / grid_step)));
+    if (section.length > 0.0) count += 1 + 2 * intervals_on(section);
   }
   Nodes nodes(n, count);
   std::vector<Interval> intervals;
@@ -202,7 +205,7 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
   for (std::size_t k = 0; k < sections.size(); ++k) {
     const PathSection& section = sections[k];
     if (!(section.length > 0.0)) continue;
-    const int m = std::max(1, static_cast<int>(std::ceil(section.length / grid_step)));
+    const int m = intervals_on(section);
     if (!intervals.empty()) {
       const double jump = (nodes.d1.col(intervals.back().n1) - section.p1).norm();
       if (jump > kTangentJump * std::max(1.0, section.p1.norm())) stops.push_back(static_cast<int>(intervals.size()));
@@ -249,7 +252,7 @@ TimedTrajectory RetimeUnderEffort(const std::vector<PathSection>& sections, cons
     }
   }
   // Per interval: the velocity limit (|q′ᵢ| is largest at an end: linear in s), the Coulomb
-  // torque's bounds, no margin yet.
+  // torque's bounds, the acceleration bound on u and the a-priori margin.
   for (int i = 0; i < N; ++i) {
     Interval& iv = intervals[i];
     const int A = iv.n0, B = iv.n1, M = iv.mid;
