@@ -72,6 +72,11 @@ class SeededSampler : public ob::RealVectorStateSampler {
 class JointSpace : public ob::RealVectorStateSpace {
  public:
   JointSpace(unsigned int dim, std::uint64_t seed) : ob::RealVectorStateSpace(dim), seed_(seed) {}
+  /// As constructed with `seed`: the next sampler draws what a new space's first would.
+  void Reseed(std::uint64_t seed) {
+    seed_ = seed;
+    counter_ = 0;
+  }
   ob::StateSamplerPtr allocDefaultStateSampler() const override {
     return std::make_shared<SeededSampler>(this, MixSeed(seed_ + 0x100 + counter_++));
   }
@@ -322,6 +327,37 @@ class Seeded : public P {
   Seeded(const ob::SpaceInformationPtr& si, std::uint32_t seed) : P(si) { this->rng_.setLocalSeed(seed); }
 };
 
+/// RRT-Connect that counts its trees' states itself. getPlannerData copies every state and edge
+/// into a graph only for the count: ~20 µs of a 0.3 ms Panda plan, and its vertices are exactly
+/// the two trees' motions (the connection adds an edge between states already in them).
+class CountedRrtConnect : public Seeded<og::RRTConnect> {
+ public:
+  using Seeded<og::RRTConnect>::Seeded;
+  std::size_t TreeStates() const { return (tStart_ ? tStart_->size() : 0) + (tGoal_ ? tGoal_->size() : 0); }
+  /// As constructed with `seed` (RRT-Connect draws nothing else from this RNG).
+  void Reseed(std::uint32_t seed) { rng_.setLocalSeed(seed); }
+};
+
+/// A thread's last RRT-Connect and its joint space, kept for the next request with the same
+/// joint bounds and range. Building them (space, space information, planner and its two
+/// nearest-neighbour trees) took ~45 µs of a ~0.3 ms Panda plan, most of it in code and memory
+/// the rest of a request had evicted from the caches. Kept between requests: no tree states
+/// (clear() frees them), no checker (its validity checker and motion validator are dropped).
+/// Reused, both are reseeded, so a request draws exactly what it would from new ones.
+struct ReusableRrtConnect {
+  Eigen::VectorXd lower, upper;  // the joint bounds
+  double range = 0.0;            // the resolved range parameter (0 = OMPL's default)
+  std::shared_ptr<JointSpace> space;
+  ob::SpaceInformationPtr si;
+  std::shared_ptr<CountedRrtConnect> planner;
+
+  bool Fits(const RobotModel& robot, double r) const {
+    return r == range && lower.size() == robot.num_dofs() && lower == robot.lower_limits() &&
+           upper == robot.upper_limits();
+  }
+};
+thread_local std::unique_ptr<ReusableRrtConnect> t_reusable_rrt_connect;
+
 /// PRM / PRM* run on one thread: OMPL's own roadmap growth, expansion and solution search,
 /// in slices of a fixed number of termination checks, instead of OMPL's solution-checking
 /// thread and timed slices. The roadmap then depends only on the seed, so a seeded run repeats.
@@ -416,6 +452,21 @@ class OmplPlanner : public Planner {
 
     map_.n = n;
     map_.se2 = IsCar(robot.kind());
+    const std::uint32_t seed = MixSeed(problem.seed);
+    max_iterations_ = static_cast<std::uint64_t>(params.count("max_iterations") ? params.at("max_iterations") : 0);
+    if (kind_ == Kind::kRrtConnect && !map_.se2 && t_reusable_rrt_connect &&
+        t_reusable_rrt_connect->Fits(robot, params.at("range"))) {
+      reused_ = std::move(t_reusable_rrt_connect);
+      reused_->space->Reseed(problem.seed);
+      reused_->planner->Reseed(seed);
+      si_ = reused_->si;
+      AttachChecker(problem);
+      DefineProblem(problem);
+      planner_ = reused_->planner;
+      rrt_connect_ = reused_->planner.get();
+      planner_->setProblemDefinition(pdef_);  // already set up: range and trees as before
+      return;
+    }
     ob::StateSpacePtr space;
     if (map_.se2) {
       // A car: OMPL's SE(2) curve spaces over the workspace bounds of (x, y); the heading is an
@@ -443,45 +494,18 @@ class OmplPlanner : public Planner {
       }
       joints->setBounds(bounds);
       space = joints;
+      if (kind_ == Kind::kRrtConnect) {
+        reused_ = std::make_unique<ReusableRrtConnect>();
+        reused_->lower = robot.lower_limits();
+        reused_->upper = robot.upper_limits();
+        reused_->range = params.at("range");
+        reused_->space = joints;
+      }
     }
     si_ = std::make_shared<ob::SpaceInformation>(space);
-    si_->setStateValidityChecker(std::make_shared<ValidityChecker>(si_, problem.checker, map_, &checks_));
-    if (map_.se2) {
-      si_->setMotionValidator(std::make_shared<CarMotionChecker>(si_, problem.checker, problem.max_step,
-                                                                 robot.motion().turning_radius, map_, &checks_));
-    } else {
-      si_->setMotionValidator(std::make_shared<MotionChecker>(si_, problem.checker, problem.max_step, map_, &checks_));
-    }
-    si_->setup();
+    AttachChecker(problem);
+    DefineProblem(problem);
 
-    pdef_ = std::make_shared<ob::ProblemDefinition>(si_);
-    ob::ScopedState<> start(space), goal(space);
-    map_.FromEigen(problem.start, start.get());
-    map_.FromEigen(problem.goal, goal.get());
-    pdef_->addStartState(start);
-    if (problem.additional_goals.empty()) {
-      pdef_->setGoalState(goal, std::max(problem.goal_tolerance, 1e-9));
-    } else {
-      auto goals = std::make_shared<ob::GoalStates>(si_);
-      goals->addState(goal);
-      for (const Eigen::VectorXd& q : problem.additional_goals) {
-        ob::ScopedState<> g(space);
-        map_.FromEigen(q, g.get());
-        goals->addState(g);
-      }
-      goals->setThreshold(std::max(problem.goal_tolerance, 1e-9));
-      pdef_->setGoal(goals);
-    }
-    auto objective = std::make_shared<SeededPathLengthObjective>(si_);
-    if (!spec_.optimizing) {
-      // Any path satisfies a first-solution planner; without this PRM keeps refining until
-      // the budget ends (its objective's default threshold is never met).
-      objective->setCostThreshold(ob::Cost(std::numeric_limits<double>::infinity()));
-    }
-    pdef_->setOptimizationObjective(objective);
-
-    const std::uint32_t seed = MixSeed(problem.seed);
-    max_iterations_ = static_cast<std::uint64_t>(params.count("max_iterations") ? params.at("max_iterations") : 0);
     switch (kind_) {
       case Kind::kPrm: {
         auto p = std::make_shared<SingleThreadPrm<og::PRM>>(si_, seed);
@@ -520,8 +544,13 @@ class OmplPlanner : public Planner {
         break;
       }
       case Kind::kRrtConnect: {
-        auto p = std::make_shared<Seeded<og::RRTConnect>>(si_, seed);
+        auto p = std::make_shared<CountedRrtConnect>(si_, seed);
         if (params.at("range") > 0) p->setRange(params.at("range"));
+        rrt_connect_ = p.get();
+        if (reused_) {  // a joint space (a car's SE(2) space is built anew)
+          reused_->si = si_;
+          reused_->planner = p;
+        }
         planner_ = p;
         break;
       }
@@ -553,9 +582,13 @@ class OmplPlanner : public Planner {
     const ob::PlannerStatus status = planner_->solve(ptc);
     result.solve_seconds = std::chrono::duration<double>(Termination::Clock::now() - t0).count();
 
-    ob::PlannerData data(si_);
-    planner_->getPlannerData(data);
-    result.graph_states = data.numVertices();
+    if (rrt_connect_ != nullptr) {
+      result.graph_states = rrt_connect_->TreeStates();
+    } else {
+      ob::PlannerData data(si_);
+      planner_->getPlannerData(data);
+      result.graph_states = data.numVertices();
+    }
 
     const bool exact = status == ob::PlannerStatus::EXACT_SOLUTION;
     const bool approximate = status == ob::PlannerStatus::APPROXIMATE_SOLUTION;
@@ -600,6 +633,14 @@ class OmplPlanner : public Planner {
 
   void Clear() override {
     if (planner_) planner_->clear();
+    if (reused_ && reused_->planner) {
+      // Back to the thread for its next request, without this request's checker.
+      si_->setStateValidityChecker(ob::StateValidityCheckerPtr());
+      si_->setMotionValidator(ob::MotionValidatorPtr());
+      t_reusable_rrt_connect = std::move(reused_);
+    }
+    reused_.reset();
+    rrt_connect_ = nullptr;
     planner_.reset();
     pdef_.reset();
     si_.reset();
@@ -607,6 +648,49 @@ class OmplPlanner : public Planner {
   }
 
  private:
+  /// Validity and motion checks of si_ by the problem's checker; sets si_ up.
+  void AttachChecker(const PlanningProblem& problem) {
+    si_->setStateValidityChecker(std::make_shared<ValidityChecker>(si_, problem.checker, map_, &checks_));
+    if (map_.se2) {
+      si_->setMotionValidator(std::make_shared<CarMotionChecker>(si_, problem.checker, problem.max_step,
+                                                                 problem.checker->robot().motion().turning_radius,
+                                                                 map_, &checks_));
+    } else {
+      si_->setMotionValidator(std::make_shared<MotionChecker>(si_, problem.checker, problem.max_step, map_, &checks_));
+    }
+    si_->setup();
+  }
+
+  /// pdef_: the problem's start, goal(s) and path-length objective on si_.
+  void DefineProblem(const PlanningProblem& problem) {
+    const ob::StateSpacePtr& space = si_->getStateSpace();
+    pdef_ = std::make_shared<ob::ProblemDefinition>(si_);
+    ob::ScopedState<> start(space), goal(space);
+    map_.FromEigen(problem.start, start.get());
+    map_.FromEigen(problem.goal, goal.get());
+    pdef_->addStartState(start);
+    if (problem.additional_goals.empty()) {
+      pdef_->setGoalState(goal, std::max(problem.goal_tolerance, 1e-9));
+    } else {
+      auto goals = std::make_shared<ob::GoalStates>(si_);
+      goals->addState(goal);
+      for (const Eigen::VectorXd& q : problem.additional_goals) {
+        ob::ScopedState<> g(space);
+        map_.FromEigen(q, g.get());
+        goals->addState(g);
+      }
+      goals->setThreshold(std::max(problem.goal_tolerance, 1e-9));
+      pdef_->setGoal(goals);
+    }
+    auto objective = std::make_shared<SeededPathLengthObjective>(si_);
+    if (!spec_.optimizing) {
+      // Any path satisfies a first-solution planner; without this PRM keeps refining until
+      // the budget ends (its objective's default threshold is never met).
+      objective->setCostThreshold(ob::Cost(std::numeric_limits<double>::infinity()));
+    }
+    pdef_->setOptimizationObjective(objective);
+  }
+
   /// A car's path: its states joined by the car's curves. Connects the exact goal along a curve,
   /// drops states the curves can skip (greedy: from each kept state the farthest state joined by a
   /// valid curve), then samples each curve into chords (every 5 degrees of heading, halved until
@@ -802,6 +886,8 @@ class OmplPlanner : public Planner {
   ob::SpaceInformationPtr si_;
   ob::ProblemDefinitionPtr pdef_;
   ob::PlannerPtr planner_;
+  const CountedRrtConnect* rrt_connect_ = nullptr;  // planner_, when it is RRT-Connect
+  std::unique_ptr<ReusableRrtConnect> reused_;      // its objects, to keep for the thread's next request
   std::uint64_t max_iterations_ = 0;
   StateMap map_;
   mutable std::atomic<std::uint64_t> checks_{0};

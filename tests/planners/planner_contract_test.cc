@@ -136,6 +136,94 @@ INSTANTIATE_TEST_SUITE_P(AllPlanners, PlannerContractTest,
                                            "wavefront"),
                          [](const auto& info) { return info.param; });
 
+// RRT-Connect keeps a thread's space and planner for its next request with the same joint
+// bounds (ompl_planner.cc, ReusableRrtConnect). Each test runs on a new thread, whose slot starts
+// empty, so the first plan there is built from nothing.
+class RrtConnectReuseTest : public ::testing::Test {
+ protected:
+  static std::shared_ptr<const CollisionChecker> Checker(bool wall) {
+    auto scene = std::make_shared<Scene>();
+    if (wall) {
+      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+      pose.translation() = Eigen::Vector3d(1.4, 0.0, 0.0);
+      scene->AddObject({"wall", Shape::Box(Eigen::Vector3d(0.2, 0.3, 0.5), pose)});
+    }
+    return std::make_shared<const CollisionChecker>(RobotModel::FromUrdf(kTwoLinkUrdf), scene);
+  }
+  static PlanningProblem Problem(std::shared_ptr<const CollisionChecker> checker, std::uint64_t seed) {
+    PlanningProblem p;
+    p.checker = std::move(checker);
+    p.start = Eigen::Vector2d(1.2, 0.0);
+    p.goal = Eigen::Vector2d(-1.2, 0.0);
+    p.goal_tolerance = 1e-3;
+    p.max_step = 0.005;
+    p.seed = seed;
+    return p;
+  }
+  static PlannerResult Plan(const PlanningProblem& p) {
+    PlannerRegistry registry;
+    RegisterDefaultPlanners(&registry);
+    auto planner = registry.Create("rrt_connect");
+    planner->Setup(p);
+    return planner->Solve(Termination::After(std::chrono::seconds(5)));
+  }
+  template <class F>
+  static void OnNewThread(F f) {
+    std::thread t(f);
+    t.join();
+  }
+};
+
+TEST_F(RrtConnectReuseTest, APlanAfterOtherRequestsIsThePlanOfANewThread) {
+  const auto wall = Checker(true);
+  PlannerResult first, again, other;
+  OnNewThread([&] { first = Plan(Problem(wall, 42)); });
+  OnNewThread([&] {
+    PlanningProblem different = Problem(wall, 5);
+    different.start = Eigen::Vector2d(0.9, 0.3);
+    other = Plan(different);
+    again = Plan(Problem(wall, 42));
+  });
+  ASSERT_EQ(first.status, PlanStatus::kExactSolution) << first.message;
+  ASSERT_EQ(other.status, PlanStatus::kExactSolution) << other.message;
+  ASSERT_EQ(again.status, PlanStatus::kExactSolution) << again.message;
+  EXPECT_EQ(first.graph_states, again.graph_states);
+  EXPECT_EQ(first.state_checks, again.state_checks);
+  ASSERT_EQ(first.path.size(), again.path.size());
+  for (size_t i = 0; i < first.path.size(); ++i) EXPECT_EQ(first.path[i], again.path[i]) << "waypoint " << i;
+}
+
+TEST_F(RrtConnectReuseTest, EachRequestIsCheckedAgainstItsOwnScene) {
+  const auto wall = Checker(true);
+  PlanningProblem blocked = Problem(wall, 3);
+  blocked.start = Eigen::Vector2d(0.0, 0.0);  // straight along +x, through the wall
+  ASSERT_FALSE(wall->IsValid(blocked.start));
+  PlannerResult open, walled, stuck;
+  OnNewThread([&] {
+    open = Plan(Problem(Checker(false), 3));
+    walled = Plan(Problem(wall, 3));
+    stuck = Plan(blocked);  // would plan in the open scene had the first request's checker been kept
+  });
+  ASSERT_EQ(open.status, PlanStatus::kExactSolution) << open.message;
+  ASSERT_EQ(walled.status, PlanStatus::kExactSolution) << walled.message;
+  for (size_t i = 0; i + 1 < walled.path.size(); ++i) {
+    EXPECT_TRUE(wall->IsMotionValid(walled.path[i], walled.path[i + 1], 0.001)) << "segment " << i;
+  }
+  EXPECT_NE(stuck.status, PlanStatus::kExactSolution);  // OMPL refuses the colliding start
+  EXPECT_EQ(stuck.graph_states, 0u) << stuck.message;
+}
+
+TEST_F(RrtConnectReuseTest, AKeptPlannerHoldsNoChecker) {
+  std::weak_ptr<const CollisionChecker> watched;
+  OnNewThread([&] {
+    auto checker = Checker(true);
+    watched = checker;
+    EXPECT_EQ(Plan(Problem(checker, 9)).status, PlanStatus::kExactSolution);
+    checker.reset();
+    EXPECT_TRUE(watched.expired()) << "the thread's kept planner still holds the request's checker";
+  });
+}
+
 TEST(PlannerRegistryTest, EveryDefaultPlannerIsCoveredByTheContractTest) {
   PlannerRegistry registry;
   RegisterDefaultPlanners(&registry);
