@@ -115,7 +115,11 @@ void CollisionChecker::Impl::SweepBounds(const Eigen::VectorXd& w, double* out) 
 
 namespace {
 constexpr int kMaxCertifiedStates = 20000;
-constexpr double kProbeSpacing = 0.25;       // [rad] probe states before advancing, at most this apart
+// [rad] probe states before advancing, at most this apart. Probes only reject (a colliding
+// probe is a real contact), so the spacing changes the cost, never the answer. Callgrind, 4
+// scenes x 20 queries (bench pipeline): 0.25 1052.9M (planning 129.4M), 0.35 1040.4M (128.7M),
+// 0.5 1042.6M (124.9M), 0.75 1046.8M (124.1M; shortcutting +2 %).
+constexpr double kProbeSpacing = 0.5;
 constexpr int kMaxProbeDepth = 10;           // (at most 1023 of them)
 constexpr double kMinCertifiedStep = 1e-7;   // in s
 // A step is at most this times the one before it. Any shorter step is as safe, and the cap lets
