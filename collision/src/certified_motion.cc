@@ -99,6 +99,20 @@ void CollisionChecker::Impl::BuildLevers() {
       }
     }
   }
+  self_pair_lever_max.clear();
+  for (const auto& pr : self_pairs) {
+    for (int side = 0; side < 2; ++side) {
+      const SphereLink& L = slinks[side == 0 ? pr.first : pr.second];
+      const std::vector<int>& unshared = self_pair_unshared[self_pair_lever_max.size()];
+      std::vector<double> most(unshared.size(), 0.0);
+      for (std::size_t j = 0; j < unshared.size(); ++j) {
+        for (int k = L.begin; k < L.end; ++k) {
+          most[j] = std::max(most[j], lever[static_cast<std::size_t>(k) * num_moving + unshared[j]]);
+        }
+      }
+      self_pair_lever_max.push_back(std::move(most));
+    }
+  }
 }
 
 void CollisionChecker::Impl::SweepBounds(const Eigen::VectorXd& w, double* out) const {
@@ -155,6 +169,7 @@ namespace {
 struct AdvancementScratch {
   std::vector<double> D, Dl;         // sweep bound per sphere, its maximum per sphere link
   std::vector<double> PD, PDl;       // self pairs: the same over the unshared joints only
+  std::vector<char> pd_ready;        // per self pair: its spheres' PD are summed
   std::vector<double> w, lb;         // world sphere centres (3 per sphere), link bound centres
   std::vector<char> placed, bound_placed;  // per sphere link: w / lb hold this state's values
   std::vector<double> margin;        // occupancy grids: last margin that held, per grid and sphere
@@ -232,9 +247,26 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
   // the distance changes at most by the levers of the joints not shared, summed for both.
   // Joints, not dofs: a dof that drives a joint above each link (a finger and its mimic) moves
   // them relative to each other, and is counted on both sides.
+  // Per side, a bound on its spheres' rates from the side's largest lever per joint (not less
+  // than the largest of the spheres' own sums, so the link-level test stays sound); the spheres'
+  // own rates PD are summed when the pair is first evaluated sphere by sphere. Most pairs never
+  // are, and a pair's steps are those of any rate bound at the link level (a pair it passes could
+  // not have shortened the step).
   m.PD.resize(self_pair_spheres);
   m.PDl.assign(2 * np, 0.0);
-  for (std::size_t p = 0; p < np; ++p) {
+  m.pd_ready.assign(np, 0);
+  for (std::size_t ps = 0; ps < 2 * np; ++ps) {
+    const std::vector<int>& unshared = self_pair_unshared[ps];
+    const double* most = self_pair_lever_max[ps].data();
+    double d = 0.0;
+    for (std::size_t j = 0; j < unshared.size(); ++j) {
+      if (most[j] != 0.0) d += speed[lever_dof[unshared[j]]] * most[j];
+    }
+    if (!std::isfinite(d)) return false;
+    m.PDl[ps] = d;
+  }
+  // Pair p's sphere rates: the distance shrinks at most by the levers of the joints not shared.
+  const auto pair_rates = [&](std::size_t p) {
     std::size_t at = self_pair_offset[p];
     for (int side = 0; side < 2; ++side) {
       const std::size_t li = side == 0 ? self_pairs[p].first : self_pairs[p].second;
@@ -245,12 +277,11 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
         for (int i : unshared) {
           if (r[i] != 0.0) d += speed[lever_dof[i]] * r[i];
         }
-        if (!std::isfinite(d)) return false;
         m.PD[at++] = d;
-        m.PDl[2 * p + side] = std::max(m.PDl[2 * p + side], d);
       }
     }
-  }
+    m.pd_ready[p] = 1;
+  };
   m.w.resize(3 * ns);
   m.lb.resize(3 * nl);
   m.placed.resize(nl);
@@ -383,6 +414,7 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
       }
       place(pr.first);
       place(pr.second);
+      if (!m.pd_ready[p]) pair_rates(p);
       double* sphere_free = m.self_sphere_free.data() + self_pair_grid[p];
       double until = kInf;
       for (int i = A.begin; i < A.end; ++i) {

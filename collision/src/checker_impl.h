@@ -226,6 +226,9 @@ struct CollisionChecker::Impl {
   // them apart).
   std::vector<std::size_t> self_pair_offset;
   std::vector<std::vector<int>> self_pair_unshared;
+  // self_pair_lever_max[2p + side][j]: the largest lever of that side's spheres about joint
+  // self_pair_unshared[2p + side][j], so Σ_j w·max bounds every sphere's rate on that side.
+  std::vector<std::vector<double>> self_pair_lever_max;
   std::size_t self_pair_spheres = 0;
   // Pair p's |A|·|B| sphere pairs start at self_pair_grid[p] (self_pair_grid.back() in all).
   std::vector<std::size_t> self_pair_grid;
