@@ -249,9 +249,9 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
   // them relative to each other, and is counted on both sides.
   // Per side, a bound on its spheres' rates from the side's largest lever per joint (not less
   // than the largest of the spheres' own sums, so the link-level test stays sound); the spheres'
-  // own rates PD are summed when the pair is first evaluated sphere by sphere. Most pairs never
-  // are, and a pair's steps are those of any rate bound at the link level (a pair it passes could
-  // not have shortened the step).
+  // own rates PD are summed (and its sphere pairs' free-until cleared) when the pair is first
+  // evaluated sphere by sphere. Most pairs never are, and a pair's steps are those of any rate
+  // bound at the link level (a pair it passes could not have shortened the step).
   m.PD.resize(self_pair_spheres);
   m.PDl.assign(2 * np, 0.0);
   m.pd_ready.assign(np, 0);
@@ -280,6 +280,8 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
         m.PD[at++] = d;
       }
     }
+    std::fill(m.self_sphere_free.begin() + static_cast<std::ptrdiff_t>(self_pair_grid[p]),
+              m.self_sphere_free.begin() + static_cast<std::ptrdiff_t>(self_pair_grid[p + 1]), -kInf);
     m.pd_ready[p] = 1;
   };
   m.w.resize(3 * ns);
@@ -328,7 +330,7 @@ bool CollisionChecker::Impl::CertifiedCurve(const CollisionChecker::Curve& curve
   };
   if (!prim_broad_phase) reset_prims();
   m.self_free.assign(np, -kInf);
-  m.self_sphere_free.assign(self_pair_grid.back(), -kInf);
+  m.self_sphere_free.resize(self_pair_grid.back());  // a pair's part set with its rates
   double* const w = m.w.data();
   double* const lb = m.lb.data();
   // World centres of link li's bounding sphere / of its spheres, once per state, when needed.
