@@ -324,7 +324,9 @@ class CarMotionChecker : public ob::MotionValidator {
 template <class P>
 class Seeded : public P {
  public:
-  Seeded(const ob::SpaceInformationPtr& si, std::uint32_t seed) : P(si) { this->rng_.setLocalSeed(seed); }
+  Seeded(const ob::SpaceInformationPtr& si, std::uint32_t seed) : P(si) { Reseed(seed); }
+  /// As constructed with `seed`.
+  void Reseed(std::uint32_t seed) { this->rng_.setLocalSeed(seed); }
 };
 
 /// RRT-Connect that counts its trees' states itself. getPlannerData copies every state and edge
@@ -334,8 +336,6 @@ class CountedRrtConnect : public Seeded<og::RRTConnect> {
  public:
   using Seeded<og::RRTConnect>::Seeded;
   std::size_t TreeStates() const { return (tStart_ ? tStart_->size() : 0) + (tGoal_ ? tGoal_->size() : 0); }
-  /// As constructed with `seed` (RRT-Connect draws nothing else from this RNG).
-  void Reseed(std::uint32_t seed) { rng_.setLocalSeed(seed); }
 };
 
 /// A thread's last RRT-Connect and its joint space, kept for the next request with the same
@@ -494,13 +494,6 @@ class OmplPlanner : public Planner {
       }
       joints->setBounds(bounds);
       space = joints;
-      if (kind_ == Kind::kRrtConnect) {
-        reused_ = std::make_unique<ReusableRrtConnect>();
-        reused_->lower = robot.lower_limits();
-        reused_->upper = robot.upper_limits();
-        reused_->range = params.at("range");
-        reused_->space = joints;
-      }
     }
     si_ = std::make_shared<ob::SpaceInformation>(space);
     AttachChecker(problem);
@@ -547,9 +540,10 @@ class OmplPlanner : public Planner {
         auto p = std::make_shared<CountedRrtConnect>(si_, seed);
         if (params.at("range") > 0) p->setRange(params.at("range"));
         rrt_connect_ = p.get();
-        if (reused_) {  // a joint space (a car's SE(2) space is built anew)
-          reused_->si = si_;
-          reused_->planner = p;
+        if (!map_.se2) {  // kept for the thread's next request (a car's SE(2) space is built anew)
+          reused_ = std::make_unique<ReusableRrtConnect>(
+              ReusableRrtConnect{robot.lower_limits(), robot.upper_limits(), params.at("range"),
+                                 std::static_pointer_cast<JointSpace>(space), si_, p});
         }
         planner_ = p;
         break;
@@ -633,7 +627,7 @@ class OmplPlanner : public Planner {
 
   void Clear() override {
     if (planner_) planner_->clear();
-    if (reused_ && reused_->planner) {
+    if (reused_) {
       // Back to the thread for its next request, without this request's checker.
       si_->setStateValidityChecker(ob::StateValidityCheckerPtr());
       si_->setMotionValidator(ob::MotionValidatorPtr());
