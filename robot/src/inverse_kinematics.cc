@@ -121,6 +121,9 @@ void IkRequest::Validate(const RobotModel& robot) const {
   }
   RequireNonNegative(distinct_distance, "distinct_distance");
   RequirePositive(time_budget, "time_budget");
+  if (max_attempts < 0) {
+    ThrowInvalid("ik.max_attempts = " + std::to_string(max_attempts) + " must be >= 0 (0 = until the budget is spent)");
+  }
   if (initial_guess.size() != 0) robot.ValidateConfiguration(initial_guess, "ik.initial_guess");
 }
 
@@ -315,6 +318,7 @@ IkResult SolveIk(const RobotModel& robot, const IkRequest& request) {
       }
     }
     if (k == 0) break;  // nothing moves the link: every further attempt is the same
+    if (request.max_attempts > 0 && result.attempts >= request.max_attempts) break;
     if (Clock::now() >= deadline || (request.stop && request.stop())) break;
   }
 

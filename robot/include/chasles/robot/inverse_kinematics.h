@@ -40,6 +40,9 @@ struct IkRequest {
   double time_budget = 0.05;             ///< [s], > 0: restarts stop when it is spent
   std::uint64_t seed = 1;                ///< restarts draw from this seed: same seed, same answers
   Eigen::VectorXd initial_guess;         ///< optional first attempt (empty = random)
+  /// 0 = attempts until the budget is spent; else at most this many (1 with an initial guess: a
+  /// local solve from it only, as a path that must stay on one branch needs).
+  int max_attempts = 0;
   /// Optional extra acceptance test (e.g. collision-free); a rejected solution counts as a
   /// failed attempt and the search goes on.
   std::function<bool(const Eigen::VectorXd&)> accept;

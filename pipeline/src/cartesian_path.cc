@@ -1,0 +1,219 @@
+#include "chasles/pipeline/cartesian_path.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "chasles/robot/error.h"
+#include "chasles/robot/inverse_kinematics.h"
+#include "chasles/robot/lie_group.h"
+
+namespace chasles {
+namespace {
+
+void CheckWithin(double value, double lo, double hi, const std::string& field) {
+  if (!(value >= lo && value <= hi)) {
+    ThrowInvalid(field + " = " + FormatNumber(value) + " must be within [" + FormatNumber(lo) + ", " +
+                 FormatNumber(hi) + "]");
+  }
+}
+
+void CheckOpen(double value, double hi, const std::string& field) {
+  if (!(value > 0.0 && value <= hi)) {
+    ThrowInvalid(field + " = " + FormatNumber(value) + " must be within (0, " + FormatNumber(hi) + "]");
+  }
+}
+
+/// Rotation angle between two rotation matrices [rad].
+double AngleBetween(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) { return LogSO3(a.transpose() * b).norm(); }
+
+constexpr double kTwoPi = 6.283185307179586;
+// Points of each step at which the link's pose is compared with the commanded line.
+constexpr int kDeviationPoints = 7;
+
+}  // namespace
+
+const char* ToString(CartesianStop stop) {
+  switch (stop) {
+    case CartesianStop::kComplete: return "COMPLETE";
+    case CartesianStop::kStartInvalid: return "START_INVALID";
+    case CartesianStop::kUnreachable: return "UNREACHABLE";
+    case CartesianStop::kJointJump: return "JOINT_JUMP";
+    case CartesianStop::kRelativeJump: return "RELATIVE_JUMP";
+    case CartesianStop::kCollision: return "COLLISION";
+    case CartesianStop::kCancelled: return "CANCELLED";
+  }
+  return "UNKNOWN";
+}
+
+void CartesianSpec::Validate(const RobotModel& robot) const {
+  if (link < 0 || link >= robot.num_links()) {
+    ThrowInvalid("link = " + std::to_string(link) + " is not a link of robot '" + robot.name() + "'");
+  }
+  if (waypoints.empty()) ThrowInvalid("waypoints: a Cartesian move needs at least one waypoint");
+  if (waypoints.size() > 10000) {
+    ThrowInvalid("waypoints: " + std::to_string(waypoints.size()) + " waypoints; at most 10000");
+  }
+  for (std::size_t i = 0; i < waypoints.size(); ++i) {
+    const Eigen::Matrix4d& m = waypoints[i].matrix();
+    if (!m.allFinite()) ThrowInvalid("waypoints[" + std::to_string(i) + "] must be finite");
+    const Eigen::Matrix3d r = waypoints[i].linear();
+    if (!(((r.transpose() * r) - Eigen::Matrix3d::Identity()).norm() < 1e-6) || !(r.determinant() > 0.0)) {
+      ThrowInvalid("waypoints[" + std::to_string(i) + "].orientation must be a rotation (a unit quaternion)");
+    }
+  }
+  CheckWithin(max_step, 1e-4, 0.5, "max_step");
+  CheckWithin(max_rotation_step, 1e-3, 1.0, "max_rotation_step");
+  CheckOpen(max_joint_jump, kTwoPi, "max_joint_jump");
+  if (!(jump_threshold == 0.0 || (jump_threshold >= 1.0 && std::isfinite(jump_threshold)))) {
+    ThrowInvalid("jump_threshold = " + FormatNumber(jump_threshold) + " must be 0 (off) or a finite value >= 1");
+  }
+  CheckOpen(position_tolerance, 0.01, "position_tolerance");
+  CheckOpen(orientation_tolerance, 0.1, "orientation_tolerance");
+  CheckWithin(collision_resolution, 1e-4, 0.1, "collision_resolution");
+}
+
+Eigen::Isometry3d InterpolatePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double u) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.translation() = a.translation() + u * (b.translation() - a.translation());
+  out.linear() = a.linear() * ExpSO3(u * LogSO3(a.linear().transpose() * b.linear()));
+  return out;
+}
+
+CartesianPathResult ComputeCartesianPath(const CollisionChecker& checker, const Eigen::VectorXd& start,
+                                         const CartesianSpec& spec, const std::function<bool()>& stop) {
+  const RobotModel& robot = checker.robot();
+  spec.Validate(robot);
+  robot.ValidateConfiguration(start, "start.positions");
+  CartesianPathResult out;
+  std::vector<Eigen::Isometry3d> poses;
+  const auto link_pose = [&](const Eigen::VectorXd& q) {
+    robot.ForwardKinematics(q, &poses);
+    return poses[static_cast<std::size_t>(spec.link)];
+  };
+
+  // The segments: from the start's link pose through each waypoint, each cut into steps no longer
+  // than max_step in translation and max_rotation_step in rotation.
+  std::vector<Eigen::Isometry3d> from;
+  std::vector<int> steps;
+  Eigen::Isometry3d previous = link_pose(start);
+  for (const Eigen::Isometry3d& w : spec.waypoints) {
+    const double length = (w.translation() - previous.translation()).norm();
+    const double angle = AngleBetween(previous.linear(), w.linear());
+    const int n = std::max({1, static_cast<int>(std::ceil(length / spec.max_step)),
+                            static_cast<int>(std::ceil(angle / spec.max_rotation_step))});
+    from.push_back(previous);
+    steps.push_back(n);
+    out.steps += n;
+    previous = w;
+  }
+  out.path.push_back(start);
+  const std::string link_name = robot.links()[static_cast<std::size_t>(spec.link)].name;
+  if (spec.check_collisions && !checker.IsValid(start)) {
+    const CollisionResult contact = checker.Check(start);
+    out.stop = CartesianStop::kStartInvalid;
+    out.message = "the start collides ('" + contact.link_a + "' / '" + contact.other + "')";
+    return out;
+  }
+
+  IkRequest ik;
+  ik.link = spec.link;
+  ik.position_tolerance = spec.position_tolerance;
+  ik.orientation_tolerance = spec.orientation_tolerance;
+  ik.max_attempts = 1;  // from the previous state only: the path stays on its branch
+  ik.max_iterations = 200;
+  ik.time_budget = 1.0;
+  ik.stop = stop;
+  int done = 0;
+  Eigen::Isometry3d last_target = from.front();
+  const auto where = [&](std::size_t i, int k) {
+    return "waypoints[" + std::to_string(i) + "], step " + std::to_string(k) + " of " + std::to_string(steps[i]);
+  };
+  const auto end = [&](CartesianStop why, std::string message) {
+    out.stop = why;
+    out.message = std::move(message);
+  };
+  for (std::size_t i = 0; i < spec.waypoints.size() && out.stop == CartesianStop::kComplete; ++i) {
+    for (int k = 1; k <= steps[i]; ++k) {
+      if (stop && stop()) {
+        end(CartesianStop::kCancelled, "cancelled at " + where(i, k));
+        break;
+      }
+      const Eigen::VectorXd& q = out.path.back();
+      ik.target = k == steps[i] ? spec.waypoints[i] : InterpolatePose(from[i], spec.waypoints[i], static_cast<double>(k) / steps[i]);
+      ik.initial_guess = q;
+      const IkResult solved = SolveIk(robot, ik);
+      if (solved.solutions.empty()) {
+        end(CartesianStop::kUnreachable, where(i, k) + ": no inverse-kinematics solution near the previous state (best " +
+                                             FormatNumber(solved.best_position_error) + " m, " +
+                                             FormatNumber(solved.best_orientation_error) + " rad from the pose)");
+        break;
+      }
+      const Eigen::VectorXd& next = solved.solutions.front();
+      Eigen::Index joint = 0;
+      const double jump = (next - q).cwiseAbs().maxCoeff(&joint);
+      if (jump > spec.max_joint_jump) {
+        end(CartesianStop::kJointJump, where(i, k) + ": joint '" + robot.dof_names()[static_cast<std::size_t>(joint)] +
+                                           "' would move " + FormatNumber(jump) + " rad in one step (max_joint_jump " +
+                                           FormatNumber(spec.max_joint_jump) + ")");
+        break;
+      }
+      if (spec.check_collisions) {
+        const bool free = checker.certifies_motion() ? checker.IsMotionCertified(q, next)
+                                                     : checker.IsMotionValid(q, next, spec.collision_resolution);
+        if (!free) {
+          const CollisionResult contact = checker.Check(next);
+          end(CartesianStop::kCollision,
+              where(i, k) + ": the motion collides" +
+                  (contact.in_collision ? " ('" + contact.link_a + "' / '" + contact.other + "' at the step's end)" : ""));
+          break;
+        }
+      }
+      // The state's pose, and the link between the states against the commanded line.
+      const Eigen::Isometry3d reached = link_pose(next);
+      out.max_position_error = std::max(out.max_position_error, (reached.translation() - ik.target.translation()).norm());
+      out.max_orientation_error = std::max(out.max_orientation_error, AngleBetween(reached.linear(), ik.target.linear()));
+      for (int p = 1; p <= kDeviationPoints; ++p) {
+        const double u = static_cast<double>(p) / (kDeviationPoints + 1);
+        const Eigen::Isometry3d at = link_pose(q + u * (next - q));
+        const Eigen::Isometry3d line = InterpolatePose(last_target, ik.target, u);
+        out.max_line_deviation = std::max(out.max_line_deviation, (at.translation() - line.translation()).norm());
+        out.max_line_rotation_deviation =
+            std::max(out.max_line_rotation_deviation, AngleBetween(at.linear(), line.linear()));
+      }
+      last_target = ik.target;
+      out.path.push_back(next);
+      ++done;
+    }
+    if (out.stop == CartesianStop::kComplete) out.waypoints_reached = static_cast<int>(i) + 1;
+  }
+  // MoveIt's relative jump test over the steps achieved.
+  if (spec.jump_threshold > 0.0 && out.path.size() > 1) {
+    double mean = 0.0;
+    for (std::size_t s = 1; s < out.path.size(); ++s) mean += (out.path[s] - out.path[s - 1]).norm();
+    mean /= static_cast<double>(out.path.size() - 1);
+    for (std::size_t s = 1; s < out.path.size(); ++s) {
+      const double d = (out.path[s] - out.path[s - 1]).norm();
+      if (d > spec.jump_threshold * mean) {
+        end(CartesianStop::kRelativeJump, "step " + std::to_string(s) + " moves the joints " + FormatNumber(d) +
+                                              " rad, more than jump_threshold " + FormatNumber(spec.jump_threshold) +
+                                              " × the mean step " + FormatNumber(mean));
+        out.path.resize(s);
+        done = static_cast<int>(s) - 1;
+        // Waypoints reached: those whose last step is still in the path.
+        int reached = 0, counted = 0;
+        for (std::size_t w = 0; w < steps.size(); ++w) {
+          counted += steps[w];
+          if (counted <= done) reached = static_cast<int>(w) + 1;
+        }
+        out.waypoints_reached = reached;
+        break;
+      }
+    }
+  }
+  out.fraction = out.steps > 0 ? static_cast<double>(done) / out.steps : 1.0;
+  return out;
+}
+
+}  // namespace chasles
