@@ -56,6 +56,11 @@ const char kUsage[] =
     "                                  --out and --method as for plan\n"
     "  ik REQUEST.json                 send a chasles.v1.InverseKinematicsRequest (protobuf JSON); print\n"
     "                                  each solution with its manipulability; exit 0 only when solved\n"
+    "  cartesian REQUEST.json [--out F] [--method M]\n"
+    "                                  send a chasles.v1.CartesianPathRequest (protobuf JSON: a link along\n"
+    "                                  straight lines through waypoint poses); print where it stopped,\n"
+    "                                  the fraction achieved and the timed trajectory; --out and --method\n"
+    "                                  as for plan; exit 0 only when the whole path was achieved and timed\n"
     "  upload-robot FILE.urdf [--srdf FILE.srdf [--strict-srdf]] [--mesh NAME=FILE]... [--exact-meshes]\n"
     "  upload-robot --dh FILE.json | --poe FILE.json\n"
     "                                  store a robot (URDF, or a chasles.v1.DhRobot / PoeRobot in\n"
@@ -473,6 +478,49 @@ int Optimize(const Options& options) {
               1e3 * t.optimize(), 1e3 * t.verify(), 1e3 * t.total());
   PrintOptimizer(response.optimizer(), response.quality());
   return FinishWithTrajectory(options, response, response.outcome(), response.message(), response.trajectory());
+}
+
+// --- cartesian ---------------------------------------------------------------------------------
+
+int CartesianPath(const Options& options) {
+  if (options.positional.size() != 2) UsageError("cartesian takes one REQUEST.json");
+  RequireOutFormat(options);
+  v1::CartesianPathRequest request = ParseJsonFileOrExit<v1::CartesianPathRequest>(options.positional[1]);
+  if (!options.method.empty()) request.mutable_options()->set_post_processing(MethodOrExit(options.method));
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  const double budget = request.time_budget() > 0 ? request.time_budget() : 10.0;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : budget + 30.0);
+  v1::CartesianPathResponse response;
+  const grpc::Status status = stub->CartesianPath(&context, request, &response);
+  if (!status.ok()) return ReportRpcError("CartesianPath", options, status);
+  std::printf("request     %s\n", response.request_id().c_str());
+  std::printf("stop        %s\n", v1::CartesianPathResponse::Stop_Name(response.stop()).c_str());
+  if (!response.message().empty()) std::printf("message     %s\n", response.message().c_str());
+  std::printf("fraction    %.4f (%d of %u steps; %u waypoints reached) in %.2f ms\n", response.fraction(),
+              response.path_size() - 1, response.steps(), response.waypoints_reached(), 1e3 * response.seconds());
+  std::printf("pose error  %.3g m, %.3g rad at the states; line %.3g m, %.3g rad between them\n",
+              response.max_position_error(), response.max_orientation_error(), response.max_line_deviation(),
+              response.max_line_rotation_deviation());
+  const v1::OptimizeResponse& timed = response.timed();
+  if (response.path_size() < 2) {
+    if (!options.out.empty() && !WriteOut(options.out, response, timed.trajectory())) return kExitFailed;
+    std::cerr << "chasles: no Cartesian path: " << v1::CartesianPathResponse::Stop_Name(response.stop()) << ": "
+              << response.message() << "\n";
+    return kExitFailed;
+  }
+  std::printf("timed       %s, %.4f s, %d samples; the link within %.3g m of the lines\n",
+              v1::PlanOutcome_Name(timed.outcome()).c_str(), timed.duration(), timed.trajectory().points_size(),
+              response.trajectory_line_deviation());
+  // A partial path is still a trajectory (fraction says how far it goes); exit 0 only when complete.
+  const int finished = FinishWithTrajectory(options, response, timed.outcome(), timed.message(), timed.trajectory());
+  if (finished != kExitOk) return finished;
+  if (response.stop() != v1::CartesianPathResponse::COMPLETE) {
+    std::cerr << "chasles: the Cartesian path ends at fraction " << response.fraction() << ": " << response.message()
+              << "\n";
+    return kExitFailed;
+  }
+  return kExitOk;
 }
 
 // --- ik ----------------------------------------------------------------------------------------
@@ -1002,6 +1050,7 @@ int main(int argc, char** argv) {
   }
   if (command == "optimize") return Optimize(options);
   if (command == "ik") return InverseKinematics(options);
+  if (command == "cartesian") return CartesianPath(options);
   if (command == "upload-robot") return UploadRobot(options);
   if (command == "upload-scene") return UploadScene(options);
   if (command == "update-scene") return UpdateScene(options);

@@ -55,8 +55,10 @@ std::string Token(const ConnectionOptions& options) {
 }
 
 /// Methods a client may send again on UNAVAILABLE: they change nothing, or nothing twice.
-constexpr const char* kIdempotentMethods[] = {"Plan",   "ListPlanners", "UploadRobot", "UploadScene",   "UpdateScene",
-                                              "InverseKinematics", "Optimize", "Coordinate", "CreateWorkcell"};
+constexpr const char* kIdempotentMethods[] = {"Plan",           "ListPlanners",      "UploadRobot",
+                                              "UploadScene",    "UpdateScene",       "InverseKinematics",
+                                              "CartesianPath",  "Optimize",          "Coordinate",
+                                              "CreateWorkcell"};
 
 /// round_robin over the resolved addresses; the idempotent methods retried on UNAVAILABLE,
 /// up to 5 attempts, backing off 0.1 s × 2^k up to 1 s (as the Python client).

@@ -319,6 +319,28 @@ def make_ik_request(name, robot, link, expected, extra):
     return request
 
 
+# CartesianPathRequests: the link drawn along straight lines through poses offset from its pose at
+# the start (orientation kept). name: (robot, link, start, offsets [m] of the waypoints, extra).
+CARTESIAN_PROBLEMS = {
+    "cartesian_panda_table": ("panda", "panda_tcp", PANDA_READY,
+                              [(0.0, 0.2, 0.0), (0.0, 0.2, -0.15), (0.0, -0.2, -0.15), (0.0, -0.2, 0.0), (0.0, 0.0, 0.0)],
+                              {"options": {"samplePeriod": 0.01}}),
+}
+
+
+def make_cartesian_request(name, robot, link, start, offsets, extra):
+    at = urdf_fk(robot, start, link)
+    waypoints = []
+    for offset in offsets:
+        m = [row[:] for row in at]
+        for axis in range(3):
+            m[axis][3] = at[axis][3] + offset[axis]
+        waypoints.append(pose_message(m))
+    request = {"requestId": name, "start": {"positions": start}, "link": link, "waypoints": waypoints}
+    request.update(extra)
+    return request
+
+
 # Mobile robots (issue 4) on the OctoMap maps, one request per planner family.
 # name: (robot file in ../robots, workspace (min, max) override or None, scene, start, goal, planner).
 MAZE = ((0.0, 0.0, 0.0), (8.0, 8.0, 0.0))
@@ -379,6 +401,8 @@ def main():
         write(name, make_ik_request(name, *problem))
     for name, problem in sorted(MOBILE_PROBLEMS.items()):
         write(name, make_mobile_request(name, *problem))
+    for name, problem in sorted(CARTESIAN_PROBLEMS.items()):
+        write(name, make_cartesian_request(name, *problem))
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -213,6 +214,32 @@ CartesianPathResult ComputeCartesianPath(const CollisionChecker& checker, const 
     }
   }
   out.fraction = out.steps > 0 ? static_cast<double>(done) / out.steps : 1.0;
+  return out;
+}
+
+double TrajectoryLineDeviation(const RobotModel& robot, const CartesianSpec& spec, const Eigen::VectorXd& start,
+                               const TimedTrajectory& trajectory) {
+  std::vector<Eigen::Isometry3d> poses;
+  robot.ForwardKinematics(start, &poses);
+  std::vector<Eigen::Vector3d> corners{poses[static_cast<std::size_t>(spec.link)].translation()};
+  for (const Eigen::Isometry3d& w : spec.waypoints) corners.push_back(w.translation());
+  const auto distance = [&](const Eigen::Vector3d& p) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i + 1 < corners.size(); ++i) {
+      const Eigen::Vector3d d = corners[i + 1] - corners[i];
+      const double length2 = d.squaredNorm();
+      const double u = length2 > 0.0 ? std::clamp((p - corners[i]).dot(d) / length2, 0.0, 1.0) : 0.0;
+      nearest = std::min(nearest, (p - (corners[i] + u * d)).norm());
+    }
+    return corners.size() == 1 ? (p - corners[0]).norm() : nearest;
+  };
+  const double duration = trajectory.duration();
+  const long n = std::clamp(static_cast<long>(std::ceil(duration / 0.001)), 1L, 100000L);
+  double out = 0.0;
+  for (long i = 0; i <= n; ++i) {
+    robot.ForwardKinematics(trajectory.Evaluate(duration * static_cast<double>(i) / n).q, &poses);
+    out = std::max(out, distance(poses[static_cast<std::size_t>(spec.link)].translation()));
+  }
   return out;
 }
 

@@ -112,6 +112,11 @@ BudgetFields BudgetsOf(const v1::OptimizeRequest& r) {
 }
 BudgetFields BudgetsOf(const v1::CoordinateRequest& r) { return {{"time_budget", Defaulted(r.time_budget(), 30.0)}}; }
 BudgetFields BudgetsOf(const v1::InverseKinematicsRequest& r) { return {{"time_budget", Defaulted(r.time_budget(), 0.05)}}; }
+BudgetFields BudgetsOf(const v1::CartesianPathRequest& r) {
+  BudgetFields fields{{"time_budget", Defaulted(r.time_budget(), 10.0)}};
+  if (const double post = PostProcessingBudget(r.options()); post > 0.0) fields.push_back({"options post-processing time_budget", post});
+  return fields;
+}
 template <typename Request>
 BudgetFields BudgetsOf(const Request&) {
   return {};
@@ -234,6 +239,7 @@ struct StatusError {
 using RawService = v1::Planning::WithRawCallbackMethod_Plan<v1::Planning::WithRawCallbackMethod_ListPlanners<
     v1::Planning::WithRawCallbackMethod_UploadRobot<v1::Planning::WithRawCallbackMethod_UploadScene<
         v1::Planning::WithRawCallbackMethod_UpdateScene<v1::Planning::WithRawCallbackMethod_InverseKinematics<
+            v1::Planning::WithRawCallbackMethod_CartesianPath<
             v1::Planning::WithRawCallbackMethod_Optimize<v1::Planning::WithRawCallbackMethod_Coordinate<
                 v1::Planning::WithRawCallbackMethod_CreateWorkcell<v1::Planning::WithRawCallbackMethod_CommitTrajectory<
                     v1::Planning::WithRawCallbackMethod_Release<v1::Planning::WithRawCallbackMethod_Benchmark<
@@ -242,7 +248,7 @@ using RawService = v1::Planning::WithRawCallbackMethod_Plan<v1::Planning::WithRa
                                 v1::Planning::WithRawCallbackMethod_AssignFleetGoals<
                                     v1::Planning::WithRawCallbackMethod_CloseFleetSession<
                                         v1::Planning::WithRawCallbackMethod_StreamFleetSession<
-                                            v1::Planning::Service>>>>>>>>>>>>>>>>>;
+                                            v1::Planning::Service>>>>>>>>>>>>>>>>>>;
 
 /// The service's collaborators and its share of the server options.
 struct ServiceContext {
@@ -443,6 +449,59 @@ class PlanningService final : public RawService {
                                 {"solutions", std::to_string(response.solutions_size()) + "/" + std::to_string(ik.max_solutions)},
                                 {"attempts", std::to_string(result.attempts)}};
           if (!response.solved()) call.record.fields.push_back({"message", result.message});
+        });
+  }
+
+  grpc::ServerUnaryReactor* CartesianPath(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
+                                          grpc::ByteBuffer* out) override {
+    return Serve<v1::CartesianPathRequest, v1::CartesianPathResponse>(
+        "CartesianPath", context, in, out, Where::kPool, [this](auto& call) {
+          const v1::CartesianPathRequest& request = call.request;
+          v1::CartesianPathResponse& response = call.response;
+          call.record.request_id = RequestId(request.request_id(), "cart");
+          response.set_request_id(call.record.request_id);
+          const StoredRobot robot = RobotOfRequest(*store_, request);
+          const StoredScene scene = SceneOfRequest(*store_, request);
+          response.set_robot_id(robot.id);
+          response.set_scene_id(scene.id);
+          const double padding = PaddingFromProto(request.padding(), "padding");
+          const std::shared_ptr<const CollisionChecker> checker = store_->Checker(robot, scene, padding);
+          const CartesianSpec spec = CartesianSpecFromProto(request, *robot.model);
+          const Eigen::VectorXd start =
+              ConfigurationFromProto(request.start().positions(), *robot.model, "start.positions", 0.0, nullptr);
+          const auto t0 = Clock::now();
+          const CartesianPathResult path =
+              ComputeCartesianPath(*checker, start, spec, [&call] { return call.cancelled(); });
+          response.set_seconds(std::chrono::duration<double>(Clock::now() - t0).count());
+          CartesianResultToProto(path, *robot.model, &response);
+          call.record.fields = {{"robot", IdPrefix(robot.id)},
+                                {"scene", IdPrefix(scene.id)},
+                                {"stop", ToString(path.stop)},
+                                {"fraction", FormatNumber(path.fraction)},
+                                {"states", std::to_string(path.path.size())}};
+          if (path.path.size() < 2) {
+            call.record.outcome = "UNSOLVED";  // nothing to time (the stop says why)
+            if (!path.message.empty()) call.record.fields.push_back({"message", path.message});
+            return;
+          }
+          // The states, timed as Optimize times a path.
+          const v1::OptimizeRequest timing = CartesianTimingRequest(request, response);
+          RequestSettings settings;
+          double input_duration = 0.0;
+          OptimizeQuery query = OptimizeQueryFromProto(timing, checker, &settings, &input_duration);
+          ApplyReplyCap(&query.sample_cap);
+          const Termination termination = call.Start(BudgetEnd(settings.time_budget, call.deadline), call.deadline);
+          const OptimizeOutcome outcome = OptimizePath(query, termination);
+          OptimizeOutcomeToProto(outcome, query, response.mutable_timed(), request.options().knots_only());
+          if (outcome.code == TrajectoryStageCode::kSuccess) {
+            response.set_trajectory_line_deviation(
+                TrajectoryLineDeviation(*robot.model, spec, start, outcome.stage.trajectory));
+          }
+          call.record.outcome = v1::PlanOutcome_Name(response.timed().outcome());
+          call.record.stages = {{"cartesian", response.seconds()},
+                                {"parameterize", outcome.stage.parameterize_seconds},
+                                {"optimize", outcome.stage.optimize_seconds},
+                                {"verify", outcome.stage.verify_seconds}};
         });
   }
 

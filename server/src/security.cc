@@ -333,8 +333,8 @@ Permission RequiredPermission(std::string_view rpc) {
   std::string_view method = rpc;
   if (method.rfind(kPlanningService, 0) == 0) method.remove_prefix(kPlanningService.size());
   static constexpr std::string_view kPlanMethods[] = {
-      "Plan",        "Optimize",   "InverseKinematics", "ListPlanners", "UploadRobot",
-      "UploadScene", "UpdateScene", "Coordinate",       "Benchmark",    "StopBenchmark"};
+      "Plan",        "Optimize",    "InverseKinematics", "CartesianPath", "ListPlanners", "UploadRobot",
+      "UploadScene", "UpdateScene", "Coordinate",        "Benchmark",     "StopBenchmark"};
   for (std::string_view plan : kPlanMethods) {
     if (method == plan) return Permission::kPlan;
   }

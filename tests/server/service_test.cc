@@ -457,6 +457,31 @@ TEST(Cli, IkPoseGoalAndDhPoeUploads) {
   EXPECT_EQ(pose.exit_code, 0) << pose.output;
   EXPECT_NE(pose.output.find("reached     ["), std::string::npos) << pose.output;
 
+  // A Cartesian move: the whole rectangle, timed; --out writes the trajectory as CSV.
+  const std::string cartesian_csv = ::testing::TempDir() + "/chasles_cli_cartesian.csv";
+  CommandResult cartesian =
+      RunCli(at + "cartesian " + ExamplePath("requests/cartesian_panda_table.json") + " --out " + cartesian_csv);
+  EXPECT_EQ(cartesian.exit_code, 0) << cartesian.output;
+  EXPECT_NE(cartesian.output.find("stop        COMPLETE"), std::string::npos) << cartesian.output;
+  EXPECT_NE(cartesian.output.find("fraction    1.0000"), std::string::npos) << cartesian.output;
+  EXPECT_NE(cartesian.output.find("timed       SUCCESS"), std::string::npos) << cartesian.output;
+  EXPECT_GT(ReadText(cartesian_csv).size(), 1000u);
+  // Ended early (a line out of reach): the partial path is reported, exit 1 with the reason.
+  v1::CartesianPathRequest reach;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(
+                  ReadText(ExamplePath("requests/cartesian_panda_table.json")), &reach)
+                  .ok());
+  reach.mutable_waypoints(0)->mutable_position()->set_y(2.0);
+  reach.set_max_joint_jump(6.0);
+  std::string reach_json;
+  ASSERT_TRUE(google::protobuf::util::MessageToJsonString(reach, &reach_json).ok());
+  const std::string reach_path = ::testing::TempDir() + "/chasles_cli_cartesian_reach.json";
+  std::ofstream(reach_path) << reach_json;
+  CommandResult partial = RunCli(at + "cartesian " + reach_path);
+  EXPECT_EQ(partial.exit_code, 1) << partial.output;
+  EXPECT_NE(partial.output.find("stop        UNREACHABLE"), std::string::npos) << partial.output;
+  EXPECT_NE(partial.output.find("the Cartesian path ends at fraction"), std::string::npos) << partial.output;
+
   for (const char* option : {"--dh robots/ur5_dh.json", "--poe robots/ur5_poe.json"}) {
     std::string arguments = option;
     arguments.replace(arguments.find(' ') + 1, 0, ExamplePath(""));

@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include "chasles/collision/collision_checker.h"
+#include "chasles/optimizers/timed_trajectory.h"
 #include "chasles/robot/joint_path.h"
 
 namespace chasles {
@@ -76,6 +77,11 @@ struct CartesianPathResult {
 /// \throws Error(kInvalidArgument) for an invalid spec or start (named).
 CartesianPathResult ComputeCartesianPath(const CollisionChecker& checker, const Eigen::VectorXd& start,
                                          const CartesianSpec& spec, const std::function<bool()>& stop = {});
+
+/// [m] The largest distance of spec.link from the commanded lines (the start's link pose through
+/// every waypoint) over `trajectory`, at states 1 ms apart (at most 100000) and its end.
+double TrajectoryLineDeviation(const RobotModel& robot, const CartesianSpec& spec, const Eigen::VectorXd& start,
+                               const TimedTrajectory& trajectory);
 
 /// The link pose at fraction u ∈ [0, 1] from a to b: position linearly, orientation along the
 /// shortest rotation (a.R · Exp(u · Log(a.Rᵀ b.R))).
