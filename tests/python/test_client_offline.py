@@ -62,6 +62,25 @@ class ConvertTest(unittest.TestCase):
         self.assertEqual(goal.pose.position.x, 0.5)
         self.assertEqual(convert.goal({"positions": [1.0], "tolerance": 0.01})[0], "goal")
 
+    def test_pose_from_a_matrix_or_a_pair(self) -> None:
+        # A rotation of 2.5 rad about a tilted axis (w small: the matrix's largest diagonal entry
+        # leads); the quaternion is checked against its axis-angle definition.
+        axis = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+        angle = 2.5
+        k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+        matrix = np.eye(4)
+        matrix[:3, :3] = np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k)  # Rodrigues
+        matrix[:3, 3] = [0.1, 0.2, 0.3]
+        pose = convert.pose_message(matrix)
+        got = np.array([pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w])
+        want = np.concatenate([math.sin(angle / 2) * axis, [math.cos(angle / 2)]])
+        self.assertLess(min(np.abs(got - want).max(), np.abs(got + want).max()), 1e-12)
+        self.assertEqual((pose.position.x, pose.position.y, pose.position.z), (0.1, 0.2, 0.3))
+        pair = convert.pose_message(([1.0, 2.0, 3.0], [0.0, 0.0, 0.0, 1.0]))
+        self.assertEqual((pair.position.z, pair.orientation.w), (3.0, 1.0))
+        with self.assertRaisesRegex(TypeError, "waypoints\\[2\\]: expected"):
+            convert.pose_message(np.eye(3), "waypoints[2]")
+
     def test_unknown_fields_and_bad_types_name_the_field(self) -> None:
         with self.assertRaisesRegex(TypeError, "no field 'foo'"):
             convert.plan_request([0.0], [1.0], foo=3)

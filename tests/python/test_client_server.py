@@ -243,6 +243,31 @@ class ServerTest(unittest.TestCase):
         self.assertTrue(again.success, f"{again.outcome}: {again.message}")
         self.assertGreater(again.input_duration, 0.0)
 
+    def test_cartesian_path_along_a_line_and_stopped_by_a_wall(self) -> None:
+        example = json.loads((ROOT / "examples/requests/cartesian_panda_table.json").read_text(encoding="utf-8"))
+        result = self.client.cartesian_path_request(example)
+        self.assertTrue(result.success, f"{result.stop}: {result.message}")
+        self.assertEqual(result.fraction, 1.0)
+        self.assertEqual(result.path.shape, (result.steps + 1, 7))
+        self.assertLess(result.trajectory_line_deviation, 2e-3)
+        self.assertGreater(result.trajectory.duration, 0.0)
+        # The same first line through the keyword call, its pose as a 4x4 matrix; a wall across it
+        # three quarters along stops the path there.
+        first = example["waypoints"][0]
+        corner = np.eye(4)
+        corner[:3, :3] = np.diag([1.0, -1.0, -1.0])  # the example's tool points down (x = 1, w = 0)
+        corner[:3, 3] = [first["position"]["x"], first["position"]["y"], first["position"]["z"]]
+        wall = {"boxes": [{"name": "wall", "size": {"x": 0.3, "y": 0.02, "z": 0.3},
+                           "pose": {"position": {"x": corner[0, 3], "y": 0.15, "z": corner[2, 3]}}}]}
+        stopped = self.client.cartesian_path(START, [corner], "panda_tcp", scene=wall)
+        self.assertEqual(stopped.stop, "COLLISION", stopped.message)
+        self.assertGreater(stopped.fraction, 0.0)
+        self.assertLess(stopped.fraction, 1.0)
+        self.assertIsNotNone(stopped.timed)
+        with self.assertRaises(ChaslesError) as raised:
+            self.client.cartesian_path(START, [corner], "panda_tcp", max_step=-1.0)
+        self.assertIn("max_step = -1", str(raised.exception))
+
     def test_coordinate_a_fleet_and_sample_its_knots(self) -> None:
         request = ROOT / "examples/requests/coordinate_fleet.json"
         response = self.client.coordinate(str(request))

@@ -21,6 +21,7 @@ _EXPORTS = {
     "BenchmarkResult": "benchmark",
     "BenchmarkRun": "benchmark",
     "ConfigSummary": "benchmark",
+    "CartesianResult": "results",
     "Client": "client",
     "DEFAULT_TIMEOUT": "client",
     "ChaslesError": "errors",
@@ -33,7 +34,7 @@ _EXPORTS = {
 }
 
 __all__ = [
-    "BenchmarkProgress", "BenchmarkResult", "BenchmarkRun", "ChaslesError", "Client", "ConfigSummary",
+    "BenchmarkProgress", "BenchmarkResult", "BenchmarkRun", "CartesianResult", "ChaslesError", "Client", "ConfigSummary",
     "DEFAULT_TIMEOUT", "OptimizeResult", "ParameterInfo", "PlannerInfo", "PlanResult", "RobotInfo", "Trajectory",
 ]
 
@@ -41,7 +42,7 @@ if TYPE_CHECKING:
     from .benchmark import BenchmarkProgress, BenchmarkResult, BenchmarkRun, ConfigSummary
     from .client import DEFAULT_TIMEOUT, Client
     from .errors import ChaslesError
-    from .results import OptimizeResult, ParameterInfo, PlannerInfo, PlanResult, RobotInfo
+    from .results import CartesianResult, OptimizeResult, ParameterInfo, PlannerInfo, PlanResult, RobotInfo
     from .trajectory import Trajectory
 
 

@@ -19,11 +19,11 @@ from google.protobuf.message import Message
 from . import _health
 from ._stubs import pb, pb_grpc
 from .benchmark import BenchmarkProgress, BenchmarkResult, BenchmarkRun
-from .convert import (JointValues, joint_states, joint_values, plan_request,
-                      plan_request_from, set_fields, set_sources, to_message, trajectory_options)
+from .convert import (JointValues, joint_state, joint_states, joint_values, plan_request,
+                      plan_request_from, pose_message, set_fields, set_sources, to_message, trajectory_options)
 from .convert import benchmark_request as build_benchmark_request
 from .errors import ChaslesError
-from .results import OptimizeResult, PlannerInfo, PlanResult, RobotInfo, limits_used
+from .results import CartesianResult, OptimizeResult, PlannerInfo, PlanResult, RobotInfo, limits_used
 from .trajectory import Trajectory
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -78,7 +78,7 @@ DEFAULT_TIMEOUT = 60.0
 #: Methods a client may send again when the server was UNAVAILABLE (a replica down or draining):
 #: they change nothing, or nothing twice (content-addressed uploads, create-if-missing).
 IDEMPOTENT_METHODS = ("Plan", "ListPlanners", "UploadRobot", "UploadScene", "UpdateScene", "InverseKinematics",
-                      "Optimize", "Coordinate", "CreateWorkcell")
+                      "CartesianPath", "Optimize", "Coordinate", "CreateWorkcell")
 
 
 def service_config(retries: int = 5) -> str:
@@ -422,6 +422,66 @@ class Client:
         velocity, acceleration = limits_used(message.options if message.HasField("options") else None,
                                              self._model_velocity(response.robot_id))
         return OptimizeResult.from_response(response, velocity, acceleration)
+
+    def cartesian_path(self, start: Any, waypoints: Sequence[Any], link: str = "", *, robot: Any = None,
+                       robot_id: Optional[str] = None, scene: Any = None, scene_id: Optional[str] = None,
+                       max_step: Optional[float] = None, max_rotation_step: Optional[float] = None,
+                       max_joint_jump: Optional[float] = None, jump_threshold: Optional[float] = None,
+                       avoid_collisions: bool = True, post_processing: Union[str, int, None] = None,
+                       sample_period: Optional[float] = None, options: Any = None,
+                       request_id: Optional[str] = None, timeout: Optional[float] = None,
+                       **more: Any) -> CartesianResult:
+        """Drives ``link`` along straight lines in task space (MoveIt's computeCartesianPath) and
+        returns the states achieved, timed.
+
+        Args:
+            start: joint positions [rad].
+            waypoints: link poses in the base frame, in order: Pose messages, dicts
+                ``{"position": {"x": …}, "orientation": {"x": …, "w": …}}``, 4×4 homogeneous
+                matrices, or ``(position, quaternion_xyzw)`` pairs.
+            link: the link that moves; empty = "tool" if the robot has one, else the last link.
+            max_step: [m] link translation between states (server default 0.01).
+            max_rotation_step: [rad] link rotation between states (default 0.05).
+            max_joint_jump: [rad] largest joint change between states (default 0.2).
+            jump_threshold: MoveIt's relative jump test (× the mean step); 0 / None = off.
+            avoid_collisions: False checks nothing (MoveIt's avoid_collisions = False; the timing
+                still refuses a path that collides).
+            post_processing, sample_period, options: how the states are timed, as in ``optimize``.
+            more: any other CartesianPathRequest field by name, e.g. ``position_tolerance=1e-3``.
+
+        Returns:
+            CartesianResult: ``stop`` and ``fraction`` say how far it got; ``timed`` is the timed
+            trajectory (None when fewer than two states were achieved).
+        """
+        request = pb.CartesianPathRequest()
+        set_sources(request, robot, robot_id, scene, scene_id)
+        request.start.CopyFrom(joint_state(start))
+        request.link = link
+        for i, waypoint in enumerate(waypoints):
+            request.waypoints.append(pose_message(waypoint, f"waypoints[{i}]"))
+        for name, value in (("max_step", max_step), ("max_rotation_step", max_rotation_step),
+                            ("max_joint_jump", max_joint_jump), ("jump_threshold", jump_threshold)):
+            if value is not None:
+                setattr(request, name, float(value))
+        request.ignore_collisions = not avoid_collisions
+        timing = trajectory_options(options, post_processing=post_processing, sample_period=sample_period,
+                                    what="options")
+        if timing is not None:
+            request.options.CopyFrom(timing)
+        if request_id is not None:
+            request.request_id = request_id
+        set_fields(request, more, "CartesianPathRequest")
+        return self.cartesian_path_request(request, timeout)
+
+    def cartesian_path_request(self, request: Union[Message, Mapping[str, Any], str],
+                               timeout: Optional[float] = None) -> CartesianResult:
+        """Sends a whole CartesianPathRequest (message, dict or JSON text, e.g. the contents of
+        ``examples/requests/cartesian_panda_table.json``)."""
+        message = to_message(request, pb.CartesianPathRequest, "CartesianPathRequest")
+        response = self._call("CartesianPath", message, timeout)
+        velocity, acceleration = limits_used(message.options if message.HasField("options") else None,
+                                             self._model_velocity(response.robot_id))
+        return CartesianResult.from_response(response, velocity, acceleration)
 
     # -- several robots -----------------------------------------------------------------------
 

@@ -103,6 +103,50 @@ def joint_states(path: Any, what: str = "path") -> list:
     return [joint_state(p, f"{what}[{i}]") for i, p in enumerate(path)]
 
 
+def pose_message(value: Any, what: str = "pose") -> pb.Pose:
+    """A Pose from a Pose message, a dict / JSON text of one, a 4×4 homogeneous matrix, or a
+    ``(position, quaternion_xyzw)`` pair."""
+    if isinstance(value, (Message, Mapping, str)):
+        return to_message(value, pb.Pose, what)
+    if isinstance(value, tuple) and len(value) == 2:
+        position, quaternion = (np.asarray(v, dtype=float) for v in value)
+        if position.shape != (3,) or quaternion.shape != (4,):
+            raise TypeError(f"{what}: expected (position[3], quaternion_xyzw[4]), got shapes "
+                            f"{position.shape} and {quaternion.shape}")
+        x, y, z, w = quaternion.tolist()
+    else:
+        matrix = np.asarray(value, dtype=float)
+        if matrix.shape != (4, 4):
+            raise TypeError(f"{what}: expected a Pose, a dict, a 4x4 matrix or (position, quaternion), "
+                            f"got shape {matrix.shape}")
+        position = matrix[:3, 3]
+        x, y, z, w = _quaternion_xyzw(matrix[:3, :3])
+    return pb.Pose(position=pb.Vector3(x=float(position[0]), y=float(position[1]), z=float(position[2])),
+                   orientation=pb.Quaternion(x=x, y=y, z=z, w=w))
+
+
+def _quaternion_xyzw(r: np.ndarray) -> Tuple[float, float, float, float]:
+    """The unit quaternion (x, y, z, w) of a rotation matrix (Shepperd's method: the largest of
+    w, x, y, z is found first, so no division by a small number)."""
+    trace = float(np.trace(r))
+    candidates = [trace, r[0, 0], r[1, 1], r[2, 2]]
+    k = int(np.argmax(candidates))
+    if k == 0:
+        s = 2.0 * np.sqrt(1.0 + trace)
+        q = (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s
+    elif k == 1:
+        s = 2.0 * np.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
+        q = 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s
+    elif k == 2:
+        s = 2.0 * np.sqrt(1.0 - r[0, 0] + r[1, 1] - r[2, 2])
+        q = (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s
+    else:
+        s = 2.0 * np.sqrt(1.0 - r[0, 0] - r[1, 1] + r[2, 2])
+        q = (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s
+    norm = float(np.linalg.norm(q))
+    return tuple(float(v) / norm for v in q)  # type: ignore[return-value]
+
+
 def goal(value: Any) -> Tuple[str, Message]:
     """The PlanRequest ``target``: ("goal", JointGoal) or ("pose_goal", PoseGoal).
 

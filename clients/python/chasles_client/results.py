@@ -1,4 +1,4 @@
-"""Results of Plan, Optimize, ListPlanners and UploadRobot as dataclasses with numpy arrays."""
+"""Results of Plan, Optimize, CartesianPath, ListPlanners and UploadRobot as dataclasses with numpy arrays."""
 
 from __future__ import annotations
 
@@ -230,3 +230,64 @@ class OptimizeResult:
                       acceleration_limits: Optional[np.ndarray] = None) -> "OptimizeResult":
         return cls(**_common_fields(response, velocity_limits, acceleration_limits),
                    input_duration=response.input_duration)
+
+
+@dataclass
+class CartesianResult:
+    """The answer to a CartesianPath request.
+
+    Attributes:
+        stop: why the path ended: ``"COMPLETE"``, ``"UNREACHABLE"``, ``"JOINT_JUMP"``,
+            ``"RELATIVE_JUMP"``, ``"COLLISION"``, ``"START_INVALID"`` or ``"CANCELLED"``.
+        message: where and why it ended (empty when complete).
+        fraction: steps achieved / steps of the whole move, in [0, 1] (MoveIt's fraction).
+        complete: ``stop == "COMPLETE"``.
+        success: complete and timed (``timed.success``).
+        path: the states achieved, shape (M, n) [rad], start first.
+        steps, waypoints_reached: of the whole move.
+        max_position_error, max_orientation_error: the states' poses from their targets [m], [rad].
+        max_line_deviation: [m] the link from the line between states (measured at 7 points a step).
+        trajectory_line_deviation: [m] the link from the lines over the timed trajectory.
+        timed: the states timed as ``Client.optimize`` would (None with fewer than two states).
+    """
+
+    stop: str
+    message: str
+    fraction: float
+    complete: bool
+    success: bool
+    path: np.ndarray
+    joint_names: List[str]
+    steps: int
+    waypoints_reached: int
+    max_position_error: float
+    max_orientation_error: float
+    max_line_deviation: float
+    trajectory_line_deviation: float
+    timed: Optional[OptimizeResult]
+    request_id: str
+    robot_id: str
+    scene_id: str
+    response: pb.CartesianPathResponse = field(default_factory=pb.CartesianPathResponse, repr=False)
+
+    @property
+    def trajectory(self) -> Optional[Trajectory]:
+        """The timed trajectory (None unless timed successfully)."""
+        return self.timed.trajectory if self.timed is not None else None
+
+    @classmethod
+    def from_response(cls, response: pb.CartesianPathResponse, velocity_limits: Optional[np.ndarray] = None,
+                      acceleration_limits: Optional[np.ndarray] = None) -> "CartesianResult":
+        stop = pb.CartesianPathResponse.Stop.Name(response.stop)
+        timed = (OptimizeResult.from_response(response.timed, velocity_limits, acceleration_limits)
+                 if response.HasField("timed") else None)
+        return cls(stop=stop, message=response.message, fraction=response.fraction, complete=stop == "COMPLETE",
+                   success=stop == "COMPLETE" and timed is not None and timed.success,
+                   path=_path_array(response.path, len(response.joint_names)), joint_names=list(response.joint_names),
+                   steps=response.steps, waypoints_reached=response.waypoints_reached,
+                   max_position_error=response.max_position_error,
+                   max_orientation_error=response.max_orientation_error,
+                   max_line_deviation=response.max_line_deviation,
+                   trajectory_line_deviation=response.trajectory_line_deviation, timed=timed,
+                   request_id=response.request_id, robot_id=response.robot_id, scene_id=response.scene_id,
+                   response=response)
