@@ -2,7 +2,7 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|effort|coordination|fleet|fleet_coordinate|fleet_lattice|fleet_session|benchmark|fairness|memory|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|effort|cartesian|coordination|fleet|fleet_coordinate|fleet_lattice|fleet_session|benchmark|fairness|memory|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
@@ -49,6 +49,7 @@
 #include "chasles/server/planning_server.h"
 #include "chasles/v1/chasles.grpc.pb.h"
 #include "bench_clutter.h"
+#include "bench_cartesian.h"
 #include "bench_effort.h"
 #include "bench_fleet.h"
 #include "bench_fleet_lattice.h"
@@ -1099,7 +1100,7 @@ int Main(int argc, char** argv) {
     else if (arg == "--urdf") options.urdfs = Split(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|effort|coordination|fleet|fleet_coordinate|fleet_lattice|fleet_session|benchmark|fairness|memory|all]\n"
+                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|effort|cartesian|coordination|fleet|fleet_coordinate|fleet_lattice|fleet_session|benchmark|fairness|memory|all]\n"
                    "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
@@ -1172,6 +1173,14 @@ int Main(int argc, char** argv) {
     BenchEffort(effort);
   }
   if (options.section == "coordination" || options.section == "all") BenchCoordination(options);
+  if (options.section == "cartesian" || options.section == "all") {
+    CartesianBenchOptions cartesian;
+    cartesian.examples_dir = examples_dir;
+    cartesian.cases = options.queries;
+    cartesian.repeats = options.bench_repeats;
+    cartesian.seed = options.seed;
+    BenchCartesian(cartesian);
+  }
   if (options.section == "fleet_session" || options.section == "all") {
     FleetSessionBenchOptions session;
     session.seed = options.seed;

@@ -32,6 +32,8 @@ double AngleBetween(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) { return
 constexpr double kTwoPi = 6.283185307179586;
 // Points of each step at which the link's pose is compared with the commanded line.
 constexpr int kDeviationPoints = 7;
+// Halvings of a step whose link strays from the line (a step ends up at least 1/256 long).
+constexpr int kMaxLineSplits = 8;
 
 }  // namespace
 
@@ -70,6 +72,7 @@ void CartesianSpec::Validate(const RobotModel& robot) const {
   if (!(jump_threshold == 0.0 || (jump_threshold >= 1.0 && std::isfinite(jump_threshold)))) {
     ThrowInvalid("jump_threshold = " + FormatNumber(jump_threshold) + " must be 0 (off) or a finite value >= 1");
   }
+  CheckWithin(line_tolerance, 1e-5, 0.1, "line_tolerance");
   CheckOpen(position_tolerance, 0.01, "position_tolerance");
   CheckOpen(orientation_tolerance, 0.1, "orientation_tolerance");
   CheckWithin(collision_resolution, 1e-4, 0.1, "collision_resolution");
@@ -126,8 +129,6 @@ CartesianPathResult ComputeCartesianPath(const CollisionChecker& checker, const 
   ik.max_iterations = 200;
   ik.time_budget = 1.0;
   ik.stop = stop;
-  int done = 0;
-  Eigen::Isometry3d last_target = from.front();
   const auto where = [&](std::size_t i, int k) {
     return "waypoints[" + std::to_string(i) + "], step " + std::to_string(k) + " of " + std::to_string(steps[i]);
   };
@@ -135,57 +136,79 @@ CartesianPathResult ComputeCartesianPath(const CollisionChecker& checker, const 
     out.stop = why;
     out.message = std::move(message);
   };
+  // One step from the last state to target `b` (the line from `a`): solved, tested for a jump,
+  // split at its middle pose while the link strays more than line_tolerance from the line between
+  // the states (up to kMaxLineSplits times), then checked for collisions. False ends the path.
+  std::vector<int> steps_at{0};  // per state: whole steps achieved when it is reached
+  const std::function<bool(const Eigen::Isometry3d&, const Eigen::Isometry3d&, int, const std::string&)> go =
+      [&](const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, int depth, const std::string& at) {
+        const Eigen::VectorXd q = out.path.back();
+        ik.target = b;
+        ik.initial_guess = q;
+        const IkResult solved = SolveIk(robot, ik);
+        if (solved.solutions.empty()) {
+          end(CartesianStop::kUnreachable, at + ": no inverse-kinematics solution near the previous state (best " +
+                                               FormatNumber(solved.best_position_error) + " m, " +
+                                               FormatNumber(solved.best_orientation_error) + " rad from the pose)");
+          return false;
+        }
+        const Eigen::VectorXd next = solved.solutions.front();
+        Eigen::Index joint = 0;
+        const double jump = (next - q).cwiseAbs().maxCoeff(&joint);
+        if (jump > spec.max_joint_jump) {
+          end(CartesianStop::kJointJump, at + ": joint '" + robot.dof_names()[static_cast<std::size_t>(joint)] +
+                                             "' would move " + FormatNumber(jump) + " rad in one step (max_joint_jump " +
+                                             FormatNumber(spec.max_joint_jump) + ")");
+          return false;
+        }
+        // The link between the states (joints moving linearly) against the line.
+        double stray = 0.0, turn = 0.0;
+        for (int p = 1; p <= kDeviationPoints; ++p) {
+          const double u = static_cast<double>(p) / (kDeviationPoints + 1);
+          const Eigen::Isometry3d x = link_pose(q + u * (next - q));
+          const Eigen::Isometry3d line = InterpolatePose(a, b, u);
+          stray = std::max(stray, (x.translation() - line.translation()).norm());
+          turn = std::max(turn, AngleBetween(x.linear(), line.linear()));
+        }
+        if (stray > spec.line_tolerance && depth < kMaxLineSplits) {
+          const Eigen::Isometry3d middle = InterpolatePose(a, b, 0.5);
+          if (!go(a, middle, depth + 1, at)) return false;
+          steps_at.back() = steps_at.size() > 1 ? steps_at[steps_at.size() - 2] : 0;  // a part of a step
+          return go(middle, b, depth + 1, at);
+        }
+        if (spec.check_collisions) {
+          const bool free = checker.certifies_motion() ? checker.IsMotionCertified(q, next)
+                                                       : checker.IsMotionValid(q, next, spec.collision_resolution);
+          if (!free) {
+            const CollisionResult contact = checker.Check(next);
+            end(CartesianStop::kCollision,
+                at + ": the motion collides" +
+                    (contact.in_collision ? " ('" + contact.link_a + "' / '" + contact.other + "' at the step's end)" : ""));
+            return false;
+          }
+        }
+        const Eigen::Isometry3d reached = link_pose(next);
+        out.max_position_error = std::max(out.max_position_error, (reached.translation() - b.translation()).norm());
+        out.max_orientation_error = std::max(out.max_orientation_error, AngleBetween(reached.linear(), b.linear()));
+        out.max_line_deviation = std::max(out.max_line_deviation, stray);
+        out.max_line_rotation_deviation = std::max(out.max_line_rotation_deviation, turn);
+        out.path.push_back(next);
+        steps_at.push_back(steps_at.back() + 1);
+        return true;
+      };
+  int done = 0;
   for (std::size_t i = 0; i < spec.waypoints.size() && out.stop == CartesianStop::kComplete; ++i) {
+    Eigen::Isometry3d a = from[i];
     for (int k = 1; k <= steps[i]; ++k) {
       if (stop && stop()) {
         end(CartesianStop::kCancelled, "cancelled at " + where(i, k));
         break;
       }
-      const Eigen::VectorXd& q = out.path.back();
-      ik.target = k == steps[i] ? spec.waypoints[i] : InterpolatePose(from[i], spec.waypoints[i], static_cast<double>(k) / steps[i]);
-      ik.initial_guess = q;
-      const IkResult solved = SolveIk(robot, ik);
-      if (solved.solutions.empty()) {
-        end(CartesianStop::kUnreachable, where(i, k) + ": no inverse-kinematics solution near the previous state (best " +
-                                             FormatNumber(solved.best_position_error) + " m, " +
-                                             FormatNumber(solved.best_orientation_error) + " rad from the pose)");
-        break;
-      }
-      const Eigen::VectorXd& next = solved.solutions.front();
-      Eigen::Index joint = 0;
-      const double jump = (next - q).cwiseAbs().maxCoeff(&joint);
-      if (jump > spec.max_joint_jump) {
-        end(CartesianStop::kJointJump, where(i, k) + ": joint '" + robot.dof_names()[static_cast<std::size_t>(joint)] +
-                                           "' would move " + FormatNumber(jump) + " rad in one step (max_joint_jump " +
-                                           FormatNumber(spec.max_joint_jump) + ")");
-        break;
-      }
-      if (spec.check_collisions) {
-        const bool free = checker.certifies_motion() ? checker.IsMotionCertified(q, next)
-                                                     : checker.IsMotionValid(q, next, spec.collision_resolution);
-        if (!free) {
-          const CollisionResult contact = checker.Check(next);
-          end(CartesianStop::kCollision,
-              where(i, k) + ": the motion collides" +
-                  (contact.in_collision ? " ('" + contact.link_a + "' / '" + contact.other + "' at the step's end)" : ""));
-          break;
-        }
-      }
-      // The state's pose, and the link between the states against the commanded line.
-      const Eigen::Isometry3d reached = link_pose(next);
-      out.max_position_error = std::max(out.max_position_error, (reached.translation() - ik.target.translation()).norm());
-      out.max_orientation_error = std::max(out.max_orientation_error, AngleBetween(reached.linear(), ik.target.linear()));
-      for (int p = 1; p <= kDeviationPoints; ++p) {
-        const double u = static_cast<double>(p) / (kDeviationPoints + 1);
-        const Eigen::Isometry3d at = link_pose(q + u * (next - q));
-        const Eigen::Isometry3d line = InterpolatePose(last_target, ik.target, u);
-        out.max_line_deviation = std::max(out.max_line_deviation, (at.translation() - line.translation()).norm());
-        out.max_line_rotation_deviation =
-            std::max(out.max_line_rotation_deviation, AngleBetween(at.linear(), line.linear()));
-      }
-      last_target = ik.target;
-      out.path.push_back(next);
+      const Eigen::Isometry3d b =
+          k == steps[i] ? spec.waypoints[i] : InterpolatePose(from[i], spec.waypoints[i], static_cast<double>(k) / steps[i]);
+      if (!go(a, b, 0, where(i, k))) break;
       ++done;
+      a = b;
     }
     if (out.stop == CartesianStop::kComplete) out.waypoints_reached = static_cast<int>(i) + 1;
   }
@@ -201,7 +224,7 @@ CartesianPathResult ComputeCartesianPath(const CollisionChecker& checker, const 
                                               " rad, more than jump_threshold " + FormatNumber(spec.jump_threshold) +
                                               " × the mean step " + FormatNumber(mean));
         out.path.resize(s);
-        done = static_cast<int>(s) - 1;
+        done = steps_at[s - 1];
         // Waypoints reached: those whose last step is still in the path.
         int reached = 0, counted = 0;
         for (std::size_t w = 0; w < steps.size(); ++w) {

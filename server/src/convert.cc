@@ -467,6 +467,7 @@ CartesianSpec CartesianSpecFromProto(const v1::CartesianPathRequest& request, co
   spec.max_rotation_step = defaulted(request.max_rotation_step(), 0.05);
   spec.max_joint_jump = defaulted(request.max_joint_jump(), 0.2);
   spec.jump_threshold = request.jump_threshold();
+  spec.line_tolerance = defaulted(request.line_tolerance(), 5e-4);
   spec.position_tolerance = defaulted(request.position_tolerance(), 1e-4);
   spec.orientation_tolerance = defaulted(request.orientation_tolerance(), 1e-3);
   spec.check_collisions = !request.ignore_collisions();

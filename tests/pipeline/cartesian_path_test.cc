@@ -97,6 +97,42 @@ TEST(CartesianPath, FollowsTheLineAndTurnsAlongTheSlerp) {
   EXPECT_LE((arm.Pose(r.path.back()).translation() - b.translation()).norm(), spec.position_tolerance);
 }
 
+TEST(CartesianPath, AStepThatStraysFromTheLineIsSplit) {
+  const Arm arm;
+  const auto checker = CheckerFor(arm, std::make_shared<Scene>());
+  const Eigen::VectorXd start = test::PandaReady();
+  const Eigen::Isometry3d a = arm.Pose(start);
+  Eigen::Isometry3d b = a;
+  b.translation() += Eigen::Vector3d(0.0, 0.4, -0.2);
+  CartesianSpec spec = LineSpec(arm, b);
+  spec.max_step = 0.1;  // long steps: the link bows away from the line between states
+  spec.max_joint_jump = 1.0;
+  spec.line_tolerance = 0.1;
+  const CartesianPathResult loose = ComputeCartesianPath(*checker, start, spec);
+  ASSERT_EQ(loose.stop, CartesianStop::kComplete) << loose.message;
+  ASSERT_EQ(static_cast<int>(loose.path.size()), loose.steps + 1);
+  spec.line_tolerance = 1e-4;
+  const CartesianPathResult tight = ComputeCartesianPath(*checker, start, spec);
+  ASSERT_EQ(tight.stop, CartesianStop::kComplete) << tight.message;
+  EXPECT_EQ(tight.steps, loose.steps);
+  EXPECT_EQ(tight.fraction, 1.0);
+  EXPECT_GT(tight.path.size(), loose.path.size());
+  // Densely, 50 points between states, against the line (projection written here).
+  const auto farthest = [&](const JointPath& path) {
+    double worst = 0.0, u = 0.0;
+    for (std::size_t s = 0; s + 1 < path.size(); ++s) {
+      for (int i = 0; i <= 50; ++i) {
+        const Eigen::VectorXd q = path[s] + (path[s + 1] - path[s]) * (i / 50.0);
+        worst = std::max(worst, SegmentDistance(arm.Pose(q).translation(), a.translation(), b.translation(), &u));
+      }
+    }
+    return worst;
+  };
+  EXPECT_GT(farthest(loose.path), 1e-3) << "the long steps should stray (else this test shows nothing)";
+  EXPECT_LT(farthest(tight.path), 1.5e-4);
+  EXPECT_LE(tight.max_line_deviation, 1e-4);
+}
+
 TEST(CartesianPath, PassesThroughEveryWaypointInOrder) {
   const Arm arm;
   const auto checker = CheckerFor(arm, std::make_shared<Scene>());
@@ -224,6 +260,9 @@ TEST(CartesianPath, NamesTheFieldOfAnInvalidSpec) {
   s = good;
   s.jump_threshold = 0.5;
   EXPECT_EQ(message(s, start), "jump_threshold = 0.5 must be 0 (off) or a finite value >= 1");
+  s = good;
+  s.line_tolerance = 0.5;
+  EXPECT_EQ(message(s, start), "line_tolerance = 0.5 must be within [1e-05, 0.1]");
   s = good;
   s.link = 99;
   EXPECT_EQ(message(s, start), "link = 99 is not a link of robot 'panda'");

@@ -32,6 +32,10 @@ struct CartesianSpec {
   /// MoveIt's relative test: the path ends before the first step whose joint distance (Euclidean)
   /// exceeds this times the mean step; 0 = off; else >= 1.
   double jump_threshold = 0.0;
+  /// [m] how far the link may stray from the line between consecutive states (the joints move
+  /// linearly between them), measured at 7 points of a step: a step that strays more is split at
+  /// its middle pose, up to 8 times; in [1e-5, 0.1].
+  double line_tolerance = 5e-4;
   double position_tolerance = 1e-4;             ///< [m] per state, in (0, 0.01]
   double orientation_tolerance = 1e-3;          ///< [rad] per state, in (0, 0.1]
   bool check_collisions = true;                 ///< false: MoveIt's avoid_collisions = false
@@ -55,7 +59,7 @@ enum class CartesianStop {
 const char* ToString(CartesianStop stop);  ///< "COMPLETE", "START_INVALID", …
 
 struct CartesianPathResult {
-  JointPath path;            ///< start first; consecutive states one interpolation step apart
+  JointPath path;            ///< start first; consecutive states one step (or part of one) apart
   CartesianStop stop = CartesianStop::kComplete;
   std::string message;       ///< where and why the path ended (empty when complete)
   double fraction = 0.0;     ///< steps achieved / steps of the whole move, in [0, 1]
@@ -65,7 +69,8 @@ struct CartesianPathResult {
   double max_position_error = 0.0;     ///< [m]
   double max_orientation_error = 0.0;  ///< [rad]
   /// Between consecutive states the joints move linearly: the link's distance from the
-  /// commanded line, measured at 7 points of every step (not a bound).
+  /// commanded line, measured at 7 points of every step (not a bound; at most line_tolerance
+  /// unless a step was split 8 times).
   double max_line_deviation = 0.0;           ///< [m]
   double max_line_rotation_deviation = 0.0;  ///< [rad]
 };
