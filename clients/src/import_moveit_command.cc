@@ -25,6 +25,8 @@ constexpr const char* kHelpHead =
     "                             [--group NAME]\n"
     "  Converts a MoveIt PlanningScene and MotionPlanRequest (YAML, e.g. a MotionBenchMaker pair) into a\n"
     "  chasles.v1.PlanRequest and prints it as protobuf JSON (or writes it to --out F.json). No server needed.\n"
+    "  A GetCartesianPath request (a REQUEST.yaml with waypoints) becomes a chasles.v1.CartesianPathRequest\n"
+    "  for `chasles cartesian` (--sample-period and --padding apply to it, the other flags do not).\n"
     "  --robot F.urdf  read joint and link names from this URDF and embed it (and --srdf) in the request;\n"
     "                  default: the server's default robot (a Panda), not embedded\n"
     "  --srdf F.srdf   its SRDF (allowed collisions)\n"
@@ -99,15 +101,33 @@ int ImportMoveItCommand(const std::vector<std::string>& args) {
     std::cerr << "chasles: " << (robot_file.empty() ? "the default robot" : robot_file) << ": " << e.what() << "\n";
     return kUsage;
   }
-  v1::PlanRequest request;
+  v1::PlanRequest plan;
+  v1::CartesianPathRequest cartesian;
+  const bool is_cartesian = moveit::IsCartesianPathRequest(request_yaml);
+  if (is_cartesian && (overrides.planner_id || overrides.time_budget || overrides.seed || overrides.group)) {
+    return Usage("--planner, --budget, --seed and --group do not apply to a Cartesian path (" + positional[1] +
+                 " is a GetCartesianPath request); --sample-period and --padding do");
+  }
   try {
-    request = moveit::ImportMotionPlanRequest(scene_yaml, request_yaml, robot, positional[0], positional[1]);
+    if (is_cartesian) {
+      cartesian = moveit::ImportCartesianPathRequest(scene_yaml, request_yaml, robot, positional[0], positional[1]);
+    } else {
+      plan = moveit::ImportMotionPlanRequest(scene_yaml, request_yaml, robot, positional[0], positional[1]);
+    }
   } catch (const std::exception& e) {
     std::cerr << "chasles: " << e.what() << "\n";
     return kConversionFailed;
   }
-  if (!robot_file.empty()) *request.mutable_robot() = robot.model;  // self-contained
-  ApplyPlanOverrides(overrides, &request);
+  if (is_cartesian) {
+    if (!robot_file.empty()) *cartesian.mutable_robot() = robot.model;  // self-contained
+    if (overrides.sample_period) cartesian.mutable_options()->set_sample_period(*overrides.sample_period);
+    if (overrides.padding) cartesian.set_padding(*overrides.padding);
+  } else {
+    if (!robot_file.empty()) *plan.mutable_robot() = robot.model;  // self-contained
+    ApplyPlanOverrides(overrides, &plan);
+  }
+  const google::protobuf::Message& request = is_cartesian ? static_cast<const google::protobuf::Message&>(cartesian)
+                                                          : static_cast<const google::protobuf::Message&>(plan);
 
   google::protobuf::util::JsonPrintOptions print;
   print.add_whitespace = true;

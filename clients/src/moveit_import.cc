@@ -675,7 +675,102 @@ std::string JoinNames(const std::vector<std::string>& names) {
   return text;
 }
 
+/// The start: the scene's robot state, overlaid by the request's start_state, in the robot's
+/// joint order.
+void ReadStart(const Value& root, const ParsedScene& scene, const RobotInfo& robot, const std::string& scene_source,
+               const std::string& request_source, v1::JointState* out) {
+  std::map<std::string, double> start_positions;
+  if (auto start_state = root.Find("start_state")) start_positions = ReadJointState(*start_state);
+  for (const std::string& joint : robot.joint_names) {
+    std::map<std::string, double>::const_iterator it = start_positions.find(joint);
+    if (it == start_positions.end()) it = scene.joint_positions.find(joint);
+    if (it == scene.joint_positions.end()) {
+      ThrowInvalid(request_source + ": start_state.joint_state has no position for joint '" + joint + "' (nor has " +
+                   scene_source + ": robot_state.joint_state); the robot's joints are " + JoinNames(robot.joint_names));
+    }
+    out->add_positions(it->second);
+  }
+}
+
+void RejectPathConstraints(const Value& root) {
+  if (auto path = root.Find("path_constraints")) {
+    for (const char* key :
+         {"joint_constraints", "position_constraints", "orientation_constraints", "visibility_constraints"}) {
+      RejectNonEmpty(*path, key, "path constraints are not supported");
+    }
+  }
+}
+
 }  // namespace
+
+bool IsCartesianPathRequest(const std::string& request_yaml) {
+  try {
+    const YAML::Node root = YAML::Load(request_yaml);
+    return root.IsMap() && root["waypoints"].IsDefined();
+  } catch (const YAML::Exception&) {
+    return false;  // the importer names the error
+  }
+}
+
+v1::CartesianPathRequest ImportCartesianPathRequest(const std::string& scene_yaml, const std::string& request_yaml,
+                                                    const RobotInfo& robot, const std::string& scene_source,
+                                                    const std::string& request_source) {
+  ParsedScene scene = ParseScene(scene_yaml, robot, scene_source);
+  const YAML::Node scene_node = ParseDocument(scene_yaml, scene_source, "moveit_msgs/PlanningScene");
+  const Frames frames(Value(scene_node, "", &scene_source), robot);
+  const YAML::Node root_node = ParseDocument(request_yaml, request_source, "moveit_msgs/GetCartesianPath request");
+  const Value root(root_node, "", &request_source);
+  v1::CartesianPathRequest request;
+  ReadStart(root, scene, robot, scene_source, request_source, request.mutable_start());
+  if (auto link = root.Find("link_name")) {
+    const std::string name = link->Text();
+    if (std::find(robot.link_names.begin(), robot.link_names.end(), name) == robot.link_names.end()) {
+      link->Fail("= '" + name + "' is not a link of the robot (" + JoinNames(robot.link_names) + ")");
+    }
+    request.set_link(name);
+  }
+  // The waypoints' frame: header.frame_id (the base for "" or absent).
+  Eigen::Isometry3d frame = Eigen::Isometry3d::Identity();
+  if (auto header = root.Find("header")) {
+    if (auto id = header->Find("frame_id")) frame = frames.Resolve(id->Text(), *id);
+  }
+  const Value waypoints = root.Get("waypoints");
+  const std::vector<Value> poses = waypoints.Items();
+  if (poses.empty()) waypoints.Fail("is empty: a Cartesian path needs at least one waypoint");
+  for (const Value& pose : poses) PoseToProto(frame * ReadPose(pose), request.add_waypoints());
+  if (auto step = root.Find("max_step")) {
+    const double value = step->Number();
+    if (!(value > 0.0)) step->Fail("= " + FormatNumber(value) + " must be > 0 [m]");
+    request.set_max_step(value);
+  }
+  if (auto jump = root.Find("jump_threshold")) {
+    const double value = jump->Number();
+    if (!(value == 0.0 || value >= 1.0)) {
+      jump->Fail("= " + FormatNumber(value) + " must be 0 (off) or >= 1 (a multiple of the mean step)");
+    }
+    request.set_jump_threshold(value);
+  }
+  if (auto revolute = root.Find("revolute_jump_threshold")) {
+    const double value = revolute->Number();
+    if (value < 0.0) revolute->Fail("= " + FormatNumber(value) + " must be >= 0 (0 = off)");
+    if (value > 0.0) request.set_max_joint_jump(value);
+  }
+  if (auto prismatic = root.Find("prismatic_jump_threshold")) {
+    if (prismatic->Number() != 0.0) {
+      prismatic->Fail("is not supported: Chasles has one absolute jump limit for every joint "
+                      "(revolute_jump_threshold becomes max_joint_jump)");
+    }
+  }
+  // moveit_msgs leaves avoid_collisions false when absent; a Cartesian path here is checked
+  // unless the file says false.
+  if (auto avoid = root.Find("avoid_collisions")) request.set_ignore_collisions(!avoid->Bool());
+  RejectPathConstraints(root);
+  if (auto speed = root.Find("max_cartesian_speed")) {
+    if (speed->Number() != 0.0) speed->Fail("is not supported (a Cartesian speed limit on a link)");
+  }
+  *request.mutable_scene() = std::move(scene.scene);
+  return request;
+}
 
 RobotInfo DefaultRobot() { return RobotFromUrdf(std::string(kDefaultRobotUrdf), std::string(kDefaultRobotSrdf)); }
 
@@ -697,19 +792,8 @@ v1::PlanRequest ImportMotionPlanRequest(const std::string& scene_yaml, const std
   const YAML::Node root_node = ParseDocument(request_yaml, request_source, "moveit_msgs/MotionPlanRequest");
   const Value root(root_node, "", &request_source);
 
-  // Start: the scene's robot state, overlaid by the request's start state.
-  std::map<std::string, double> start_positions;
-  if (auto start_state = root.Find("start_state")) start_positions = ReadJointState(*start_state);
   v1::PlanRequest request;
-  for (const std::string& joint : robot.joint_names) {
-    auto it = start_positions.find(joint);
-    if (it == start_positions.end()) it = scene.joint_positions.find(joint);
-    if (it == scene.joint_positions.end()) {
-      ThrowInvalid(request_source + ": start_state.joint_state has no position for joint '" + joint + "' (nor has " +
-                   scene_source + ": robot_state.joint_state); the robot's joints are " + JoinNames(robot.joint_names));
-    }
-    request.mutable_start()->add_positions(it->second);
-  }
+  ReadStart(root, scene, robot, scene_source, request_source, request.mutable_start());
 
   // Goal: one set of joint constraints.
   const Value goals_value = root.Get("goal_constraints");
@@ -769,12 +853,7 @@ v1::PlanRequest ImportMotionPlanRequest(const std::string& scene_yaml, const std
   // bounds_tolerance (it covers the start too; capped at its 0.01 maximum).
   if (tolerance > 0.0) request.set_bounds_tolerance(std::min(tolerance, 0.01));
 
-  if (auto path = root.Find("path_constraints")) {
-    for (const char* key :
-         {"joint_constraints", "position_constraints", "orientation_constraints", "visibility_constraints"}) {
-      RejectNonEmpty(*path, key, "path constraints are not supported");
-    }
-  }
+  RejectPathConstraints(root);
   if (auto trajectory = root.Find("trajectory_constraints")) {
     RejectNonEmpty(*trajectory, "constraints", "trajectory constraints are not supported");
   }

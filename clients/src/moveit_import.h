@@ -82,6 +82,20 @@ v1::PlanRequest ImportMotionPlanRequest(const std::string& scene_yaml, const std
                                         const RobotInfo& robot, const std::string& scene_source,
                                         const std::string& request_source);
 
+/// True when `request_yaml` is a moveit_msgs/GetCartesianPath request (it has `waypoints`).
+bool IsCartesianPathRequest(const std::string& request_yaml);
+
+/// A PlanningScene and a moveit_msgs/GetCartesianPath request in YAML -> a CartesianPathRequest
+/// with the scene inline: start (as for a MotionPlanRequest), link_name -> link, waypoints
+/// (geometry_msgs/Pose, in header.frame_id resolved as scene frames are) -> waypoints in the
+/// base frame, max_step, jump_threshold (0 or >= 1), revolute_jump_threshold > 0 ->
+/// max_joint_jump, avoid_collisions: false -> ignore_collisions (absent: collisions are checked,
+/// unlike moveit_msgs' default). Named errors: prismatic_jump_threshold, path constraints,
+/// max_cartesian_speed, an unknown link or frame, malformed values.
+v1::CartesianPathRequest ImportCartesianPathRequest(const std::string& scene_yaml, const std::string& request_yaml,
+                                                    const RobotInfo& robot, const std::string& scene_source,
+                                                    const std::string& request_source);
+
 /// One problem of a directory.
 struct MoveItProblem {
   std::string name;         ///< the scene file's stem, e.g. "scene0001"

@@ -710,6 +710,21 @@ TEST(MoveItCli, OverridesPlannerBudgetSeedAndSamplePeriod) {
   }
 }
 
+TEST(MoveItCli, AGetCartesianPathRequestBecomesACartesianPathRequest) {
+  const std::string scene = ExamplesDir() + "/scene0001.yaml";
+  const std::string request = ExamplesDir() + "/cartesian0001.yaml";
+  const CommandResult result = RunCli(scene + " " + request + " --sample-period 0.02 --padding 0.01");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  v1::CartesianPathRequest parsed;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(result.out, &parsed).ok()) << result.out;
+  EXPECT_EQ(parsed.waypoints_size(), 3);
+  EXPECT_EQ(parsed.options().sample_period(), 0.02);
+  EXPECT_EQ(parsed.padding(), 0.01);
+  const CommandResult planner = RunCli(scene + " " + request + " --planner prm");
+  EXPECT_EQ(planner.exit_code, 2);
+  EXPECT_NE(planner.err.find("do not apply to a Cartesian path"), std::string::npos) << planner.err;
+}
+
 TEST(MoveItCli, ExitCodes) {
   // 1: the YAML does not convert, with the named error.
   const CommandResult bad = RunCli(DataPath("malformed.yaml") + " " + DataPath("request_full.yaml"));
@@ -760,6 +775,69 @@ TEST_F(MoveItExamples, StartsAndGoalsAreClearAndEveryProblemPlans) {
     EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
     EXPECT_GT(response.trajectory().points_size(), 1);
   }
+}
+
+TEST_F(MoveItExamples, TheCartesianExampleConvertsAndIsDrawnWholeThroughTheServer) {
+  const std::string scene = testing::ReadText(ExamplesDir() + "/scene0001.yaml");
+  const std::string yaml = testing::ReadText(ExamplesDir() + "/cartesian0001.yaml");
+  ASSERT_TRUE(moveit::IsCartesianPathRequest(yaml));
+  EXPECT_FALSE(moveit::IsCartesianPathRequest(testing::ReadText(ExamplesDir() + "/request0001.yaml")));
+  const v1::CartesianPathRequest request =
+      moveit::ImportCartesianPathRequest(scene, yaml, Panda(), "scene0001.yaml", "cartesian0001.yaml");
+  EXPECT_EQ(request.link(), "panda_tcp");
+  ASSERT_EQ(request.start().positions_size(), 7);  // the finger joints are not the robot's
+  EXPECT_EQ(request.start().positions(3), -1.787);
+  ASSERT_EQ(request.waypoints_size(), 3);
+  EXPECT_NEAR(request.waypoints(1).position().y(), 0.199848877034, kTight);
+  EXPECT_NEAR(request.waypoints(2).position().z(), 0.350059929057, kTight);
+  EXPECT_EQ(request.max_step(), 0.01);
+  EXPECT_FALSE(request.ignore_collisions());
+  EXPECT_EQ(request.scene().boxes_size(), ImportPlanningScene(scene, Panda(), "s").boxes_size());
+  v1::CartesianPathResponse response;
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  ASSERT_TRUE(server_->stub().CartesianPath(&context, request, &response).ok());
+  EXPECT_EQ(response.stop(), v1::CartesianPathResponse::COMPLETE) << response.message();
+  EXPECT_EQ(response.timed().outcome(), v1::SUCCESS) << response.timed().message();
+}
+
+TEST(MoveItCartesian, FramesJumpThresholdsAndNamedErrors) {
+  const std::string scene = Data("scene_full.yaml");
+  const std::string base = testing::ReadText(ExamplesDir() + "/cartesian0001.yaml");
+  const auto import = [&](const std::string& yaml) {
+    return moveit::ImportCartesianPathRequest(scene, yaml, Panda(), "scene.yaml", "cartesian.yaml");
+  };
+  const auto error = [&](const std::string& yaml) { return ErrorOf([&] { import(yaml); }); };
+  // Waypoints in a scene frame: "bench" is 0.5 m above the base.
+  const v1::CartesianPathRequest bench = import(Replace(base, "frame_id: panda_link0", "frame_id: bench"));
+  EXPECT_NEAR(bench.waypoints(0).position().z(), 0.950059929057, kTight);
+  // Thresholds: relative (0 or >= 1) as is, revolute as max_joint_jump; avoid_collisions false.
+  const v1::CartesianPathRequest jumps = import(Replace(
+      Replace(Replace(base, "jump_threshold: 0.0", "jump_threshold: 2.5"), "revolute_jump_threshold: 0.0",
+              "revolute_jump_threshold: 0.3"),
+      "avoid_collisions: true", "avoid_collisions: false"));
+  EXPECT_EQ(jumps.jump_threshold(), 2.5);
+  EXPECT_EQ(jumps.max_joint_jump(), 0.3);
+  EXPECT_TRUE(jumps.ignore_collisions());
+  // Absent avoid_collisions: checked (moveit_msgs would default to false).
+  EXPECT_FALSE(import(Replace(base, "avoid_collisions: true", "")).ignore_collisions());
+  EXPECT_EQ(error(Replace(base, "\njump_threshold: 0.0", "\njump_threshold: 0.5")),
+            "cartesian.yaml: jump_threshold = 0.5 must be 0 (off) or >= 1 (a multiple of the mean step)");
+  EXPECT_NE(error(Replace(base, "prismatic_jump_threshold: 0.0", "prismatic_jump_threshold: 0.01"))
+                .find("cartesian.yaml: prismatic_jump_threshold is not supported"),
+            std::string::npos);
+  EXPECT_NE(error(Replace(base, "link_name: panda_tcp", "link_name: gripper")).find("link_name = 'gripper' is not a link"),
+            std::string::npos);
+  EXPECT_NE(error(Replace(base, "frame_id: panda_link0", "frame_id: camera")).find("header.frame_id = 'camera' is not a known frame"),
+            std::string::npos);
+  EXPECT_NE(error(base + "path_constraints:\n  orientation_constraints:\n    - {link_name: panda_tcp}\n")
+                .find("path constraints are not supported"),
+            std::string::npos);
+  EXPECT_NE(error(Replace(base, "max_step: 0.01", "max_step: 0")).find("max_step = 0 must be > 0"), std::string::npos);
+  const std::size_t at = base.find("waypoints:");
+  const std::size_t end = base.find("max_step:");
+  EXPECT_NE(error(base.substr(0, at) + "waypoints: []\n" + base.substr(end)).find("waypoints is empty"),
+            std::string::npos);
 }
 
 TEST_F(MoveItExamples, AllowedCollisionsReachTheChecker) {
