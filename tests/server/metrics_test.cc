@@ -295,7 +295,7 @@ TEST(ServerMetrics, LabelValuesStayInTheirBoundedSets) {
 
   // Every rpc label of every series is a Planning method or "other".
   const std::set<std::string> methods = {"Plan", "ListPlanners", "UploadRobot", "UploadScene", "UpdateScene",
-                                         "InverseKinematics", "Optimize", "Coordinate", "CreateWorkcell",
+                                         "InverseKinematics", "CartesianPath", "Optimize", "Coordinate", "CreateWorkcell",
                                          "CommitTrajectory", "Release", "Benchmark", "StopBenchmark",
                                          "OpenFleetSession", "AssignFleetGoals", "CloseFleetSession", "StreamFleetSession",
                                          "other"};
