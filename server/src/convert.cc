@@ -456,6 +456,24 @@ IkRequest IkRequestFromProto(const v1::InverseKinematicsRequest& request, const 
   return ik;
 }
 
+std::vector<AttachedObject> AttachedObjectsFromProto(const google::protobuf::RepeatedPtrField<v1::AttachedObject>& objects,
+                                                     const RobotModel& robot, const std::string& field) {
+  std::vector<AttachedObject> out;
+  for (int i = 0; i < objects.size(); ++i) {
+    const v1::AttachedObject& object = objects.Get(i);
+    const std::string f = Indexed(field, i);
+    AttachedObject attached;
+    attached.name = object.name();
+    attached.link = LinkFromProto(robot, object.link(), f + ".link");
+    ForEachPrimitive(object, f, [&attached](Shape shape, const std::string&, const std::string&, const char*, int) {
+      attached.shapes.push_back(std::move(shape));
+    });
+    attached.touch_links.assign(object.touch_links().begin(), object.touch_links().end());
+    out.push_back(std::move(attached));
+  }
+  return out;
+}
+
 CartesianSpec CartesianSpecFromProto(const v1::CartesianPathRequest& request, const RobotModel& robot) {
   CartesianSpec spec;
   spec.link = LinkFromProto(robot, request.link(), "link");

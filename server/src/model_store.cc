@@ -5,7 +5,10 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "chasles/collision/shape_spheres.h"
+#include "chasles/robot/attached_objects.h"
 #include "chasles/robot/error.h"
+#include "chasles/server/content_hash.h"
 #include "chasles/server/convert.h"
 #include "chasles/server/heap_tracking.h"
 
@@ -73,6 +76,65 @@ StoredRobot ModelStore::AddRobot(const v1::RobotModel& robot, const std::string&
   });
   if (redis_ != nullptr) Share("chasles:robot:" + id, robot.SerializeAsString());
   return *cache_.Put<StoredRobot>("robot:" + id, std::move(parsed), bytes);
+}
+
+StoredRobot ModelStore::Carrying(const StoredRobot& robot,
+                                 const google::protobuf::RepeatedPtrField<v1::AttachedObject>& objects,
+                                 const std::string& field, std::vector<std::string>* warnings) {
+  if (objects.empty()) return robot;
+  std::string bytes;
+  for (const v1::AttachedObject& object : objects) bytes += object.SerializeAsString();
+  const std::string id = robot.id + "+" + ContentId(bytes);
+  const std::string key = "carrying:" + id;
+  struct Carried {
+    StoredRobot robot;
+    std::vector<std::string> warnings;
+  };
+  if (auto stored = cache_.Get<Carried>(key)) {
+    warnings->insert(warnings->end(), stored->warnings.begin(), stored->warnings.end());
+    return stored->robot;
+  }
+  std::uint64_t size = 0;
+  auto built = Measured(bytes.size(), &size, [&] {
+    auto entry = std::make_shared<Carried>();
+    const std::vector<AttachedObject> exact = AttachedObjectsFromProto(objects, *robot.model, field);
+    std::vector<AttachedObject> carried = exact;
+    bool spheres = true;
+    for (const Link& link : robot.model->links()) {
+      for (const Shape& shape : link.collision) spheres = spheres && shape.type == ShapeType::kSphere;
+    }
+    if (spheres) {
+      for (std::size_t i = 0; i < carried.size(); ++i) {
+        std::vector<Shape> covered;
+        double reach = 0.0;
+        for (const Shape& shape : carried[i].shapes) {
+          if (shape.type == ShapeType::kSphere) {
+            covered.push_back(shape);
+            continue;
+          }
+          const FittedSpheres fit = FitShapeSpheres(shape);
+          reach = std::max(reach, fit.reach);
+          for (std::size_t k = 0; k < fit.centres.size(); ++k) {
+            covered.push_back(Shape::Sphere(fit.radii[k], shape.pose * Eigen::Translation3d(fit.centres[k])));
+          }
+        }
+        if (reach > 0.0) {
+          entry->warnings.push_back(field + "[" + std::to_string(i) + "] ('" + carried[i].name + "'): covered by " +
+                                    std::to_string(covered.size()) + " spheres reaching at most " +
+                                    FormatNumber(reach) + " m outside its shapes (the robot is checked as spheres)");
+        }
+        carried[i].shapes = std::move(covered);
+      }
+    }
+    entry->robot = robot;
+    entry->robot.id = id;
+    entry->robot.model = AttachObjects(*robot.model, carried, field);
+    if (robot.exact != nullptr) entry->robot.exact = AttachObjects(*robot.exact, exact, field);
+    return std::shared_ptr<const Carried>(std::move(entry));
+  });
+  const auto stored = cache_.Put<Carried>(key, std::move(built), std::max<std::uint64_t>(size, 1));
+  warnings->insert(warnings->end(), stored->warnings.begin(), stored->warnings.end());
+  return stored->robot;
 }
 
 StoredScene ModelStore::AddScene(const v1::Scene& scene, const std::string& field) {

@@ -296,8 +296,10 @@ class PlanningService final : public RawService {
         call.record.fields.push_back({"group", call.request.group()});
       }
       const v1::OptimizeRequest& request = call.request.group().empty() ? call.request : grouped;
+      const std::string robot_id = robot.id;  // the robot as described (ids of carried loads are internal)
+      robot = store_->Carrying(robot, request.attached_objects(), "attached_objects", &warnings);
       const StoredScene scene = SceneOfRequest(*store_, request);
-      response.set_robot_id(robot.id);
+      response.set_robot_id(robot_id);
       response.set_scene_id(scene.id);
       RequestSettings settings;
       double input_duration = 0.0;
@@ -460,9 +462,12 @@ class PlanningService final : public RawService {
           v1::CartesianPathResponse& response = call.response;
           call.record.request_id = RequestId(request.request_id(), "cart");
           response.set_request_id(call.record.request_id);
-          const StoredRobot robot = RobotOfRequest(*store_, request);
+          std::vector<std::string> warnings;
+          const StoredRobot described = RobotOfRequest(*store_, request);
+          const StoredRobot robot = store_->Carrying(described, request.attached_objects(), "attached_objects", &warnings);
+          for (const std::string& w : warnings) response.add_warnings(w);
           const StoredScene scene = SceneOfRequest(*store_, request);
-          response.set_robot_id(robot.id);
+          response.set_robot_id(described.id);
           response.set_scene_id(scene.id);
           const double padding = PaddingFromProto(request.padding(), "padding");
           const std::shared_ptr<const CollisionChecker> checker = store_->Checker(robot, scene, padding);
@@ -1116,6 +1121,11 @@ class PlanningService final : public RawService {
       call.record.fields.push_back({"group", call.request.group()});
     }
     const v1::PlanRequest& request = call.request.group().empty() ? call.request : grouped;
+    // Objects the robot carries: links of their own (built once per robot and objects).
+    robot = store_->Carrying(robot, request.attached_objects(), "attached_objects", &group_warnings);
+    if (request.attached_objects_size() > 0) {
+      call.record.fields.push_back({"attached", std::to_string(request.attached_objects_size())});
+    }
     const StoredScene scene = SceneOfRequest(*store_, request);
     response.set_scene_id(scene.id);
     call.record.fields.push_back({"robot", IdPrefix(robot.id)});

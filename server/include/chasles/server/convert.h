@@ -13,6 +13,7 @@
 #include "chasles/collision/scene.h"
 #include "chasles/pipeline/cartesian_path.h"
 #include "chasles/pipeline/plan_pipeline.h"
+#include "chasles/robot/attached_objects.h"
 #include "chasles/robot/descriptions.h"
 #include "chasles/robot/input_limits.h"
 #include "chasles/robot/inverse_kinematics.h"
@@ -151,6 +152,11 @@ OptimizeQuery OptimizeQueryFromProto(const v1::OptimizeRequest& request, std::sh
 /// trajectory, duration and, with `knots`, the knots.
 void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery& query, v1::OptimizeResponse* response,
                             bool knots = false);
+
+/// Attached objects in domain types: link names resolved, shapes converted (errors name
+/// `field[i]...`). \throws Error(kInvalidArgument).
+std::vector<AttachedObject> AttachedObjectsFromProto(const google::protobuf::RepeatedPtrField<v1::AttachedObject>& objects,
+                                                     const RobotModel& robot, const std::string& field);
 
 /// A CartesianPathRequest's move with the proto's defaults (link, waypoints, steps, jump tests,
 /// tolerances, collision checking). \throws Error(kInvalidArgument) naming the field.

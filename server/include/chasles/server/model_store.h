@@ -64,6 +64,14 @@ class ModelStore {
   const StoredRobot& default_robot() const { return default_robot_; }
   const StoredScene& default_scene() const { return default_scene_; }
 
+  /// `robot` carrying `objects` (AttachObjects), built once per (robot, objects) and cached: its
+  /// id is robot.id + "+" + the objects' content id, so checkers are cached per load. On a robot
+  /// whose shapes are all spheres (the fast, certified path) each object's shapes are covered by
+  /// spheres (FitShapeSpheres), and `warnings` gets how far they reach outside the shapes. The
+  /// same as `robot` for no objects. \throws Error(kInvalidArgument) naming `field[i]`.
+  StoredRobot Carrying(const StoredRobot& robot, const google::protobuf::RepeatedPtrField<v1::AttachedObject>& objects,
+                       const std::string& field, std::vector<std::string>* warnings);
+
   /// The checker for (robot, scene) with `padding` [m] around every robot shape
   /// (CollisionOptions::padding, validated by the caller), built once per (robot, scene,
   /// padding) and cached: a checker is never shared between paddings.
