@@ -295,11 +295,6 @@ class Frames {
 /// A robot state's joint positions by name (every name in the file, robot joint or not).
 std::map<std::string, double> ReadJointState(const Value& state) {
   std::map<std::string, double> positions;
-  if (auto attached = state.Find("attached_collision_objects"); attached && attached->Count() > 0) {
-    attached->Fail("has " + std::to_string(attached->Count()) +
-                   " objects: attached collision objects are not supported (add them to the world, or leave "
-                   "them out)");
-  }
   auto joint_state = state.Find("joint_state");
   if (!joint_state) return positions;
   const std::vector<Value> name_items = ListAt(*joint_state, "name");
@@ -420,7 +415,9 @@ long long ReadPrimitiveType(const Value& type) {
   return type.Integer(0, 255);
 }
 
-void AddPrimitive(const Value& primitive, const Eigen::Isometry3d& pose, const std::string& name, v1::Scene* scene) {
+/// Adds the primitive to `scene` (a v1::Scene, or a v1::AttachedObject: the same shape lists).
+template <typename Shapes>
+void AddPrimitive(const Value& primitive, const Eigen::Isometry3d& pose, const std::string& name, Shapes* scene) {
   primitive.RequireMap();
   const Value type_value = primitive.Get("type");
   const long long type = ReadPrimitiveType(type_value);
@@ -530,6 +527,8 @@ void RequireAdd(const Value& object) {
 struct ParsedScene {
   v1::Scene scene;
   std::map<std::string, double> joint_positions;
+  std::optional<Frames> frames;        ///< the scene's frames (fixed_frame_transforms)
+  std::vector<Value> attached;         ///< robot_state.attached_collision_objects
 };
 
 ParsedScene ParseScene(const std::string& yaml, const RobotInfo& robot, const std::string& source) {
@@ -538,10 +537,14 @@ ParsedScene ParseScene(const std::string& yaml, const RobotInfo& robot, const st
   ParsedScene parsed;
   v1::Scene& scene = parsed.scene;
 
-  if (auto state = root.Find("robot_state")) parsed.joint_positions = ReadJointState(*state);
+  if (auto state = root.Find("robot_state")) {
+    parsed.joint_positions = ReadJointState(*state);
+    parsed.attached = ListAt(*state, "attached_collision_objects");
+  }
 
   const std::set<std::string> links(robot.link_names.begin(), robot.link_names.end());
-  const Frames frames(root, robot);
+  parsed.frames.emplace(root, robot);
+  const Frames& frames = *parsed.frames;
   std::vector<ObjectShapes> objects;
   std::map<std::string, std::string> object_paths;  // id -> path, for duplicates
   std::set<std::string> shape_names;
@@ -701,6 +704,82 @@ void RejectPathConstraints(const Value& root) {
   }
 }
 
+/// moveit_msgs/AttachedCollisionObject entries -> AttachedObjects (shapes in the link's frame):
+/// the scene's robot_state ones, then the request's start_state ones (an id given again replaces
+/// the scene's). An object given in a frame other than its link's is placed where `start` puts
+/// that frame (a robot link by forward kinematics, the base or a scene frame as scene objects
+/// are). Touch links the robot lacks (MoveIt's finger links) are dropped.
+template <typename Request>
+void ReadAttached(const ParsedScene& scene, const std::optional<Value>& start_state, const RobotInfo& robot,
+                  Request* request) {
+  std::vector<Value> items = scene.attached;
+  if (start_state) {
+    const std::vector<Value> more = ListAt(*start_state, "attached_collision_objects");
+    items.insert(items.end(), more.begin(), more.end());
+  }
+  if (items.empty()) return;
+  const std::shared_ptr<const RobotModel> model = RobotFromProto(robot.model, "robot");
+  Eigen::VectorXd q(static_cast<Eigen::Index>(request->start().positions_size()));
+  for (int i = 0; i < request->start().positions_size(); ++i) q[i] = request->start().positions(i);
+  std::vector<Eigen::Isometry3d> poses;
+  model->ForwardKinematics(q, &poses);
+  const std::set<std::string> links(robot.link_names.begin(), robot.link_names.end());
+  std::map<std::string, int> index;  // id -> its entry in request->attached_objects
+  for (const Value& item : items) {
+    item.RequireMap();
+    const Value link_value = item.Get("link_name");
+    const std::string link = link_value.Text();
+    if (links.count(link) == 0) link_value.Fail("= '" + link + "' is not a link of the robot (" + JoinNames(robot.link_names) + ")");
+    const Value object = item.Get("object");
+    object.RequireMap();
+    const Value id_value = object.Get("id");
+    const std::string id = id_value.Text();
+    if (id.empty()) id_value.Fail("is empty: every attached object needs an id");
+    if (links.count(id) != 0) id_value.Fail("= '" + id + "' is a link of the robot: object ids must differ");
+    RequireAdd(object);
+    RejectNonEmpty(object, "meshes", "meshes of attached objects are not supported (BOX, SPHERE and CYLINDER are)");
+    RejectNonEmpty(object, "planes", "planes are not supported (use a thin BOX)");
+    // The object's frame in the link's frame.
+    const Eigen::Isometry3d& link_pose = poses[static_cast<std::size_t>(model->FindLink(link))];
+    const std::string frame = FrameOf(object);
+    Eigen::Isometry3d in_link = Eigen::Isometry3d::Identity();
+    if (frame != link) {
+      const int frame_link = model->FindLink(frame);
+      const std::optional<Value> header = object.Find("header");
+      const std::optional<Value> frame_id = header ? header->Find("frame_id") : std::nullopt;
+      const Eigen::Isometry3d frame_pose = frame_link >= 0 && !scene.frames->IsBase(frame)
+                                               ? poses[static_cast<std::size_t>(frame_link)]
+                                               : scene.frames->Resolve(frame, frame_id ? *frame_id : object);
+      in_link = link_pose.inverse() * frame_pose;
+    }
+    if (const std::optional<Value> pose = object.Find("pose")) in_link = in_link * ReadPose(*pose);
+    const std::vector<Value> primitives = ListAt(object, "primitives");
+    if (primitives.empty()) object.Fail("(id '" + id + "') has no primitives: it needs a shape");
+    const std::vector<Value> primitive_poses = ListAt(object, "primitive_poses");
+    if (primitive_poses.size() != primitives.size()) {
+      ThrowInvalid(object.source() + ": " + object.path() + ".primitive_poses has " +
+                   std::to_string(primitive_poses.size()) + " poses for " + std::to_string(primitives.size()) +
+                   " primitives: there must be one per shape");
+    }
+    v1::AttachedObject converted;
+    converted.set_name(id);
+    converted.set_link(link);
+    for (std::size_t k = 0; k < primitives.size(); ++k) {
+      AddPrimitive(primitives[k], in_link * ReadPose(primitive_poses[k]), id, &converted);
+    }
+    for (const Value& touch : ListAt(item, "touch_links")) {
+      const std::string name = touch.Text();
+      if (links.count(name) != 0 && name != link) converted.add_touch_links(name);
+    }
+    const auto [at, inserted] = index.emplace(id, request->attached_objects_size());
+    if (inserted) {
+      *request->add_attached_objects() = std::move(converted);
+    } else {
+      *request->mutable_attached_objects(at->second) = std::move(converted);
+    }
+  }
+}
+
 }  // namespace
 
 bool IsCartesianPathRequest(const std::string& request_yaml) {
@@ -716,12 +795,12 @@ v1::CartesianPathRequest ImportCartesianPathRequest(const std::string& scene_yam
                                                     const RobotInfo& robot, const std::string& scene_source,
                                                     const std::string& request_source) {
   ParsedScene scene = ParseScene(scene_yaml, robot, scene_source);
-  const YAML::Node scene_node = ParseDocument(scene_yaml, scene_source, "moveit_msgs/PlanningScene");
-  const Frames frames(Value(scene_node, "", &scene_source), robot);
+  const Frames& frames = *scene.frames;
   const YAML::Node root_node = ParseDocument(request_yaml, request_source, "moveit_msgs/GetCartesianPath request");
   const Value root(root_node, "", &request_source);
   v1::CartesianPathRequest request;
   ReadStart(root, scene, robot, scene_source, request_source, request.mutable_start());
+  ReadAttached(scene, root.Find("start_state"), robot, &request);
   if (auto link = root.Find("link_name")) {
     const std::string name = link->Text();
     if (std::find(robot.link_names.begin(), robot.link_names.end(), name) == robot.link_names.end()) {
@@ -782,7 +861,13 @@ RobotInfo RobotFromUrdf(const std::string& urdf, const std::string& srdf) {
 }
 
 v1::Scene ImportPlanningScene(const std::string& yaml, const RobotInfo& robot, const std::string& source) {
-  return ParseScene(yaml, robot, source).scene;
+  ParsedScene parsed = ParseScene(yaml, robot, source);
+  if (!parsed.attached.empty()) {
+    ThrowInvalid(source + ": robot_state.attached_collision_objects has " + std::to_string(parsed.attached.size()) +
+                 " objects: a scene alone cannot carry them (they belong to the robot); import the scene with its "
+                 "request, which attaches them (attached_objects)");
+  }
+  return std::move(parsed.scene);
 }
 
 v1::PlanRequest ImportMotionPlanRequest(const std::string& scene_yaml, const std::string& request_yaml,
@@ -794,6 +879,7 @@ v1::PlanRequest ImportMotionPlanRequest(const std::string& scene_yaml, const std
 
   v1::PlanRequest request;
   ReadStart(root, scene, robot, scene_source, request_source, request.mutable_start());
+  ReadAttached(scene, root.Find("start_state"), robot, &request);
 
   // Goal: one set of joint constraints.
   const Value goals_value = root.Get("goal_constraints");

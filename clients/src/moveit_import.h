@@ -35,7 +35,13 @@
 /// - allowed_planning_time > 0 -> time_budget. planner_id, group_name, num_planning_attempts,
 ///   workspace_parameters and the velocity/acceleration scaling factors are not converted (the
 ///   caller chooses the planner and the trajectory options).
-/// Named errors: attached collision objects, planes, cones, mesh resources, non-ADD operations,
+/// - robot_state.attached_collision_objects (the scene's, then the request's start_state's; an
+///   id given again replaces the scene's): each becomes one of the request's attached_objects —
+///   BOX, SPHERE and CYLINDER primitives in the link's frame (an object given in another frame
+///   is placed where the start puts that frame: a robot link by forward kinematics, the base or a
+///   scene frame as above), touch links the robot lacks dropped. ImportPlanningScene alone refuses
+///   them (a Scene cannot carry them).
+/// Named errors: attached meshes, planes, cones, mesh resources, non-ADD operations,
 /// OctoMaps with data, position/orientation/visibility constraints, path or trajectory
 /// constraints, unknown frames, malformed YAML (with line and column) and malformed values.
 

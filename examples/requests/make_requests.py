@@ -328,6 +328,20 @@ CARTESIAN_PROBLEMS = {
 }
 
 
+# A PlanRequest carrying an object: a 40 cm rod held in the gripper, pointing down, carried across
+# a block on the floor that the bare arm would sweep straight over (the rod would go through it).
+def make_carry_request():
+    start = list(PANDA_READY)
+    goal = list(PANDA_READY)
+    start[0], goal[0] = 0.6, -0.6
+    block = {"name": "block", "size": {"x": 0.1, "y": 0.1, "z": 0.1}, "pose": {"position": {"x": 0.307, "z": 0.05}}}
+    rod = {"name": "rod", "link": "panda_tcp", "touchLinks": ["panda_hand"],
+           "boxes": [{"size": {"x": 0.04, "y": 0.04, "z": 0.4}, "pose": {"position": {"z": 0.2}}}]}
+    return {"requestId": "panda_carry_rod", "scene": {"boxes": [block]}, "start": {"positions": start},
+            "goal": {"positions": goal}, "planner": {"plannerId": "rrt_connect"}, "timeBudget": 5.0, "seed": "7",
+            "attachedObjects": [rod]}
+
+
 def make_cartesian_request(name, robot, link, start, offsets, extra):
     at = urdf_fk(robot, start, link)
     waypoints = []
@@ -403,6 +417,7 @@ def main():
         write(name, make_mobile_request(name, *problem))
     for name, problem in sorted(CARTESIAN_PROBLEMS.items()):
         write(name, make_cartesian_request(name, *problem))
+    write("panda_carry_rod", make_carry_request())
 
 
 if __name__ == "__main__":

@@ -3,6 +3,7 @@
 #include <malloc.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "chasles/collision/shape_spheres.h"
@@ -121,7 +122,8 @@ StoredRobot ModelStore::Carrying(const StoredRobot& robot,
         if (reach > 0.0) {
           entry->warnings.push_back(field + "[" + std::to_string(i) + "] ('" + carried[i].name + "'): covered by " +
                                     std::to_string(covered.size()) + " spheres reaching at most " +
-                                    FormatNumber(reach) + " m outside its shapes (the robot is checked as spheres)");
+                                    FormatNumber(std::ceil(reach * 1e4) / 1e4) +  // rounded up: still a bound
+                                    " m outside its shapes (the robot is checked as spheres)");
         }
         carried[i].shapes = std::move(covered);
       }

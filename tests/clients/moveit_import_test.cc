@@ -444,8 +444,8 @@ TEST(MoveItErrors, ZeroQuaternion) {
 TEST(MoveItErrors, UnsupportedSceneContent) {
   const std::string attached = Replace(Data("scene_full.yaml"), "attached_collision_objects: []",
                                        "attached_collision_objects:\n    - link_name: panda_hand");
-  EXPECT_NE(SceneError(attached).find("robot_state.attached_collision_objects has 1 objects: attached collision "
-                                      "objects are not supported"),
+  EXPECT_NE(SceneError(attached).find("robot_state.attached_collision_objects has 1 objects: a scene alone cannot "
+                                      "carry them"),
             std::string::npos);
   const std::string planes = Replace(Data("scene_full.yaml"), "planes: []", "planes:\n        - coef: [0, 0, 1, 0]");
   EXPECT_NE(SceneError(planes).find("world.collision_objects[6].planes has 1 entries: planes are not supported"),
@@ -559,8 +559,62 @@ TEST(MoveItErrors, MissingStartJoint) {
             "request.yaml: start_state.joint_state has 3 names and 2 positions: they must match one to one");
   const std::string attached =
       Replace(Data("request_full.yaml"), "is_diff: true", "attached_collision_objects:\n    - link_name: panda_hand");
-  EXPECT_NE(RequestError(Data("scene_full.yaml"), attached)
-                .find("request.yaml: start_state.attached_collision_objects has 1 objects"),
+  EXPECT_NE(RequestError(Data("scene_full.yaml"), attached).find("start_state.attached_collision_objects[0]"),
+            std::string::npos);
+}
+
+/// request_full.yaml with one attached cup (a cylinder) given in `frame` at `position`.
+std::string WithCup(const std::string& frame, const std::string& position, const std::string& extra = "") {
+  return Replace(Data("request_full.yaml"), "is_diff: true",
+                 "attached_collision_objects:\n"
+                 "    - link_name: panda_hand\n"
+                 "      touch_links: [panda_leftfinger, panda_link7]\n"
+                 "      object:\n"
+                 "        id: cup\n"
+                 "        header: {frame_id: " + frame + "}\n"
+                 "        primitives: [{type: 3, dimensions: [0.1, 0.03]}]\n"
+                 "        primitive_poses: [{position: " + position + ", orientation: [0, 0, 0, 1]}]\n" + extra);
+}
+
+TEST(MoveItRequest, AttachedObjectsBecomeTheRobotsLoad) {
+  const v1::PlanRequest in_link = ImportMotionPlanRequest(Data("scene_full.yaml"),
+                                                          WithCup("panda_hand", "[0, 0, 0.1]"), Panda(), "s", "r");
+  ASSERT_EQ(in_link.attached_objects_size(), 1);
+  const v1::AttachedObject& cup = in_link.attached_objects(0);
+  EXPECT_EQ(cup.name(), "cup");
+  EXPECT_EQ(cup.link(), "panda_hand");
+  ASSERT_EQ(cup.cylinders_size(), 1);
+  EXPECT_EQ(cup.cylinders(0).length(), 0.1);
+  EXPECT_EQ(cup.cylinders(0).radius(), 0.03);
+  EXPECT_NEAR(cup.cylinders(0).pose().position().z(), 0.1, kTight);
+  // MoveIt's finger link is not a link of Chasles' Panda: dropped, as in the ACM.
+  ASSERT_EQ(cup.touch_links_size(), 1);
+  EXPECT_EQ(cup.touch_links(0), "panda_link7");
+  // The same cup given in the base frame, where the hand is at the start: the same pose in the hand.
+  const auto robot = RobotFromProto(Panda().model, "robot");
+  Eigen::VectorXd q(7);
+  for (int i = 0; i < 7; ++i) q[i] = in_link.start().positions(i);
+  std::vector<Eigen::Isometry3d> poses;
+  robot->ForwardKinematics(q, &poses);
+  const Eigen::Vector3d world =
+      poses[static_cast<std::size_t>(robot->FindLink("panda_hand"))] * Eigen::Vector3d(0.0, 0.0, 0.1);
+  char position[128];
+  std::snprintf(position, sizeof(position), "[%.17g, %.17g, %.17g]", world.x(), world.y(), world.z());
+  const v1::PlanRequest in_world =
+      ImportMotionPlanRequest(Data("scene_full.yaml"), WithCup("world", position), Panda(), "s", "r");
+  ASSERT_EQ(in_world.attached_objects_size(), 1);
+  const v1::Pose& pose = in_world.attached_objects(0).cylinders(0).pose();
+  EXPECT_NEAR(pose.position().x(), 0.0, 1e-12);
+  EXPECT_NEAR(pose.position().y(), 0.0, 1e-12);
+  EXPECT_NEAR(pose.position().z(), 0.1, 1e-12);
+  // Named errors: a mesh, an unknown link.
+  EXPECT_NE(RequestError(Data("scene_full.yaml"),
+                         WithCup("panda_hand", "[0, 0, 0.1]", "        meshes: [{vertices: [], triangles: []}]\n"))
+                .find("meshes of attached objects are not supported"),
+            std::string::npos);
+  EXPECT_NE(RequestError(Data("scene_full.yaml"),
+                         Replace(WithCup("panda_hand", "[0, 0, 0.1]"), "link_name: panda_hand", "link_name: gripper"))
+                .find("start_state.attached_collision_objects[0].link_name = 'gripper' is not a link of the robot"),
             std::string::npos);
 }
 
