@@ -21,4 +21,10 @@ struct CartesianBenchOptions {
 /// Prints markdown tables to stdout.
 void BenchCartesian(const CartesianBenchOptions& options);
 
+/// `chasles-bench --section carry` (issue 18): examples/requests/panda_carry_rod.json (a 40 cm rod
+/// in the gripper, carried across a block) with `cases` random start/goal pairs on either side of
+/// the block, as Plan RPCs to an in-process server, carrying the rod and bare; every trajectory
+/// re-checked at 0.002 rad steps on a checker of the rod's exact box (FCL).
+void BenchCarry(const CartesianBenchOptions& options);
+
 }  // namespace chasles
