@@ -268,6 +268,19 @@ class ServerTest(unittest.TestCase):
             self.client.cartesian_path(START, [corner], "panda_tcp", max_step=-1.0)
         self.assertIn("max_step = -1", str(raised.exception))
 
+    def test_plan_carrying_a_rod(self) -> None:
+        example = json.loads((ROOT / "examples/requests/panda_carry_rod.json").read_text(encoding="utf-8"))
+        result = self.client.plan_request(example)
+        self.assertTrue(result.success, f"{result.outcome}: {result.message}")
+        self.assertTrue(any("('rod'): covered by" in w for w in result.response.warnings), result.response.warnings)
+        # The keyword call, the rod as plain data: a start with the rod in the block collides.
+        start = list(example["start"]["positions"])
+        start[0] = 0.0
+        blocked = self.client.plan(start, example["goal"]["positions"], scene=example["scene"],
+                                   attached_objects=example["attachedObjects"])
+        self.assertEqual(blocked.outcome, "START_IN_COLLISION", blocked.message)
+        self.assertIn("'rod'", blocked.message)
+
     def test_coordinate_a_fleet_and_sample_its_knots(self) -> None:
         request = ROOT / "examples/requests/coordinate_fleet.json"
         response = self.client.coordinate(str(request))
