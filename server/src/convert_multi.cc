@@ -355,6 +355,9 @@ Reservation ReservationFromCommit(const v1::CommitTrajectoryRequest& request, Mo
     ThrowInvalid("held_positions is set without group: name the planning group the trajectory moves, "
                  "or send no held_positions");
   }
+  // What it carries occupies the workcell with it (the others plan around the load too).
+  std::vector<std::string> ignored;  // the sphere cover's reach: reported to the plan that made it
+  robot = store.Carrying(robot, request.attached_objects(), "attached_objects", &ignored);
   Reservation reservation;
   reservation.robot_name = request.robot_name();
   reservation.placement.name = request.robot_name();

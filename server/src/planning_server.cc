@@ -528,9 +528,9 @@ class PlanningService final : public RawService {
           const v1::CoordinateRequest& team = grouped.robots_size() > 0 ? grouped : request;
           CoordinationQuery query = CoordinationQueryFromProto(
               team, scene.scene,
-              [this, &held](const v1::TeamRobot& robot, const std::string& field) {
+              [this, &held, &warnings](const v1::TeamRobot& robot, const std::string& field) {
                 const auto it = held.find(field);
-                return it != held.end() ? it->second : TeamRobotOf(robot, field).model;
+                return it != held.end() ? it->second : TeamRobotOf(robot, field, &warnings).model;
               },
               registry_, &warnings, options_.max_team_robots);
           for (int k = 0; k < request.robots_size(); ++k) {
@@ -1233,7 +1233,7 @@ class PlanningService final : public RawService {
         ThrowInvalid(field + ".group = '" + robot.group() + "' cannot be combined with " + field +
                      ".pose_goal: give a joint goal");
       }
-      const StoredRobot stored = TeamRobotOf(robot, field);
+      const StoredRobot stored = TeamRobotOf(robot, field, warnings);
       const PlanningGroup& group = FindGroup(stored, robot.group(), field + ".group");
       const Eigen::VectorXd start = TakeHeldState(robot.mutable_start()->mutable_positions(), *stored.model, group,
                                                   field + ".start.positions", tolerance, warnings);
@@ -1265,12 +1265,19 @@ class PlanningService final : public RawService {
   }
 
   /// A team robot: inline (parsed and cached) or by id; errors name `field`.
-  StoredRobot TeamRobotOf(const v1::TeamRobot& robot, const std::string& field) {
+  /// A team robot as stored, carrying its attached_objects (their warnings into `warnings` when
+  /// given).
+  StoredRobot TeamRobotOf(const v1::TeamRobot& robot, const std::string& field,
+                          std::vector<std::string>* warnings = nullptr) {
+    StoredRobot stored;
     switch (robot.robot_source_case()) {
-      case v1::TeamRobot::kRobot: return store_->AddRobot(robot.robot(), field + ".robot");
-      case v1::TeamRobot::kRobotId: return store_->FindRobot(robot.robot_id());
+      case v1::TeamRobot::kRobot: stored = store_->AddRobot(robot.robot(), field + ".robot"); break;
+      case v1::TeamRobot::kRobotId: stored = store_->FindRobot(robot.robot_id()); break;
       default: ThrowInvalid(field + " has no robot: set robot or robot_id");
     }
+    std::vector<std::string> unused;
+    return store_->Carrying(stored, robot.attached_objects(), field + ".attached_objects",
+                            warnings != nullptr ? warnings : &unused);
   }
 
   /// The client's request id, or a generated "<prefix>-NNNNNN" when it sent none.

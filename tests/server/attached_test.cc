@@ -185,6 +185,41 @@ TEST_F(Attached, OptimizeAndCartesianPathsCarryItToo) {
   EXPECT_EQ(DenseCollisions(stopped.timed().trajectory(), *ExactRodChecker()), 0);
 }
 
+TEST_F(Attached, ACoordinatedRobotCarriesItToo) {
+  const auto team = [](bool carrying) {
+    v1::CoordinateRequest request;
+    *request.mutable_scene() = Block();
+    v1::TeamRobot* arm = request.add_robots();
+    arm->set_name("arm");
+    *arm->mutable_robot() = v1::RobotModel();
+    arm->mutable_robot()->mutable_urdf()->set_urdf(ReadText(ExamplePath("robots/panda.urdf")));
+    arm->mutable_robot()->mutable_urdf()->set_srdf(ReadText(ExamplePath("robots/panda.srdf")));
+    *arm->mutable_start() = Ready(0.6);
+    const v1::JointState goal = Ready(-0.6);
+    *arm->mutable_goal()->mutable_positions() = goal.positions();
+    if (carrying) *arm->add_attached_objects() = Rod();
+    request.set_seed(3);
+    request.set_time_budget(20.0);
+    return request;
+  };
+  const auto exact = ExactRodChecker();
+  for (const bool carrying : {false, true}) {
+    v1::CoordinateResponse response;
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+    const grpc::Status status = server_->stub().Coordinate(&context, team(carrying), &response);
+    ASSERT_TRUE(status.ok()) << status.error_message();
+    ASSERT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+    ASSERT_EQ(response.robots_size(), 1);
+    const int through = DenseCollisions(response.robots(0).trajectory(), *exact);
+    if (carrying) {
+      EXPECT_EQ(through, 0) << "the carried rod goes through the block";
+    } else {
+      EXPECT_GT(through, 0) << "the scenario should need the rod";
+    }
+  }
+}
+
 TEST_F(Attached, ABadObjectIsANamedError) {
   const auto expect = [](v1::PlanRequest request, const char* fragment) {
     v1::PlanResponse response;
@@ -207,6 +242,24 @@ TEST_F(Attached, ABadObjectIsANamedError) {
   request = PlanAcross(0.6, -0.6, true);
   request.mutable_attached_objects(0)->clear_boxes();
   expect(request, "attached_objects[0] has no shapes");
+  // A workcell commit reads them as well.
+  v1::CommitTrajectoryRequest commit;
+  commit.set_workcell("cell");
+  commit.set_robot_name("arm");
+  for (const double t : {0.0, 1.0}) {
+    v1::TrajectoryPoint* point = commit.mutable_trajectory()->add_points();
+    point->set_time_from_start(t);
+    *point->mutable_positions() = Ready(0.6).positions();
+    for (int i = 0; i < 7; ++i) point->add_velocities(0.0);
+  }
+  *commit.add_attached_objects() = Rod();
+  commit.mutable_attached_objects(0)->set_link("nope");
+  v1::CommitTrajectoryResponse committed;
+  grpc::ClientContext context;
+  const grpc::Status status = server_->stub().CommitTrajectory(&context, commit, &committed);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  EXPECT_NE(status.error_message().find("attached_objects[0].link = 'nope'"), std::string::npos)
+      << status.error_message();
 }
 
 }  // namespace
