@@ -1,5 +1,6 @@
 #include "chasles/robot/attached_objects.h"
 
+#include <cmath>
 #include <set>
 #include <string>
 #include <utility>
@@ -38,10 +39,20 @@ std::shared_ptr<const RobotModel> AttachObjects(const RobotModel& robot, const s
       ThrowInvalid(f + ".link = " + std::to_string(object.link) + " is not a link of robot '" + robot.name() + "'");
     }
     if (object.shapes.empty()) ThrowInvalid(f + " has no shapes: give it a box, sphere, cylinder or capsule");
+    if (!(std::isfinite(object.mass) && object.mass >= 0.0)) {
+      ThrowInvalid(f + ".mass = " + FormatNumber(object.mass) + " must be finite and >= 0 [kg]");
+    }
+    if (!object.center_of_mass.allFinite()) ThrowInvalid(f + ".center_of_mass must be finite");
     const std::string& parent = robot.links()[static_cast<std::size_t>(object.link)].name;
     Link carried;
     carried.name = object.name;
     carried.collision = object.shapes;
+    if (object.mass > 0.0) {
+      Inertial load;
+      load.mass = object.mass;
+      load.com = object.center_of_mass;
+      carried.inertial = load;
+    }
     carried.parent_joint = static_cast<int>(joints.size());
     Joint fixed;
     fixed.name = object.name + "_attachment";

@@ -469,6 +469,10 @@ std::vector<AttachedObject> AttachedObjectsFromProto(const google::protobuf::Rep
       attached.shapes.push_back(std::move(shape));
     });
     attached.touch_links.assign(object.touch_links().begin(), object.touch_links().end());
+    attached.mass = object.mass();
+    if (object.has_center_of_mass()) {
+      attached.center_of_mass = VectorFromProto(object.center_of_mass(), f + ".center_of_mass");
+    }
     out.push_back(std::move(attached));
   }
   return out;

@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include "chasles/robot/attached_objects.h"
+#include "chasles/robot/dynamics.h"
+#include "chasles/robot/kinematics.h"
 #include "chasles/robot/error.h"
 #include "test_util.h"
 
@@ -68,6 +70,33 @@ TEST(AttachObjects, KeepsTheJointsAndMovesTheObjectWithItsLink) {
   }
 }
 
+// A carried point mass m at p on a link held still needs J_p(q)ᵀ (0, 0, m·9.81) more torque (the
+// virtual work of its weight; J_p from PointJacobian, not from the dynamics code).
+TEST(AttachObjects, AMassIsHeldByTheWeightItsPointJacobianGives) {
+  const auto robot = testing::LoadExampleRobot("panda");
+  AttachedObject load = Box(*robot, "load", "panda_hand");
+  load.mass = 2.5;
+  load.center_of_mass = Eigen::Vector3d(0.02, -0.01, 0.12);
+  const auto carrying = AttachObjects(*robot, {load});
+  ASSERT_TRUE(HasInertia(*carrying));
+  std::mt19937_64 rng(5);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(robot->num_dofs());
+  for (int trial = 0; trial < 20; ++trial) {
+    Eigen::VectorXd q(robot->num_dofs());
+    for (int i = 0; i < q.size(); ++i) {
+      q[i] = std::uniform_real_distribution<double>(robot->lower_limits()[i], robot->upper_limits()[i])(rng);
+    }
+    const Eigen::VectorXd extra = InverseDynamics(*carrying, q, zero, zero) - InverseDynamics(*robot, q, zero, zero);
+    const Jacobian J = PointJacobian(*robot, q, robot->FindLink("panda_hand"), load.center_of_mass);
+    const Eigen::VectorXd weight = J.bottomRows<3>().transpose() * Eigen::Vector3d(0.0, 0.0, load.mass * 9.81);
+    EXPECT_LT((extra - weight).cwiseAbs().maxCoeff(), 1e-10) << extra.transpose() << "\n" << weight.transpose();
+  }
+  // No mass: the dynamics are the robot's.
+  const auto light = AttachObjects(*robot, {Box(*robot, "box", "panda_hand")});
+  Eigen::VectorXd q = Eigen::VectorXd::Constant(robot->num_dofs(), 0.3);
+  EXPECT_LT((InverseDynamics(*light, q, zero, zero) - InverseDynamics(*robot, q, zero, zero)).cwiseAbs().maxCoeff(), 1e-12);
+}
+
 TEST(AttachObjects, NamesTheFieldOfABadObject) {
   const auto robot = testing::LoadExampleRobot("panda");
   const auto message = [&](const std::vector<AttachedObject>& objects) {
@@ -97,6 +126,9 @@ TEST(AttachObjects, NamesTheFieldOfABadObject) {
   AttachedObject nowhere = box;
   nowhere.link = 99;
   EXPECT_EQ(message({nowhere}), "attached_objects[0].link = 99 is not a link of robot 'panda'");
+  AttachedObject heavy = box;
+  heavy.mass = -1.0;
+  EXPECT_EQ(message({heavy}), "attached_objects[0].mass = -1 must be finite and >= 0 [kg]");
 }
 
 }  // namespace

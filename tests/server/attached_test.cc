@@ -242,6 +242,9 @@ TEST_F(Attached, ABadObjectIsANamedError) {
   request = PlanAcross(0.6, -0.6, true);
   request.mutable_attached_objects(0)->clear_boxes();
   expect(request, "attached_objects[0] has no shapes");
+  request = PlanAcross(0.6, -0.6, true);
+  request.mutable_attached_objects(0)->set_mass(-1.0);
+  expect(request, "attached_objects[0].mass = -1 must be finite and >= 0 [kg]");
   // A workcell commit reads them as well.
   v1::CommitTrajectoryRequest commit;
   commit.set_workcell("cell");
