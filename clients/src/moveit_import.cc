@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 
+#include "chasles/collision/scene.h"
 #include "chasles/robot/error.h"
 #include "chasles/robot/robot_model.h"
 #include "chasles/server/convert.h"
@@ -549,13 +550,31 @@ ParsedScene ParseScene(const std::string& yaml, const RobotInfo& robot, const st
   std::map<std::string, std::string> object_paths;  // id -> path, for duplicates
   std::set<std::string> shape_names;
   if (auto world = root.Find("world")) {
+    // world.octomap (octomap_msgs/OctomapWithPose): its tree as an OctoMap of the scene, at its
+    // frame ∘ origin.
     if (auto octomap = world->Find("octomap")) {
       const std::optional<Value> map = octomap->Find("octomap");
       const std::optional<Value> data = map ? map->Find("data") : std::nullopt;
-      if (data && (data->node().IsSequence() ? data->Count() > 0 : !data->Text().empty())) {
-        data->Fail(
-            "holds an octomap: OctoMaps in a PlanningScene are not supported (save the map as a .bt file "
-            "and add it to the Chasles scene as an OctoMap)");
+      if (data && !data->node().IsSequence() && !data->Text().empty()) {
+        data->Fail("is a string: write octomap_msgs/Octomap data as a list of int8 values");
+      }
+      if (data && data->Count() > 0) {
+        std::string bytes;
+        bytes.reserve(data->Count());
+        for (const Value& item : data->Items()) bytes.push_back(static_cast<char>(item.Integer(-128, 255)));
+        const std::optional<Value> binary = map->Find("binary");
+        const std::optional<Value> id = map->Find("id");
+        const std::string file =
+            OctoMapFileFromMessage(binary ? binary->Bool() : false, id ? id->Text() : "OcTree",
+                                   map->Get("resolution").Number(), bytes, source + ": " + map->path());
+        const std::optional<Value> header = octomap->Find("header");
+        const std::optional<Value> frame_id = header ? header->Find("frame_id") : std::nullopt;
+        Eigen::Isometry3d pose = frames.Resolve(FrameOf(*octomap), frame_id ? *frame_id : *octomap);
+        if (const std::optional<Value> origin = octomap->Find("origin")) pose = pose * ReadPose(*origin);
+        v1::OctoMap* added = scene.add_octomaps();
+        added->set_name("octomap");
+        added->set_data(file);
+        PoseToProto(pose, added->mutable_pose());
       }
     }
     for (const Value& object : ListAt(*world, "collision_objects")) {

@@ -35,6 +35,9 @@
 /// - allowed_planning_time > 0 -> time_budget. planner_id, group_name, num_planning_attempts,
 ///   workspace_parameters and the velocity/acceleration scaling factors are not converted (the
 ///   caller chooses the planner and the trajectory options).
+/// - world.octomap (octomap_msgs/OctomapWithPose): its tree (binary or full data, as int8
+///   values) becomes the scene's OctoMap "octomap" at frame ∘ origin, the file built by
+///   OctoMapFileFromMessage (header with the node count it walks).
 /// - robot_state.attached_collision_objects (the scene's, then the request's start_state's; an
 ///   id given again replaces the scene's): each becomes one of the request's attached_objects —
 ///   BOX, SPHERE and CYLINDER primitives in the link's frame (an object given in another frame
@@ -42,7 +45,7 @@
 ///   scene frame as above), touch links the robot lacks dropped. ImportPlanningScene alone refuses
 ///   them (a Scene cannot carry them).
 /// Named errors: attached meshes, planes, cones, mesh resources, non-ADD operations,
-/// OctoMaps with data, position/orientation/visibility constraints, path or trajectory
+/// OctoMaps other than OcTree or with corrupt data, position/orientation/visibility constraints, path or trajectory
 /// constraints, unknown frames, malformed YAML (with line and column) and malformed values.
 
 #include <string>

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <sstream>
@@ -170,6 +171,30 @@ void Scene::AddObject(SceneObject object, const std::string& field) {
   }
   CheckPose(s.pose, field);
   objects_.push_back(std::move(object));
+}
+
+std::string OctoMapFileFromMessage(bool binary, const std::string& id, double resolution, const std::string& data,
+                                   const std::string& field) {
+  if (id != "OcTree") ThrowInvalid(field + ".id = '" + id + "': only 'OcTree' maps are supported");
+  if (!(resolution >= 1e-4 && resolution <= 1e3)) {
+    ThrowInvalid(field + ".resolution = " + FormatNumber(resolution) + " must be within [1e-4, 1e3] m");
+  }
+  if (data.empty()) ThrowInvalid(field + ".data is empty");
+  std::size_t pos = 0;
+  std::uint64_t nodes = 1, leaves = 0;
+  const bool ok = binary ? WalkBinary(data, &pos, 0, &nodes, &leaves) : WalkFull(data, &pos, 0, &nodes);
+  if (!binary) nodes -= 1;  // WalkFull counts the root itself
+  if (!ok) {
+    ThrowInvalid(field + ".data is truncated or corrupt: its " + std::string(binary ? "binary" : "full") +
+                 " node data ends early, goes deeper than 16 levels or holds a non-finite value");
+  }
+  if (pos != data.size()) {
+    ThrowInvalid(field + ".data holds " + std::to_string(data.size() - pos) + " bytes after its tree");
+  }
+  char header[160];
+  std::snprintf(header, sizeof(header), "%s\nid OcTree\nsize %llu\nres %.17g\ndata\n",
+                binary ? kBinaryHeader : kFullHeader, static_cast<unsigned long long>(nodes), resolution);
+  return header + data;
 }
 
 void Scene::AddOctoMap(const std::string& name, const std::string& bytes, const Eigen::Isometry3d& pose,

@@ -13,6 +13,8 @@
 #include <unistd.h>
 
 #include <Eigen/Geometry>
+#include <octomap/AbstractOcTree.h>
+#include <octomap/OcTree.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -306,6 +308,55 @@ TEST(MoveItScene, RobowflexLayout) {
   EXPECT_EQ(scene.allowed_collisions(0).link2(), "Table");
 }
 
+// world.octomap: the message's tree data (octomap's own writeBinaryData / writeData, made here
+// with the octomap library) becomes an OctoMap of the scene that octomap reads back with the same
+// occupied cells, at frame ∘ origin, and that the server's scene reader accepts.
+TEST(MoveItScene, TheWorldsOctomapBecomesAnOctoMap) {
+  octomap::OcTree tree(0.05);
+  for (double x = 0.4; x <= 0.6; x += 0.05) tree.updateNode(octomap::point3d(x, 0.1, 0.5), true);
+  tree.updateNode(octomap::point3d(0.5, -0.3, 0.2), false);
+  for (const bool binary : {true, false}) {
+    SCOPED_TRACE(binary ? "binary" : "full");
+    std::stringstream stream;
+    if (binary) {
+      tree.writeBinaryData(stream);
+    } else {
+      tree.writeData(stream);
+    }
+    const std::string bytes = stream.str();
+    std::string list;
+    for (const char c : bytes) list += (list.empty() ? "" : ", ") + std::to_string(static_cast<int>(static_cast<signed char>(c)));
+    std::string yaml = Replace(Data("scene_full.yaml"), "data: []", "data: [" + list + "]");
+    yaml = Replace(yaml, "binary: true", binary ? "binary: true" : "binary: false");
+    yaml = Replace(yaml, "      position: {x: 0, y: 0, z: 0}\n      orientation: {x: 0, y: 0, z: 0, w: 1}\n    octomap:",
+                   "      position: {x: 0.1, y: 0, z: 0}\n      orientation: {x: 0, y: 0, z: 0, w: 1}\n    octomap:");
+    const v1::Scene scene = ImportPlanningScene(yaml, Panda(), "scene.yaml");
+    ASSERT_EQ(scene.octomaps_size(), 1);
+    EXPECT_EQ(scene.octomaps(0).name(), "octomap");
+    EXPECT_NEAR(scene.octomaps(0).pose().position().x(), 0.1, kTight);
+    std::istringstream in(scene.octomaps(0).data());
+    std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(in));
+    std::unique_ptr<octomap::OcTree> tree_read;
+    if (binary) {
+      std::istringstream again(scene.octomaps(0).data());
+      tree_read = std::make_unique<octomap::OcTree>(0.05);
+      ASSERT_TRUE(tree_read->readBinary(again));
+    } else {
+      ASSERT_NE(read, nullptr);
+      tree_read.reset(dynamic_cast<octomap::OcTree*>(read.release()));
+      ASSERT_NE(tree_read, nullptr);
+    }
+    EXPECT_EQ(tree_read->size(), tree.size());
+    EXPECT_EQ(tree_read->getResolution(), 0.05);
+    for (double x = 0.4; x <= 0.6; x += 0.05) {
+      const octomap::OcTreeNode* node = tree_read->search(octomap::point3d(x, 0.1, 0.5));
+      ASSERT_NE(node, nullptr);
+      EXPECT_TRUE(tree_read->isNodeOccupied(node));
+    }
+    EXPECT_NO_THROW(SceneFromProto(scene, "scene"));
+  }
+}
+
 TEST(MoveItScene, EmptySceneHasNoObjects) {
   const v1::Scene scene = ImportPlanningScene("name: empty\n", Panda(), "empty.yaml");
   EXPECT_EQ(scene.ByteSizeLong(), 0u);
@@ -450,9 +501,18 @@ TEST(MoveItErrors, UnsupportedSceneContent) {
   const std::string planes = Replace(Data("scene_full.yaml"), "planes: []", "planes:\n        - coef: [0, 0, 1, 0]");
   EXPECT_NE(SceneError(planes).find("world.collision_objects[6].planes has 1 entries: planes are not supported"),
             std::string::npos);
-  const std::string octomap = Replace(Data("scene_full.yaml"), "data: []", "data: [1, 2, 3]");
-  EXPECT_NE(SceneError(octomap).find("world.octomap.octomap.data holds an octomap: OctoMaps in a PlanningScene are "
-                                     "not supported"),
+  const std::string octomap = Replace(Data("scene_full.yaml"), "data: []", "data: [1]");
+  EXPECT_NE(SceneError(octomap).find("scene.yaml: world.octomap.octomap.data is truncated or corrupt"),
+            std::string::npos);
+  EXPECT_NE(SceneError(Replace(Data("scene_full.yaml"), "data: []", "data: [1, 2, 3]"))
+                .find("scene.yaml: world.octomap.octomap.data holds 1 bytes after its tree"),
+            std::string::npos);
+  EXPECT_NE(SceneError(Replace(Data("scene_full.yaml"), "data: []", "data: [300]"))
+                .find("world.octomap.octomap.data[0] = 300 must be a whole number within [-128, 255]"),
+            std::string::npos);
+  EXPECT_NE(SceneError(Replace(Replace(Data("scene_full.yaml"), "data: []", "data: [0, 0]"), "id: OcTree",
+                               "id: ColorOcTree"))
+                .find("world.octomap.octomap.id = 'ColorOcTree': only 'OcTree' maps are supported"),
             std::string::npos);
   const std::string resource =
       Replace(Data("scene_full.yaml"), "- vertices:", "- resource: package://x/y.stl\n          vertices:");

@@ -67,6 +67,15 @@ struct PointCloudInsertionStats {
 };
 
 /// A value type; cheap to copy (shared immutable maps and meshes).
+/// The bytes of an OctoMap file holding the node data `data` of an octomap_msgs/Octomap message
+/// (`binary`: octomap's writeBinaryData, a .bt file; else writeData, a .ot file), with the header
+/// octomap's readers expect: id, resolution and the node count, counted here by walking the data
+/// (depth <= 16, every byte present) — the file Scene::AddOctoMap reads.
+/// \throws Error(kInvalidArgument) naming `field`: an id other than "OcTree", a resolution outside
+///         [1e-4, 1e3] m, data that is empty, truncated, too deep or with bytes after the tree.
+std::string OctoMapFileFromMessage(bool binary, const std::string& id, double resolution, const std::string& data,
+                                   const std::string& field);
+
 class Scene {
  public:
   /// Adds a primitive or mesh. \throws Error(kInvalidArgument) naming `field` when a dimension
