@@ -714,6 +714,82 @@ void ReadStart(const Value& root, const ParsedScene& scene, const RobotInfo& rob
   }
 }
 
+/// One position constraint and one orientation constraint on the same link -> a PoseGoal,
+/// conservatively: the position tolerance is the radius of the largest ball about the region's
+/// centre inside it (a SPHERE's radius, half a BOX's least extent, a CYLINDER's radius or half
+/// height; at most 0.1 m), the orientation tolerance the least of the three axis tolerances (at
+/// most 0.5 rad), so every pose within them is within MoveIt's region (for the rotation-vector
+/// form of its axis tolerances exactly, to first order for Euler angles).
+void ReadPoseGoal(const Value& goal, const Frames& frames, const RobotInfo& robot, v1::PoseGoal* out) {
+  const std::vector<Value> positions = ListAt(goal, "position_constraints");
+  const std::vector<Value> orientations = ListAt(goal, "orientation_constraints");
+  if (positions.size() != 1 || orientations.size() != 1) {
+    goal.Fail("has " + std::to_string(positions.size()) + " position and " + std::to_string(orientations.size()) +
+              " orientation constraints: a pose goal needs exactly one of each (on the same link)");
+  }
+  const Value& position = positions[0];
+  const Value& orientation = orientations[0];
+  const Value link_value = position.Get("link_name");
+  const std::string link = link_value.Text();
+  if (std::find(robot.link_names.begin(), robot.link_names.end(), link) == robot.link_names.end()) {
+    link_value.Fail("= '" + link + "' is not a link of the robot (" + JoinNames(robot.link_names) + ")");
+  }
+  const Value other = orientation.Get("link_name");
+  if (other.Text() != link) other.Fail("= '" + other.Text() + "' differs from the position constraint's '" + link + "'");
+  if (auto offset = position.Find("target_point_offset")) {
+    if (!ReadVector(*offset).isZero()) offset->Fail("is not supported (a point offset from the link frame): give 0");
+  }
+  const auto frame_of = [&frames](const Value& constraint) {
+    const std::optional<Value> header = constraint.Find("header");
+    const std::optional<Value> frame_id = header ? header->Find("frame_id") : std::nullopt;
+    return frames.Resolve(FrameOf(constraint), frame_id ? *frame_id : constraint);
+  };
+  const Value region = position.Get("constraint_region");
+  RejectNonEmpty(region, "meshes", "mesh regions are not supported (a SPHERE, BOX or CYLINDER is)");
+  const std::vector<Value> primitives = ListAt(region, "primitives");
+  const std::vector<Value> poses = ListAt(region, "primitive_poses");
+  if (primitives.size() != 1 || poses.size() != 1) {
+    region.Fail("has " + std::to_string(primitives.size()) + " primitives and " + std::to_string(poses.size()) +
+                " poses: a goal region here is one primitive with its pose");
+  }
+  const Value type_value = primitives[0].Get("type");
+  const long long type = ReadPrimitiveType(type_value);
+  std::vector<double> dims;
+  for (const Value& item : primitives[0].Get("dimensions").Items()) {
+    const double d = item.Number();
+    if (!(d > 0.0)) item.Fail("= " + FormatNumber(d) + " must be > 0");
+    dims.push_back(d);
+  }
+  double radius = 0.0;
+  if (type == 2 && dims.size() == 1) {
+    radius = dims[0];
+  } else if (type == 1 && dims.size() == 3) {
+    radius = 0.5 * std::min({dims[0], dims[1], dims[2]});
+  } else if (type == 3 && dims.size() == 2) {
+    radius = std::min(dims[1], 0.5 * dims[0]);
+  } else {
+    type_value.Fail("= " + std::to_string(type) + " (" + PrimitiveName(type) +
+                    ") with these dimensions is not a goal region here (a SPHERE [r], BOX [x, y, z] or CYLINDER "
+                    "[height, radius] is)");
+  }
+  double angle = std::numeric_limits<double>::infinity();
+  for (const char* key : {"absolute_x_axis_tolerance", "absolute_y_axis_tolerance", "absolute_z_axis_tolerance"}) {
+    const Value value = orientation.Get(key);
+    const double t = value.Number();
+    if (!(t > 0.0)) value.Fail("= " + FormatNumber(t) + " must be > 0");
+    angle = std::min(angle, t);
+  }
+  const Eigen::Vector3d centre = frame_of(position) * ReadPose(poses[0]).translation();
+  const Eigen::Matrix3d rotation = frame_of(orientation).linear() * ReadQuaternion(orientation.Get("orientation")).toRotationMatrix();
+  Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
+  target.translation() = centre;
+  target.linear() = rotation;
+  out->set_link(link);
+  PoseToProto(target, out->mutable_pose());
+  out->set_position_tolerance(std::min(radius, 0.1));
+  out->set_orientation_tolerance(std::min(angle, 0.5));
+}
+
 void RejectPathConstraints(const Value& root) {
   if (auto path = root.Find("path_constraints")) {
     for (const char* key :
@@ -910,53 +986,62 @@ v1::PlanRequest ImportMotionPlanRequest(const std::string& scene_yaml, const std
   }
   const Value& goal = goals[0];
   goal.RequireMap();
-  RejectNonEmpty(goal, "position_constraints", "position constraints are not supported (only joint constraints are)");
-  RejectNonEmpty(goal, "orientation_constraints",
-                 "orientation constraints are not supported (only joint constraints are)");
   RejectNonEmpty(goal, "visibility_constraints",
-                 "visibility constraints are not supported (only joint constraints are)");
-  std::map<std::string, std::pair<double, double>> targets;  // joint -> (position, tolerance)
-  const std::vector<Value> constraints = ListAt(goal, "joint_constraints");
-  const std::set<std::string> robot_joints(robot.joint_names.begin(), robot.joint_names.end());
-  for (const Value& constraint : constraints) {
-    constraint.RequireMap();
-    const Value name_value = constraint.Get("joint_name");
-    const std::string name = name_value.Text();
-    const double position = constraint.Get("position").Number();
-    double tolerance = std::numeric_limits<double>::infinity();
-    for (const char* key : {"tolerance_above", "tolerance_below"}) {
-      double t = 0.0;  // moveit_msgs default
-      if (auto value = constraint.Find(key)) {
-        t = value->Number();
-        if (t < 0.0) value->Fail("= " + FormatNumber(t) + " must be >= 0");
+                 "visibility constraints are not supported (joint constraints, or one position and one "
+                 "orientation constraint, are)");
+  // A goal region for a link (one position and one orientation constraint) is a pose goal.
+  const bool pose_goal =
+      !ListAt(goal, "position_constraints").empty() || !ListAt(goal, "orientation_constraints").empty();
+  if (pose_goal) {
+    if (!ListAt(goal, "joint_constraints").empty()) {
+      goal.Fail("mixes joint constraints with position/orientation constraints: give one kind");
+    }
+    ReadPoseGoal(goal, *scene.frames, robot, request.mutable_pose_goal());
+  }
+  if (!pose_goal) {
+    std::map<std::string, std::pair<double, double>> targets;  // joint -> (position, tolerance)
+    const std::vector<Value> constraints = ListAt(goal, "joint_constraints");
+    const std::set<std::string> robot_joints(robot.joint_names.begin(), robot.joint_names.end());
+    for (const Value& constraint : constraints) {
+      constraint.RequireMap();
+      const Value name_value = constraint.Get("joint_name");
+      const std::string name = name_value.Text();
+      const double position = constraint.Get("position").Number();
+      double tolerance = std::numeric_limits<double>::infinity();
+      for (const char* key : {"tolerance_above", "tolerance_below"}) {
+        double t = 0.0;  // moveit_msgs default
+        if (auto value = constraint.Find(key)) {
+          t = value->Number();
+          if (t < 0.0) value->Fail("= " + FormatNumber(t) + " must be >= 0");
+        }
+        tolerance = std::min(tolerance, t);
       }
-      tolerance = std::min(tolerance, t);
+      if (robot_joints.count(name) == 0) continue;  // e.g. finger joints of a MoveIt model
+      if (!targets.emplace(name, std::make_pair(position, tolerance)).second) {
+        name_value.Fail("= '" + name + "' is constrained twice");
+      }
     }
-    if (robot_joints.count(name) == 0) continue;  // e.g. finger joints of a MoveIt model
-    if (!targets.emplace(name, std::make_pair(position, tolerance)).second) {
-      name_value.Fail("= '" + name + "' is constrained twice");
+    if (targets.empty()) {
+      ThrowInvalid(request_source + ": " + goal.path() + ".joint_constraints constrain none of the robot's joints (" +
+                   JoinNames(robot.joint_names) + ")");
     }
-  }
-  if (targets.empty()) {
-    ThrowInvalid(request_source + ": " + goal.path() + ".joint_constraints constrain none of the robot's joints (" +
-                 JoinNames(robot.joint_names) + ")");
-  }
-  double tolerance = kMaxGoalTolerance;
-  v1::JointGoal* joint_goal = request.mutable_goal();
-  for (std::size_t i = 0; i < robot.joint_names.size(); ++i) {
-    const auto it = targets.find(robot.joint_names[i]);
-    if (it == targets.end()) {
-      joint_goal->add_positions(request.start().positions(static_cast<int>(i)));  // as outside the planning group
-    } else {
-      joint_goal->add_positions(it->second.first);
-      tolerance = std::min(tolerance, it->second.second);
+    double tolerance = kMaxGoalTolerance;
+    v1::JointGoal* joint_goal = request.mutable_goal();
+    for (std::size_t i = 0; i < robot.joint_names.size(); ++i) {
+      const auto it = targets.find(robot.joint_names[i]);
+      if (it == targets.end()) {
+        joint_goal->add_positions(request.start().positions(static_cast<int>(i)));  // as outside the planning group
+      } else {
+        joint_goal->add_positions(it->second.first);
+        tolerance = std::min(tolerance, it->second.second);
+      }
     }
+    joint_goal->set_tolerance(tolerance);
+    // A goal value outside a joint limit by no more than the goal's own tolerance (published
+    // Fetch goals sit µrad beyond ±π) is clamped onto the limit by the server, which reports it:
+    // bounds_tolerance (it covers the start too; capped at its 0.01 maximum).
+    if (tolerance > 0.0) request.set_bounds_tolerance(std::min(tolerance, 0.01));
   }
-  joint_goal->set_tolerance(tolerance);
-  // A goal value outside a joint limit by no more than the goal's own tolerance (published
-  // Fetch goals sit µrad beyond ±π) is clamped onto the limit by the server, which reports it:
-  // bounds_tolerance (it covers the start too; capped at its 0.01 maximum).
-  if (tolerance > 0.0) request.set_bounds_tolerance(std::min(tolerance, 0.01));
 
   RejectPathConstraints(root);
   if (auto trajectory = root.Find("trajectory_constraints")) {

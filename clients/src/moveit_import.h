@@ -38,6 +38,11 @@
 /// - world.octomap (octomap_msgs/OctomapWithPose): its tree (binary or full data, as int8
 ///   values) becomes the scene's OctoMap "octomap" at frame ∘ origin, the file built by
 ///   OctoMapFileFromMessage (header with the node count it walks).
+/// - goal_constraints: one entry, either joint constraints (below) or one position and one
+///   orientation constraint on the same link, which become a PoseGoal conservatively: position
+///   tolerance = the largest ball about the region's centre inside its one SPHERE / BOX / CYLINDER
+///   (at most 0.1 m), orientation tolerance = the least axis tolerance (at most 0.5 rad), so the
+///   pose reached is inside MoveIt's region; target_point_offset must be 0.
 /// - robot_state.attached_collision_objects (the scene's, then the request's start_state's; an
 ///   id given again replaces the scene's): each becomes one of the request's attached_objects —
 ///   BOX, SPHERE and CYLINDER primitives in the link's frame (an object given in another frame
@@ -45,7 +50,7 @@
 ///   scene frame as above), touch links the robot lacks dropped. ImportPlanningScene alone refuses
 ///   them (a Scene cannot carry them).
 /// Named errors: attached meshes, planes, cones, mesh resources, non-ADD operations,
-/// OctoMaps other than OcTree or with corrupt data, position/orientation/visibility constraints, path or trajectory
+/// OctoMaps other than OcTree or with corrupt data, visibility constraints, goal regions other than the above, path or trajectory
 /// constraints, unknown frames, malformed YAML (with line and column) and malformed values.
 
 #include <string>

@@ -559,15 +559,12 @@ TEST(MoveItErrors, FramesIdsAndShapeLists) {
 }
 
 TEST(MoveItErrors, UnsupportedGoals) {
+  // Position/orientation constraints are a pose goal, never mixed with joint constraints.
   const std::string position = Replace(Data("request_full.yaml"), "position_constraints: []",
                                        "position_constraints:\n      - link_name: panda_hand");
   EXPECT_EQ(RequestError(Data("scene_full.yaml"), position),
-            "request.yaml: goal_constraints[0].position_constraints has 1 entries: position constraints are not "
-            "supported (only joint constraints are)");
-  const std::string orientation = Replace(Data("request_full.yaml"), "orientation_constraints: []",
-                                          "orientation_constraints:\n      - link_name: panda_hand");
-  EXPECT_NE(RequestError(Data("scene_full.yaml"), orientation).find("orientation constraints are not supported"),
-            std::string::npos);
+            "request.yaml: goal_constraints[0] mixes joint constraints with position/orientation constraints: give "
+            "one kind");
   const std::string path = Replace(Data("request_full.yaml"), "joint_constraints: []",
                                    "joint_constraints:\n    - {joint_name: panda_joint1, position: 0}");
   EXPECT_NE(RequestError(Data("scene_full.yaml"), path)
@@ -596,6 +593,74 @@ TEST(MoveItErrors, UnsupportedGoals) {
       Replace(Data("request_full.yaml"), "allowed_planning_time: 2.5", "allowed_planning_time: 900");
   EXPECT_EQ(RequestError(Data("scene_full.yaml"), budget),
             "request.yaml: allowed_planning_time = 900 must be within [0, 600] s (0 = Chasles' default budget)");
+}
+
+/// request_full.yaml with its goal replaced by a region: a position constraint (`region`, one
+/// primitive at (0.4, 0.1, 0.5)) and an orientation constraint with the axis tolerances `axes`.
+std::string PoseGoalRequest(const std::string& region, const std::string& axes, const std::string& frame = "world") {
+  std::string text = Data("request_full.yaml");
+  const std::size_t at = text.find("goal_constraints:");
+  const std::size_t end = text.find("\npath_constraints:");
+  EXPECT_NE(at, std::string::npos);
+  EXPECT_NE(end, std::string::npos);
+  return text.substr(0, at) +
+         "goal_constraints:\n"
+         "  - position_constraints:\n"
+         "      - header: {frame_id: " + frame + "}\n"
+         "        link_name: panda_hand\n"
+         "        target_point_offset: {x: 0, y: 0, z: 0}\n"
+         "        constraint_region:\n"
+         "          primitives: [" + region + "]\n"
+         "          primitive_poses: [{position: [0.4, 0.1, 0.5], orientation: [0, 0, 0, 1]}]\n"
+         "    orientation_constraints:\n"
+         "      - header: {frame_id: " + frame + "}\n"
+         "        link_name: panda_hand\n"
+         "        orientation: [1, 0, 0, 0]\n" + axes + text.substr(end);
+}
+
+TEST(MoveItRequest, APositionAndOrientationRegionIsAPoseGoalWithinIt) {
+  const std::string axes =
+      "        absolute_x_axis_tolerance: 0.1\n        absolute_y_axis_tolerance: 0.05\n"
+      "        absolute_z_axis_tolerance: 3.14\n";
+  const v1::PlanRequest box =
+      ImportMotionPlanRequest(Data("scene_full.yaml"), PoseGoalRequest("{type: 1, dimensions: [0.02, 0.06, 0.04]}", axes),
+                              Panda(), "s", "r");
+  ASSERT_EQ(box.target_case(), v1::PlanRequest::kPoseGoal);
+  const v1::PoseGoal& goal = box.pose_goal();
+  EXPECT_EQ(goal.link(), "panda_hand");
+  EXPECT_NEAR(goal.pose().position().x(), 0.4, kTight);
+  EXPECT_NEAR(goal.pose().position().y(), 0.1, kTight);
+  EXPECT_NEAR(goal.pose().position().z(), 0.5, kTight);
+  EXPECT_NEAR(std::abs(goal.pose().orientation().x()), 1.0, kTight);  // pointing down
+  EXPECT_EQ(goal.position_tolerance(), 0.01);      // half the box's least extent: the ball fits inside
+  EXPECT_EQ(goal.orientation_tolerance(), 0.05);   // the least axis tolerance
+  const v1::PlanRequest sphere = ImportMotionPlanRequest(
+      Data("scene_full.yaml"), PoseGoalRequest("{type: 2, dimensions: [0.5]}", axes), Panda(), "s", "r");
+  EXPECT_EQ(sphere.pose_goal().position_tolerance(), 0.1);  // capped at PoseGoal's range
+  // In the scene's "bench" frame (0.5 m up): the centre moves with it.
+  const v1::PlanRequest bench = ImportMotionPlanRequest(
+      Data("scene_full.yaml"), PoseGoalRequest("{type: 2, dimensions: [0.01]}", axes, "bench"), Panda(), "s", "r");
+  EXPECT_NEAR(bench.pose_goal().pose().position().z(), 1.0, kTight);
+  // Named errors.
+  EXPECT_NE(RequestError(Data("scene_full.yaml"), PoseGoalRequest("{type: 4, dimensions: [0.1, 0.1]}", axes))
+                .find("is not a goal region here"),
+            std::string::npos);
+  EXPECT_NE(RequestError(Data("scene_full.yaml"),
+                         Replace(PoseGoalRequest("{type: 2, dimensions: [0.01]}", axes), "absolute_y_axis_tolerance: 0.05",
+                                 "absolute_y_axis_tolerance: 0"))
+                .find("orientation_constraints[0].absolute_y_axis_tolerance = 0 must be > 0"),
+            std::string::npos);
+  EXPECT_NE(RequestError(Data("scene_full.yaml"),
+                         Replace(PoseGoalRequest("{type: 2, dimensions: [0.01]}", axes), "target_point_offset: {x: 0, y: 0, z: 0}",
+                                 "target_point_offset: {x: 0, y: 0, z: 0.1}"))
+                .find("target_point_offset is not supported"),
+            std::string::npos);
+  const std::string no_orientation = PoseGoalRequest("{type: 2, dimensions: [0.01]}", axes);
+  const std::size_t cut = no_orientation.find("    orientation_constraints:");
+  const std::size_t resume = no_orientation.find("\npath_constraints:");
+  EXPECT_NE(RequestError(Data("scene_full.yaml"), no_orientation.substr(0, cut) + no_orientation.substr(resume + 1))
+                .find("has 1 position and 0 orientation constraints"),
+            std::string::npos);
 }
 
 TEST(MoveItErrors, MissingStartJoint) {
@@ -889,6 +954,53 @@ TEST_F(MoveItExamples, StartsAndGoalsAreClearAndEveryProblemPlans) {
     EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
     EXPECT_GT(response.trajectory().points_size(), 1);
   }
+}
+
+// request0001 with its joint goal replaced by a 4 cm box and 0.1 rad axis tolerances about the hand's
+// pose at that goal: planned through the server, the goal reached lies in MoveIt's region (checked
+// here on the box and the axis angles, not on the PoseGoal the importer made).
+TEST_F(MoveItExamples, AGoalRegionPlansIntoTheRegion) {
+  const std::string scene = testing::ReadText(ExamplesDir() + "/scene0001.yaml");
+  std::string yaml = testing::ReadText(ExamplesDir() + "/request0001.yaml");
+  const auto robot = RobotFromProto(Panda().model, "robot");
+  Eigen::VectorXd goal(7);
+  goal << -0.444, 0.176, -0.179, -1.787, 0.034, 1.96, 0.152;  // request0001's joint goal
+  std::vector<Eigen::Isometry3d> poses;
+  robot->ForwardKinematics(goal, &poses);
+  const Eigen::Isometry3d hand = poses[static_cast<std::size_t>(robot->FindLink("panda_hand"))];
+  const Eigen::Quaterniond q(hand.linear());
+  char region[1024];
+  std::snprintf(region, sizeof(region),
+                "goal_constraints:\n"
+                "  - position_constraints:\n"
+                "      - link_name: panda_hand\n"
+                "        constraint_region:\n"
+                "          primitives: [{type: 1, dimensions: [0.04, 0.04, 0.04]}]\n"
+                "          primitive_poses: [{position: [%.17g, %.17g, %.17g], orientation: [0, 0, 0, 1]}]\n"
+                "    orientation_constraints:\n"
+                "      - link_name: panda_hand\n"
+                "        orientation: [%.17g, %.17g, %.17g, %.17g]\n"
+                "        absolute_x_axis_tolerance: 0.1\n"
+                "        absolute_y_axis_tolerance: 0.1\n"
+                "        absolute_z_axis_tolerance: 0.1\n",
+                hand.translation().x(), hand.translation().y(), hand.translation().z(), q.x(), q.y(), q.z(), q.w());
+  yaml = yaml.substr(0, yaml.find("goal_constraints:")) + region;
+  v1::PlanRequest request = ImportMotionPlanRequest(scene, yaml, Panda(), "scene0001.yaml", "request.yaml");
+  ASSERT_EQ(request.target_case(), v1::PlanRequest::kPoseGoal);
+  request.set_seed(7);
+  v1::PlanResponse response;
+  const grpc::Status status = server_->Plan(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  Eigen::VectorXd reached(7);
+  for (int i = 0; i < 7; ++i) reached[i] = response.reached_goal().positions(i);
+  robot->ForwardKinematics(reached, &poses);
+  const Eigen::Isometry3d at = poses[static_cast<std::size_t>(robot->FindLink("panda_hand"))];
+  const Eigen::Vector3d offset = at.translation() - hand.translation();
+  EXPECT_LE(offset.cwiseAbs().maxCoeff(), 0.02) << offset.transpose();
+  const Eigen::Vector3d turn = Eigen::AngleAxisd(hand.linear().transpose() * at.linear()).angle() *
+                               Eigen::AngleAxisd(hand.linear().transpose() * at.linear()).axis();
+  EXPECT_LE(turn.cwiseAbs().maxCoeff(), 0.1) << turn.transpose();
 }
 
 TEST_F(MoveItExamples, TheCartesianExampleConvertsAndIsDrawnWholeThroughTheServer) {
