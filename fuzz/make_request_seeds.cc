@@ -1,7 +1,8 @@
 // fuzz_request_seeds OUT_DIR FILE.json...: each JSON request (examples/requests) as a seed of
 // fuzz_request: one selector byte, then the message's wire bytes. The message type is chosen
 // from the file name (coordinate_* = CoordinateRequest, ik_* = InverseKinematicsRequest,
-// optimize_* = OptimizeRequest, else PlanRequest); examples/robots/*.json DH/PoE/mobile files
+// optimize_* = OptimizeRequest, cartesian_* = CartesianPathRequest, else PlanRequest);
+// examples/robots/*.json DH/PoE/mobile files
 // become UploadRobotRequest seeds and examples/scenes/*.json UploadSceneRequest seeds.
 
 #include <filesystem>
@@ -66,6 +67,9 @@ int main(int argc, char** argv) {
     } else if (name.rfind("optimize_", 0) == 0) {
       message = std::make_unique<v1::OptimizeRequest>();
       selector = 1;
+    } else if (name.rfind("cartesian_", 0) == 0) {
+      message = std::make_unique<v1::CartesianPathRequest>();
+      selector = 7;
     } else {
       message = std::make_unique<v1::PlanRequest>();
       selector = 0;

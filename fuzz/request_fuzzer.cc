@@ -7,16 +7,21 @@
 //   4 UploadSceneRequest     SceneFromProto
 //   5 UpdateSceneRequest     PointCloudInsertion into the default scene (Scene::InsertPointCloud)
 //   6 InverseKinematicsRequest  robot, IkRequestFromProto (and the scene when collision_free)
+//   7 CartesianPathRequest   robot carrying its attached_objects (AttachObjects, exact shapes),
+//                            CartesianSpecFromProto, the start (ConfigurationFromProto)
 // A robot or scene given by id, or absent, is the server's default (examples/robots/panda.urdf
 // and .srdf, examples/scenes/table.json). Nothing is planned or solved: the targets are the parsers.
 
 #include <memory>
+#include <string>
+#include <vector>
 
 #include <google/protobuf/stubs/logging.h>
 #include <google/protobuf/util/json_util.h>
 
 #include "chasles/collision/collision_checker.h"
 #include "chasles/planners/registry.h"
+#include "chasles/robot/attached_objects.h"
 #include "chasles/server/convert.h"
 #include "chasles/server/convert_multi.h"
 #include "fuzz_util.h"
@@ -84,13 +89,14 @@ void Convert(int selector, std::string_view bytes) {
     case 2: {
       v1::CoordinateRequest request;
       if (!Parse(bytes, &request)) return;
+      std::vector<std::string> warnings;
       CoordinationQueryFromProto(
           request, SceneOf(request),
           [](const v1::TeamRobot& robot, const std::string& field) {
             return robot.robot_source_case() == v1::TeamRobot::kRobot ? RobotFromProto(robot.robot(), field + ".robot")
                                                                       : Server().robot;
           },
-          Server().registry);
+          Server().registry, &warnings);
       return;
     }
     case 3: {
@@ -121,6 +127,17 @@ void Convert(int selector, std::string_view bytes) {
       if (request.collision_free()) CollisionChecker checker(robot, SceneOf(request));
       return;
     }
+    case 7: {
+      v1::CartesianPathRequest request;
+      if (!Parse(bytes, &request)) return;
+      std::shared_ptr<const RobotModel> robot = RobotOf(request);
+      if (request.attached_objects_size() > 0) {
+        robot = AttachObjects(*robot, AttachedObjectsFromProto(request.attached_objects(), *robot, "attached_objects"));
+      }
+      CartesianSpecFromProto(request, *robot);
+      ConfigurationFromProto(request.start().positions(), *robot, "start.positions");
+      return;
+    }
   }
 }
 
@@ -136,6 +153,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size == 0) return 0;
   chasles::fuzz::Server();
   const std::string_view bytes(reinterpret_cast<const char*>(data) + 1, size - 1);
-  chasles::fuzz::Expect([&] { chasles::fuzz::Convert(data[0] % 7, bytes); });
+  chasles::fuzz::Expect([&] { chasles::fuzz::Convert(data[0] % 8, bytes); });
   return 0;
 }
