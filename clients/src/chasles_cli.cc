@@ -497,6 +497,7 @@ int CartesianPath(const Options& options) {
   std::printf("request     %s\n", response.request_id().c_str());
   std::printf("stop        %s\n", v1::CartesianPathResponse::Stop_Name(response.stop()).c_str());
   if (!response.message().empty()) std::printf("message     %s\n", response.message().c_str());
+  for (const std::string& warning : response.warnings()) std::printf("warning     %s\n", warning.c_str());
   std::printf("fraction    %.4f (%d of %u steps; %u waypoints reached) in %.2f ms\n", response.fraction(),
               response.path_size() - 1, response.steps(), response.waypoints_reached(), 1e3 * response.seconds());
   std::printf("pose error  %.3g m, %.3g rad at the states; line %.3g m, %.3g rad between them\n",

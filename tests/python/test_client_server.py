@@ -259,6 +259,11 @@ class ServerTest(unittest.TestCase):
         corner[:3, 3] = [first["position"]["x"], first["position"]["y"], first["position"]["z"]]
         wall = {"boxes": [{"name": "wall", "size": {"x": 0.3, "y": 0.02, "z": 0.3},
                            "pose": {"position": {"x": corner[0, 3], "y": 0.15, "z": corner[2, 3]}}}]}
+        carried = self.client.cartesian_path(START, [corner], "panda_tcp", attached_objects=[
+            {"name": "pen", "link": "panda_tcp", "touch_links": ["panda_hand"],
+             "capsules": [{"radius": 0.01, "length": 0.1}]}])
+        self.assertTrue(carried.complete, f"{carried.stop}: {carried.message}")
+        self.assertTrue(any("('pen'): covered by" in w for w in carried.warnings), carried.warnings)
         stopped = self.client.cartesian_path(START, [corner], "panda_tcp", scene=wall)
         self.assertEqual(stopped.stop, "COLLISION", stopped.message)
         self.assertGreater(stopped.fraction, 0.0)

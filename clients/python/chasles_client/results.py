@@ -249,6 +249,7 @@ class CartesianResult:
         max_line_deviation: [m] the link from the line between states (measured at 7 points a step).
         trajectory_line_deviation: [m] the link from the lines over the timed trajectory.
         timed: the states timed as ``Client.optimize`` would (None with fewer than two states).
+        warnings: what the server adjusted (e.g. attached objects covered by spheres).
     """
 
     stop: str
@@ -265,6 +266,7 @@ class CartesianResult:
     max_line_deviation: float
     trajectory_line_deviation: float
     timed: Optional[OptimizeResult]
+    warnings: List[str]
     request_id: str
     robot_id: str
     scene_id: str
@@ -289,5 +291,6 @@ class CartesianResult:
                    max_orientation_error=response.max_orientation_error,
                    max_line_deviation=response.max_line_deviation,
                    trajectory_line_deviation=response.trajectory_line_deviation, timed=timed,
+                   warnings=list(response.warnings),
                    request_id=response.request_id, robot_id=response.robot_id, scene_id=response.scene_id,
                    response=response)
