@@ -9,22 +9,13 @@
 #include "chasles/robot/error.h"
 #include "chasles/robot/inverse_kinematics.h"
 #include "chasles/robot/lie_group.h"
+#include "field_checks.h"
 
 namespace chasles {
 namespace {
 
-void CheckWithin(double value, double lo, double hi, const std::string& field) {
-  if (!(value >= lo && value <= hi)) {
-    ThrowInvalid(field + " = " + FormatNumber(value) + " must be within [" + FormatNumber(lo) + ", " +
-                 FormatNumber(hi) + "]");
-  }
-}
-
-void CheckOpen(double value, double hi, const std::string& field) {
-  if (!(value > 0.0 && value <= hi)) {
-    ThrowInvalid(field + " = " + FormatNumber(value) + " must be within (0, " + FormatNumber(hi) + "]");
-  }
-}
+using detail::CheckOpenRange;
+using detail::CheckRange;
 
 /// Rotation angle between two rotation matrices [rad].
 double AngleBetween(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) { return LogSO3(a.transpose() * b).norm(); }
@@ -66,16 +57,16 @@ void CartesianSpec::Validate(const RobotModel& robot) const {
       ThrowInvalid("waypoints[" + std::to_string(i) + "].orientation must be a rotation (a unit quaternion)");
     }
   }
-  CheckWithin(max_step, 1e-4, 0.5, "max_step");
-  CheckWithin(max_rotation_step, 1e-3, 1.0, "max_rotation_step");
-  CheckOpen(max_joint_jump, kTwoPi, "max_joint_jump");
+  CheckRange(max_step, 1e-4, 0.5, "max_step");
+  CheckRange(max_rotation_step, 1e-3, 1.0, "max_rotation_step");
+  CheckOpenRange(max_joint_jump, kTwoPi, "max_joint_jump");
   if (!(jump_threshold == 0.0 || (jump_threshold >= 1.0 && std::isfinite(jump_threshold)))) {
     ThrowInvalid("jump_threshold = " + FormatNumber(jump_threshold) + " must be 0 (off) or a finite value >= 1");
   }
-  CheckWithin(line_tolerance, 1e-5, 0.1, "line_tolerance");
-  CheckOpen(position_tolerance, 0.01, "position_tolerance");
-  CheckOpen(orientation_tolerance, 0.1, "orientation_tolerance");
-  CheckWithin(collision_resolution, 1e-4, 0.1, "collision_resolution");
+  CheckRange(line_tolerance, 1e-5, 0.1, "line_tolerance");
+  CheckOpenRange(position_tolerance, 0.01, "position_tolerance");
+  CheckOpenRange(orientation_tolerance, 0.1, "orientation_tolerance");
+  CheckRange(collision_resolution, 1e-4, 0.1, "collision_resolution");
 }
 
 Eigen::Isometry3d InterpolatePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double u) {
@@ -113,7 +104,6 @@ CartesianPathResult ComputeCartesianPath(const CollisionChecker& checker, const 
     previous = w;
   }
   out.path.push_back(start);
-  const std::string link_name = robot.links()[static_cast<std::size_t>(spec.link)].name;
   if (spec.check_collisions && !checker.IsValid(start)) {
     const CollisionResult contact = checker.Check(start);
     out.stop = CartesianStop::kStartInvalid;
@@ -254,7 +244,7 @@ double TrajectoryLineDeviation(const RobotModel& robot, const CartesianSpec& spe
       const double u = length2 > 0.0 ? std::clamp((p - corners[i]).dot(d) / length2, 0.0, 1.0) : 0.0;
       nearest = std::min(nearest, (p - (corners[i] + u * d)).norm());
     }
-    return corners.size() == 1 ? (p - corners[0]).norm() : nearest;
+    return nearest;  // spec.waypoints is not empty: at least one segment
   };
   const double duration = trajectory.duration();
   const long n = std::clamp(static_cast<long>(std::ceil(duration / 0.001)), 1L, 100000L);

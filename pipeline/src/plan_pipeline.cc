@@ -11,20 +11,18 @@
 #include "chasles/robot/error.h"
 #include "chasles/robot/inverse_kinematics.h"
 #include "chasles/robot/kinematics.h"
+#include "field_checks.h"
 
 namespace chasles {
 namespace {
+
+using detail::CheckOpenRange;
+using detail::CheckRange;
 
 using Clock = std::chrono::steady_clock;
 
 double SecondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-void CheckRange(double value, double lo, double hi, const std::string& field) {
-  if (!std::isfinite(value) || value < lo || value > hi) {
-    ThrowInvalid(field + " = " + FormatNumber(value) + " must be within [" + FormatNumber(lo) + ", " + FormatNumber(hi) + "]");
-  }
 }
 
 std::string DescribeContact(const CollisionResult& c) {
@@ -300,14 +298,9 @@ void PlanQuery::Validate(const PlannerRegistry& registry) const {
       ThrowInvalid("pose_goal.link = " + std::to_string(p.link) + " is not a link of robot '" + robot.name() + "'");
     }
     if (!p.pose.matrix().allFinite()) ThrowInvalid("pose_goal.pose must be finite");
-    const auto check_open = [](double v, double hi, const std::string& field) {
-      if (!std::isfinite(v) || v <= 0.0 || v > hi) {
-        ThrowInvalid(field + " = " + FormatNumber(v) + " must be within (0, " + FormatNumber(hi) + "]");
-      }
-    };
-    check_open(p.position_tolerance, 0.1, "pose_goal.position_tolerance");
-    check_open(p.orientation_tolerance, 0.5, "pose_goal.orientation_tolerance");
-    check_open(p.ik_time_budget, 600.0, "pose_goal.ik_time_budget");
+    CheckOpenRange(p.position_tolerance, 0.1, "pose_goal.position_tolerance");
+    CheckOpenRange(p.orientation_tolerance, 0.5, "pose_goal.orientation_tolerance");
+    CheckOpenRange(p.ik_time_budget, 600.0, "pose_goal.ik_time_budget");
     if (p.max_goal_states < 1 || p.max_goal_states > 64) {
       ThrowInvalid("pose_goal.max_goal_states = " + std::to_string(p.max_goal_states) + " must be within [1, 64]");
     }
