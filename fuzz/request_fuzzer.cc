@@ -23,6 +23,7 @@
 #include "chasles/planners/registry.h"
 #include "chasles/robot/attached_objects.h"
 #include "chasles/server/convert.h"
+#include "chasles/server/convert_cartesian.h"
 #include "chasles/server/convert_multi.h"
 #include "fuzz_util.h"
 

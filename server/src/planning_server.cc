@@ -28,6 +28,7 @@
 #include "chasles/robot/inverse_kinematics.h"
 #include "chasles/server/benchmark.h"
 #include "chasles/server/convert.h"
+#include "chasles/server/convert_cartesian.h"
 #include "chasles/server/convert_multi.h"
 #include "chasles/server/default_assets.h"
 #include "chasles/server/fleet_sessions.h"

@@ -11,7 +11,6 @@
 #include <Eigen/Geometry>
 
 #include "chasles/collision/scene.h"
-#include "chasles/pipeline/cartesian_path.h"
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/robot/attached_objects.h"
 #include "chasles/robot/descriptions.h"
@@ -157,20 +156,6 @@ void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery&
 /// `field[i]...`). \throws Error(kInvalidArgument).
 std::vector<AttachedObject> AttachedObjectsFromProto(const google::protobuf::RepeatedPtrField<v1::AttachedObject>& objects,
                                                      const RobotModel& robot, const std::string& field);
-
-/// A CartesianPathRequest's move with the proto's defaults (link, waypoints, steps, jump tests,
-/// tolerances, collision checking). \throws Error(kInvalidArgument) naming the field.
-CartesianSpec CartesianSpecFromProto(const v1::CartesianPathRequest& request, const RobotModel& robot);
-
-/// Fills stop, message, fraction, steps, waypoints_reached, joint_names, path and the pose
-/// figures of a CartesianPathResponse.
-void CartesianResultToProto(const CartesianPathResult& result, const RobotModel& robot,
-                            v1::CartesianPathResponse* response);
-
-/// The Optimize request that times a Cartesian path: the response's states as its path, the
-/// request's options (max_deviation absent = 0.001 rad), resolution, budget, gravity and padding.
-v1::OptimizeRequest CartesianTimingRequest(const v1::CartesianPathRequest& request,
-                                           const v1::CartesianPathResponse& response);
 
 /// Fills a catalogue entry.
 void PlannerSpecToProto(const PlannerSpec& spec, v1::PlannerDescription* description);
