@@ -127,6 +127,65 @@ void IkRequest::Validate(const RobotModel& robot) const {
   if (initial_guess.size() != 0) robot.ValidateConfiguration(initial_guess, "ik.initial_guess");
 }
 
+namespace {
+
+/// The joint step dq that the chain's space Jacobian J maps onto the twist error Vs (error
+/// norm e): Newton–Raphson with the pseudo-inverse J⁺ = Jᵀ (JJᵀ)⁺ (an LDLT solve when JJᵀ is well
+/// conditioned, an eigen-decomposition pseudo-inverse otherwise), or with `dls` damped least
+/// squares Jᵀ(JJᵀ + λ²I)⁻¹V, λ shrinking with the error so that the last steps are Newton steps
+/// (quadratic convergence) while large errors stay damped.
+/// A joint on a limit that the step would push further out is taken out of the step (its column
+/// of *J zeroed) and the step solved again by the others, until no joint is pushed out: clamping
+/// it instead would leave the rest of the step aimed at a motion that joint cannot make, and the
+/// attempt stalls there. *J is left with those columns zeroed.
+void JointStep(const std::vector<ChainDof>& chain, const Eigen::VectorXd& q, const Vector6d& Vs, double e, bool dls,
+               double lambda2, Eigen::Matrix<double, 6, Eigen::Dynamic>* J, Eigen::VectorXd* dq) {
+  const int k = static_cast<int>(chain.size());
+  for (int pass = 0; pass <= k; ++pass) {
+    Matrix6d G;
+    G.noalias() = *J * J->transpose();
+    Vector6d y;
+    bool solved = false;
+    if (!dls) {
+      const Eigen::LDLT<Matrix6d> ldlt(G);
+      const auto D = ldlt.vectorD();
+      if (ldlt.info() == Eigen::Success && D.minCoeff() > 1e-10 * D.maxCoeff()) {
+        y = ldlt.solve(Vs);
+        solved = true;
+      }
+    }
+    if (solved) {
+      // done
+    } else if (dls) {
+      const double l2 = lambda2 * std::min(1.0, 10.0 * e) + 1e-12;
+      G.diagonal().array() += l2;
+      y = G.ldlt().solve(Vs);
+    } else {
+      const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(G);
+      const Vector6d& ev = eig.eigenvalues();
+      const double cutoff = std::max(ev[5], 1e-300) * 1e-10;
+      const Vector6d coeff = eig.eigenvectors().transpose() * Vs;
+      Vector6d scaled;
+      for (int i = 0; i < 6; ++i) scaled[i] = ev[i] > cutoff ? coeff[i] / ev[i] : 0.0;
+      y.noalias() = eig.eigenvectors() * scaled;
+    }
+    dq->noalias() = J->transpose() * y;
+    bool blocked = false;
+    for (int j = 0; j < k; ++j) {
+      const ChainDof& c = chain[j];
+      const double x = q[c.dof];
+      if (!c.continuous && ((x <= c.lower && (*dq)[j] < 0.0) || (x >= c.upper && (*dq)[j] > 0.0)) &&
+          !J->col(j).isZero()) {
+        J->col(j).setZero();
+        blocked = true;
+      }
+    }
+    if (!blocked) return;
+  }
+}
+
+}  // namespace
+
 IkResult SolveIk(const RobotModel& robot, const IkRequest& request) {
   request.Validate(robot);
   using Clock = std::chrono::steady_clock;
@@ -252,55 +311,7 @@ IkResult SolveIk(const RobotModel& robot, const IkRequest& request) {
       // step has made the error grow (it overshot, typically near a singularity).
       if (!dls_now && e > previous_error) dls_now = true;
       previous_error = e;
-      // A joint on a limit that the step would push further out is taken out of the step (its
-      // Jacobian column zeroed) and the step solved again by the others, until no joint is
-      // pushed out: clamping it instead would leave the rest of the step aimed at a motion that
-      // joint cannot make, and the attempt stalls there.
-      for (int pass = 0; pass <= k; ++pass) {
-        Matrix6d G;
-        G.noalias() = J * J.transpose();
-        Vector6d y;
-        bool solved = false;
-        if (!dls_now) {
-          // Newton–Raphson with the pseudo-inverse J⁺ = Jᵀ (JJᵀ)⁺: an LDLT solve when JJᵀ is
-          // well conditioned, an eigen-decomposition pseudo-inverse otherwise.
-          const Eigen::LDLT<Matrix6d> ldlt(G);
-          const auto D = ldlt.vectorD();
-          if (ldlt.info() == Eigen::Success && D.minCoeff() > 1e-10 * D.maxCoeff()) {
-            y = ldlt.solve(Vs);
-            solved = true;
-          }
-        }
-        if (solved) {
-          // done
-        } else if (dls_now) {
-          // Damped least squares Jᵀ(JJᵀ + λ²I)⁻¹V; λ shrinks with the error so that the last
-          // steps are Newton steps (quadratic convergence) while large errors stay damped.
-          const double l2 = lambda2 * std::min(1.0, 10.0 * e) + 1e-12;
-          G.diagonal().array() += l2;
-          y = G.ldlt().solve(Vs);
-        } else {
-          const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(G);
-          const Vector6d& ev = eig.eigenvalues();
-          const double cutoff = std::max(ev[5], 1e-300) * 1e-10;
-          const Vector6d coeff = eig.eigenvectors().transpose() * Vs;
-          Vector6d scaled;
-          for (int i = 0; i < 6; ++i) scaled[i] = ev[i] > cutoff ? coeff[i] / ev[i] : 0.0;
-          y.noalias() = eig.eigenvectors() * scaled;
-        }
-        dq.noalias() = J.transpose() * y;
-        bool blocked = false;
-        for (int j = 0; j < k; ++j) {
-          const ChainDof& c = chain[j];
-          const double x = q[c.dof];
-          if (!c.continuous && ((x <= c.lower && dq[j] < 0.0) || (x >= c.upper && dq[j] > 0.0)) &&
-              !J.col(j).isZero()) {
-            J.col(j).setZero();
-            blocked = true;
-          }
-        }
-        if (!blocked) break;
-      }
+      JointStep(chain, q, Vs, e, dls_now, lambda2, &J, &dq);
       const double largest = k > 0 ? dq.cwiseAbs().maxCoeff() : 0.0;
       if (!(largest <= kMaxStep)) {
         if (!std::isfinite(largest)) break;
