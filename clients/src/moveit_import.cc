@@ -263,6 +263,14 @@ class Frames {
     return frame.empty() || frame == "world" || frame == "/world" || frame == root_;
   }
 
+  /// The pose in the base frame of the frame `holder` is given in (its header.frame_id, FrameOf);
+  /// errors point at that frame_id (or at the holder when it has none).
+  Eigen::Isometry3d Of(const Value& holder) const {
+    const std::optional<Value> header = holder.Find("header");
+    const std::optional<Value> frame_id = header ? header->Find("frame_id") : std::nullopt;
+    return Resolve(FrameOf(holder), frame_id ? *frame_id : holder);
+  }
+
   /// The pose of `frame` in the base frame; `where` is the header the frame came from.
   Eigen::Isometry3d Resolve(const std::string& frame, const Value& where) const {
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
@@ -524,6 +532,16 @@ void RequireAdd(const Value& object) {
            ") is not supported: a scene is read as a whole, so every object must be ADD (0)");
 }
 
+/// A collision object's `poses_key` list, one pose per shape of its `count` `shapes_key`.
+std::vector<Value> PosesFor(const Value& object, const char* shapes_key, const char* poses_key, std::size_t count) {
+  std::vector<Value> poses = ListAt(object, poses_key);
+  if (count > 0 && poses.size() != count) {
+    ThrowInvalid(object.source() + ": " + object.path() + "." + poses_key + " has " + std::to_string(poses.size()) +
+                 " poses for " + std::to_string(count) + " " + shapes_key + ": there must be one per shape");
+  }
+  return poses;
+}
+
 /// A scene's conversion and the robot state it carries.
 struct ParsedScene {
   v1::Scene scene;
@@ -567,9 +585,7 @@ ParsedScene ParseScene(const std::string& yaml, const RobotInfo& robot, const st
         const std::string file =
             OctoMapFileFromMessage(binary ? binary->Bool() : false, id ? id->Text() : "OcTree",
                                    map->Get("resolution").Number(), bytes, source + ": " + map->path());
-        const std::optional<Value> header = octomap->Find("header");
-        const std::optional<Value> frame_id = header ? header->Find("frame_id") : std::nullopt;
-        Eigen::Isometry3d pose = frames.Resolve(FrameOf(*octomap), frame_id ? *frame_id : *octomap);
+        Eigen::Isometry3d pose = frames.Of(*octomap);
         if (const std::optional<Value> origin = octomap->Find("origin")) pose = pose * ReadPose(*origin);
         v1::OctoMap* added = scene.add_octomaps();
         added->set_name("octomap");
@@ -588,9 +604,7 @@ ParsedScene ParseScene(const std::string& yaml, const RobotInfo& robot, const st
       }
       RequireAdd(object);
       RejectNonEmpty(object, "planes", "planes are not supported (use a thin BOX)");
-      const std::optional<Value> header = object.Find("header");
-      const std::optional<Value> frame_id = header ? header->Find("frame_id") : std::nullopt;
-      const Eigen::Isometry3d frame = frames.Resolve(FrameOf(object), frame_id ? *frame_id : object);
+      const Eigen::Isometry3d frame = frames.Of(object);
       const std::optional<Value> pose = object.Find("pose");
       const Eigen::Isometry3d object_pose = pose ? frame * ReadPose(*pose) : frame;
 
@@ -598,17 +612,8 @@ ParsedScene ParseScene(const std::string& yaml, const RobotInfo& robot, const st
       const std::vector<Value> meshes = ListAt(object, "meshes");
       const std::size_t total = primitives.size() + meshes.size();
       if (total == 0) object.Fail("(id '" + id + "') has no primitives and no meshes: it needs a shape");
-      auto poses_for = [&object](const char* shapes_key, const char* poses_key, std::size_t count) {
-        std::vector<Value> poses = ListAt(object, poses_key);
-        if (count > 0 && poses.size() != count) {
-          ThrowInvalid(object.source() + ": " + object.path() + "." + poses_key + " has " +
-                       std::to_string(poses.size()) + " poses for " + std::to_string(count) + " " + shapes_key +
-                       ": there must be one per shape");
-        }
-        return poses;
-      };
-      const std::vector<Value> primitive_poses = poses_for("primitives", "primitive_poses", primitives.size());
-      const std::vector<Value> mesh_poses = poses_for("meshes", "mesh_poses", meshes.size());
+      const std::vector<Value> primitive_poses = PosesFor(object, "primitives", "primitive_poses", primitives.size());
+      const std::vector<Value> mesh_poses = PosesFor(object, "meshes", "mesh_poses", meshes.size());
 
       ObjectShapes shapes{id, {}};
       for (std::size_t k = 0; k < total; ++k) {
@@ -739,11 +744,6 @@ void ReadPoseGoal(const Value& goal, const Frames& frames, const RobotInfo& robo
   if (auto offset = position.Find("target_point_offset")) {
     if (!ReadVector(*offset).isZero()) offset->Fail("is not supported (a point offset from the link frame): give 0");
   }
-  const auto frame_of = [&frames](const Value& constraint) {
-    const std::optional<Value> header = constraint.Find("header");
-    const std::optional<Value> frame_id = header ? header->Find("frame_id") : std::nullopt;
-    return frames.Resolve(FrameOf(constraint), frame_id ? *frame_id : constraint);
-  };
   const Value region = position.Get("constraint_region");
   RejectNonEmpty(region, "meshes", "mesh regions are not supported (a SPHERE, BOX or CYLINDER is)");
   const std::vector<Value> primitives = ListAt(region, "primitives");
@@ -779,8 +779,8 @@ void ReadPoseGoal(const Value& goal, const Frames& frames, const RobotInfo& robo
     if (!(t > 0.0)) value.Fail("= " + FormatNumber(t) + " must be > 0");
     angle = std::min(angle, t);
   }
-  const Eigen::Vector3d centre = frame_of(position) * ReadPose(poses[0]).translation();
-  const Eigen::Matrix3d rotation = frame_of(orientation).linear() * ReadQuaternion(orientation.Get("orientation")).toRotationMatrix();
+  const Eigen::Vector3d centre = frames.Of(position) * ReadPose(poses[0]).translation();
+  const Eigen::Matrix3d rotation = frames.Of(orientation).linear() * ReadQuaternion(orientation.Get("orientation")).toRotationMatrix();
   Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
   target.translation() = centre;
   target.linear() = rotation;
@@ -840,22 +840,15 @@ void ReadAttached(const ParsedScene& scene, const std::optional<Value>& start_st
     Eigen::Isometry3d in_link = Eigen::Isometry3d::Identity();
     if (frame != link) {
       const int frame_link = model->FindLink(frame);
-      const std::optional<Value> header = object.Find("header");
-      const std::optional<Value> frame_id = header ? header->Find("frame_id") : std::nullopt;
       const Eigen::Isometry3d frame_pose = frame_link >= 0 && !scene.frames->IsBase(frame)
                                                ? poses[static_cast<std::size_t>(frame_link)]
-                                               : scene.frames->Resolve(frame, frame_id ? *frame_id : object);
+                                               : scene.frames->Of(object);
       in_link = link_pose.inverse() * frame_pose;
     }
     if (const std::optional<Value> pose = object.Find("pose")) in_link = in_link * ReadPose(*pose);
     const std::vector<Value> primitives = ListAt(object, "primitives");
     if (primitives.empty()) object.Fail("(id '" + id + "') has no primitives: it needs a shape");
-    const std::vector<Value> primitive_poses = ListAt(object, "primitive_poses");
-    if (primitive_poses.size() != primitives.size()) {
-      ThrowInvalid(object.source() + ": " + object.path() + ".primitive_poses has " +
-                   std::to_string(primitive_poses.size()) + " poses for " + std::to_string(primitives.size()) +
-                   " primitives: there must be one per shape");
-    }
+    const std::vector<Value> primitive_poses = PosesFor(object, "primitives", "primitive_poses", primitives.size());
     v1::AttachedObject converted;
     converted.set_name(id);
     converted.set_link(link);
@@ -904,10 +897,7 @@ v1::CartesianPathRequest ImportCartesianPathRequest(const std::string& scene_yam
     request.set_link(name);
   }
   // The waypoints' frame: header.frame_id (the base for "" or absent).
-  Eigen::Isometry3d frame = Eigen::Isometry3d::Identity();
-  if (auto header = root.Find("header")) {
-    if (auto id = header->Find("frame_id")) frame = frames.Resolve(id->Text(), *id);
-  }
+  const Eigen::Isometry3d frame = frames.Of(root);
   const Value waypoints = root.Get("waypoints");
   const std::vector<Value> poses = waypoints.Items();
   if (poses.empty()) waypoints.Fail("is empty: a Cartesian path needs at least one waypoint");

@@ -335,13 +335,12 @@ TEST(MoveItScene, TheWorldsOctomapBecomesAnOctoMap) {
     EXPECT_EQ(scene.octomaps(0).name(), "octomap");
     EXPECT_NEAR(scene.octomaps(0).pose().position().x(), 0.1, kTight);
     std::istringstream in(scene.octomaps(0).data());
-    std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(in));
     std::unique_ptr<octomap::OcTree> tree_read;
     if (binary) {
-      std::istringstream again(scene.octomaps(0).data());
       tree_read = std::make_unique<octomap::OcTree>(0.05);
-      ASSERT_TRUE(tree_read->readBinary(again));
+      ASSERT_TRUE(tree_read->readBinary(in));
     } else {
+      std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(in));
       ASSERT_NE(read, nullptr);
       tree_read.reset(dynamic_cast<octomap::OcTree*>(read.release()));
       ASSERT_NE(tree_read, nullptr);
