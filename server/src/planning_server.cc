@@ -499,6 +499,7 @@ class PlanningService final : public RawService {
           const Termination termination = call.Start(BudgetEnd(settings.time_budget, call.deadline), call.deadline);
           const OptimizeOutcome outcome = OptimizePath(query, termination);
           OptimizeOutcomeToProto(outcome, query, response.mutable_timed(), request.options().knots_only());
+          const auto t_line = Clock::now();
           if (outcome.code == TrajectoryStageCode::kSuccess) {
             response.set_trajectory_line_deviation(
                 TrajectoryLineDeviation(*robot.model, spec, start, outcome.stage.trajectory));
@@ -507,7 +508,10 @@ class PlanningService final : public RawService {
           call.record.stages = {{"cartesian", response.seconds()},
                                 {"parameterize", outcome.stage.parameterize_seconds},
                                 {"optimize", outcome.stage.optimize_seconds},
-                                {"verify", outcome.stage.verify_seconds}};
+                                {"verify", outcome.stage.verify_seconds},
+                                {"quality", outcome.stage.quality_seconds},
+                                {"sample", outcome.sample_seconds},
+                                {"line_deviation", std::chrono::duration<double>(Clock::now() - t_line).count()}};
         });
   }
 
