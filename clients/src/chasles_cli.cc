@@ -349,6 +349,10 @@ void PrintOptimizer(const v1::OptimizerStatistics& o, const v1::TrajectoryQualit
               q.max_velocity_ratio(), q.max_acceleration_ratio(), q.max_jerk(),
               q.max_effort_ratio() > 0 ? (" |τ|/τmax " + std::to_string(q.max_effort_ratio())).c_str() : "",
               q.max_deviation(), clearance, q.jerk_integral());
+  if (q.max_constraint_ratio() > 0.0) {
+    std::printf("constraints max |error|/tolerance %.4f at the samples (verification checks them with the collisions)\n",
+                q.max_constraint_ratio());
+  }
 }
 
 /// Writes the response (.json) or its trajectory (.csv); prints where. False on failure.

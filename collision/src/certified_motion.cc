@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "chasles/robot/error.h"
+#include "chasles/robot/kinematics.h"
 #include "checker_impl.h"
 
 // Certified motion: the lever-arm bounds built with the checker (BuildLevers), the sweep bounds
@@ -14,13 +15,10 @@ namespace chasles {
 
 using detail::kInf;
 
-// Lever arms. A revolute joint turns everything below it about an axis through its child
-// frame's origin, so a point x moves at most |x − o| per radian of that joint; |x − o| is
-// bounded, by the triangle inequality, by the sphere centre's norm in its link frame plus the
-// norms of the joint-origin translations between that link and the joint (a prismatic joint in
-// between adds the largest |limit| to that length). A prismatic joint moves every point below
-// it by exactly |Δq|. Summing over the chain, the centre's speed is at most Σ_i R_i |q̇_i|, so
-// along any path |x(s1) − x(s0)| <= Σ_i R_i ∫|q̇_i| <= Σ_i R_i w_i (s1 − s0) when |dq_i/ds| <= w_i
+// Lever arms (PointLevers of each sphere centre). A revolute joint turns everything below it
+// about an axis through its child frame's origin, so a point x moves at most its distance from
+// the axis per radian of that joint. A prismatic joint moves every point below it by exactly
+// |Δq|. Summing over the chain, the centre's speed is at most Σ_i R_i |q̇_i|, so along any path |x(s1) − x(s0)| <= Σ_i R_i ∫|q̇_i| <= Σ_i R_i w_i (s1 − s0) when |dq_i/ds| <= w_i
 // (a straight segment a→b: w = |b − a|).
 // Mimic joints: the sum runs over the moving joints j (θ_j = m_j q_d + c_j), |θ̇_j| = |m_j| |q̇_d|,
 // so joint j adds |m_j| R_j to the bound of the dof d that drives it; a prismatic mimic joint
@@ -61,42 +59,10 @@ void CollisionChecker::Impl::BuildLevers() {
       self_pair_spheres += static_cast<std::size_t>(slinks[li].end - slinks[li].begin);
     }
   }
-  // Walking up from the sphere's link, in the child frame F of each joint J the centre is
-  // x = t + v: t the translation of the joint below (its origin in F; at the sphere's own link, t
-  // = the centre itself and v = 0), |v| <= reach (the bound on the centre's distance from that
-  // joint's origin). J turns x about its axis a through F's origin at |a × x| <= |a × t| + reach
-  // per radian: no more than the distance bound |t| + reach, and less where t runs along a (the
-  // Panda's base joint over the 0.333 m column, the hand over its flange).
   for (const SphereLink& L : slinks) {
     for (int k = L.begin; k < L.end; ++k) {
-      double* r = lever.data() + static_cast<std::size_t>(k) * num_moving;
-      Eigen::Vector3d t(sx[k], sy[k], sz[k]);
-      double reach = 0.0;
-      int link = L.link;
-      while (robot->links()[link].parent_joint >= 0) {
-        const int ji = robot->links()[link].parent_joint;
-        const Joint& j = robot->joints()[ji];
-        const int m = robot->moving_index(ji);
-        double dist = t.norm() + reach;  // bound on the centre's distance from F's origin
-        if (m >= 0) {
-          const double scale = j.mimic ? std::abs(j.mimic->multiplier) : 1.0;  // |dθ/dq|
-          if (j.type == JointType::kPrismatic) {
-            r[m] += scale;
-            // |θ| over the dof's limits (θ = m·q + c is monotone in q, also as rounded).
-            const double lo = robot->lower_limits()[j.dof], hi = robot->upper_limits()[j.dof];
-            const double travel =
-                j.mimic ? std::max(std::abs(j.mimic->multiplier * lo + j.mimic->offset),
-                                   std::abs(j.mimic->multiplier * hi + j.mimic->offset))
-                        : std::max(std::abs(lo), std::abs(hi));
-            dist += std::isfinite(travel) ? travel : kInf;
-          } else {
-            r[m] += scale * std::min(dist, j.axis.normalized().cross(t).norm() + reach);
-          }
-        }
-        t = j.origin.translation();
-        reach = dist;
-        link = j.parent_link;
-      }
+      const Eigen::VectorXd r = PointLevers(*robot, L.link, Eigen::Vector3d(sx[k], sy[k], sz[k]));
+      std::copy(r.data(), r.data() + num_moving, lever.data() + static_cast<std::size_t>(k) * num_moving);
     }
   }
   self_pair_lever_max.clear();
@@ -520,6 +486,12 @@ bool CollisionChecker::IsMotionCertified(const Eigen::VectorXd& a, const Eigen::
 bool CollisionChecker::IsCurveCertified(const Curve& curve, const Eigen::VectorXd& speed_bound,
                                         CheckCounters* counters) const {
   detail::CheckSpeedBound(*robot_, speed_bound, "speed_bound");
+  if (constraints_) {
+    std::uint64_t states = 0;
+    const bool kept = constraints_->IsCurveSatisfied(curve, speed_bound, &states);
+    if (counters != nullptr) counters->state_checks += states;
+    if (!kept) return false;
+  }
   if (impl_->certifiable) {
     // Probes first, in bisection order, until they are at most kProbeSpacing apart in every
     // joint (by the speed bound), so a curve through an obstacle is rejected here rather than by

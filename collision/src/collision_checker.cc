@@ -365,7 +365,7 @@ bool CollisionChecker::Impl::Collide(const Eigen::VectorXd& q, CollisionResult* 
 
 CollisionChecker::CollisionChecker(std::shared_ptr<const RobotModel> robot, std::shared_ptr<const Scene> scene,
                                    CollisionOptions options)
-    : robot_(std::move(robot)), scene_(std::move(scene)), impl_(std::make_unique<Impl>()) {
+    : robot_(std::move(robot)), scene_(std::move(scene)), impl_(std::make_shared<Impl>()) {
   if (!robot_) ThrowInvalid("collision checker: robot is null");
   if (!scene_) scene_ = std::make_shared<Scene>();
   options.Validate();
@@ -670,6 +670,23 @@ void CollisionChecker::Impl::GeomsNear(const detail::Box3& box, std::vector<std:
 
 CollisionChecker::~CollisionChecker() = default;
 
+std::shared_ptr<const CollisionChecker> CollisionChecker::WithPathConstraints(
+    std::shared_ptr<const CollisionChecker> base, std::shared_ptr<const PathConstraints> constraints) {
+  if (!base) ThrowInvalid("WithPathConstraints: no checker");
+  if (!constraints || constraints->empty()) return base;
+  if (constraints->robot().num_dofs() != base->robot().num_dofs()) {
+    ThrowInvalid("WithPathConstraints: the constraints are for robot '" + constraints->robot().name() + "' (" +
+                 std::to_string(constraints->robot().num_dofs()) + " joints), the checker's robot '" +
+                 base->robot().name() + "' has " + std::to_string(base->robot().num_dofs()));
+  }
+  std::shared_ptr<CollisionChecker> out(new CollisionChecker());
+  out->robot_ = base->robot_;
+  out->scene_ = base->scene_;
+  out->impl_ = base->impl_;
+  out->constraints_ = std::move(constraints);
+  return out;
+}
+
 bool CollisionChecker::uses_fast_path() const { return impl_->fast; }
 
 int CollisionChecker::num_gridded_occupancy_maps() const { return static_cast<int>(impl_->grids.size()); }
@@ -704,6 +721,7 @@ bool CollisionChecker::IsValid(const Eigen::VectorXd& q, CheckCounters* counters
   CheckSize(*robot_, q, "q");
   if (counters != nullptr) ++counters->state_checks;
   if (!detail::WithinLimits(*robot_, q)) return false;
+  if (constraints_ && !constraints_->Satisfied(q)) return false;
   return !impl_->Collide(q, nullptr);
 }
 
@@ -711,6 +729,14 @@ CollisionResult CollisionChecker::Check(const Eigen::VectorXd& q) const {
   CheckSize(*robot_, q, "q");
   CollisionResult result;
   impl_->Collide(q, &result);
+  if (!result.in_collision && constraints_) {
+    int link = -1;
+    result.violation = constraints_->Violation(q, &link);
+    if (!result.violation.empty()) {
+      result.in_collision = true;
+      result.link_a = robot_->links()[link].name;
+    }
+  }
   return result;
 }
 
@@ -728,6 +754,12 @@ bool CollisionChecker::IsMotionValid(const Eigen::VectorXd& a, const Eigen::Vect
   // power-of-two stride first, then of half that stride, and so on — a bisection order that
   // needs no queue.
   if (!IsValid(b, counters) || !IsValid(a, counters)) return false;
+  if (constraints_) {
+    std::uint64_t states = 0;
+    const bool kept = constraints_->IsSegmentSatisfied(a, b, &states);
+    if (counters != nullptr) counters->state_checks += states;
+    if (!kept) return false;
+  }
   const double span = (b - a).cwiseAbs().maxCoeff();
   if (!std::isfinite(span)) return false;
   const double steps = std::ceil(span / max_step);

@@ -105,6 +105,7 @@ class Verifier {
   /// "collision at t = … between link 'a' and 'b'" / "self-collision at t = … between link 'a'
   /// and link 'b'".
   static std::string ContactText(const CollisionResult& contact, double t) {
+    if (!contact.violation.empty()) return "path constraint broken" + At(t) + ": " + contact.violation;
     if (contact.self_collision) {
       return "self-collision" + At(t) + " between link '" + contact.link_a + "' and link '" + contact.other + "'";
     }
@@ -722,6 +723,7 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
   Eigen::MatrixXd states(n, static_cast<Eigen::Index>(count));
   Eigen::Index filled = 0;
   const bool bound_clearance = checker != nullptr && checker->certifies_motion();
+  const PathConstraints* constraints = checker != nullptr ? checker->path_constraints() : nullptr;
   const int clearance_every = std::max<int>(1, static_cast<int>(count) / 200);
   Eigen::VectorXd q(n);
   for (std::size_t p = 0; p < trajectory.pieces().size(); ++p) {
@@ -738,6 +740,7 @@ TrajectoryQuality MeasureTrajectory(const TimedTrajectory& trajectory, const Kin
         for (int j = 0; j < n; ++j) q[j] = tau == 0.0 ? c[j] : poly::Eval(c + j, size, tau, n);
       }
       states.col(filled) = q;
+      if (constraints != nullptr) out.max_constraint_ratio = std::max(out.max_constraint_ratio, constraints->WorstRatio(q));
       // Off the sphere path: the clearance at (at most about 200 of) the sampled states.
       if (checker != nullptr && !bound_clearance && (filled % clearance_every == 0 || last)) {
         out.min_clearance = std::min(out.min_clearance, checker->Clearance(q));

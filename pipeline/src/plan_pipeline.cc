@@ -26,6 +26,7 @@ double SecondsSince(Clock::time_point t0) {
 }
 
 std::string DescribeContact(const CollisionResult& c) {
+  if (!c.violation.empty()) return "it breaks " + c.violation;
   return c.self_collision ? "link '" + c.link_a + "' touches link '" + c.other + "'"
                           : "link '" + c.link_a + "' touches '" + c.other + "'";
 }
@@ -109,6 +110,12 @@ Ends CheckEnds(const PlanQuery& query, const Termination& termination, PlanOutco
     const CollisionResult contact = checker.Check(q);
     out->state_checks += 1;
     if (!contact.in_collision) return false;
+    if (!contact.violation.empty()) {
+      ends.code = code == PlanOutcomeCode::kStartInCollision ? PlanOutcomeCode::kStartViolatesConstraints
+                                                             : PlanOutcomeCode::kGoalViolatesConstraints;
+      ends.message = std::string(what) + " breaks " + contact.violation;
+      return true;
+    }
     ends.code = code;
     ends.message = std::string(what) + " is in collision: " + DescribeContact(contact);
     return true;
@@ -276,6 +283,8 @@ const char* ToString(PlanOutcomeCode code) {
     case PlanOutcomeCode::kNoPathWithinBudget: return "NO_PATH_WITHIN_BUDGET";
     case PlanOutcomeCode::kStartInCollision: return "START_IN_COLLISION";
     case PlanOutcomeCode::kGoalInCollision: return "GOAL_IN_COLLISION";
+    case PlanOutcomeCode::kStartViolatesConstraints: return "START_VIOLATES_CONSTRAINTS";
+    case PlanOutcomeCode::kGoalViolatesConstraints: return "GOAL_VIOLATES_CONSTRAINTS";
     case PlanOutcomeCode::kGoalUnreachable: return "GOAL_UNREACHABLE";
     case PlanOutcomeCode::kVerificationFailed: return "VERIFICATION_FAILED";
     case PlanOutcomeCode::kApproximateOnly: return "APPROXIMATE_ONLY";

@@ -369,6 +369,7 @@ OptimizeOutcome OptimizePath(const OptimizeQuery& query, const Termination& term
   ResolveLimits(robot, query.trajectory);  // named errors before any work
   // The user's path must be collision-free: say which segment is not, and why.
   const auto describe = [](const CollisionResult& contact) {
+    if (!contact.violation.empty()) return "it breaks " + contact.violation;
     return "link '" + contact.link_a + "' touches " + (contact.self_collision ? "link '" : "'") + contact.other + "'";
   };
   if (query.path.size() == 1 && !checker.IsValid(query.path.front())) {

@@ -18,9 +18,12 @@
 #include <utility>
 #include <vector>
 
+#include <ompl/base/ConstrainedSpaceInformation.h>
+#include <ompl/base/Constraint.h>
 #include <ompl/base/MotionValidator.h>
 #include <ompl/base/PlannerData.h>
 #include <ompl/base/ProblemDefinition.h>
+#include <ompl/base/ProjectionEvaluator.h>
 #include <ompl/base/ScopedState.h>
 #include <ompl/base/SpaceInformation.h>
 #include <ompl/base/StateValidityChecker.h>
@@ -31,6 +34,7 @@
 #include <ompl/base/spaces/DubinsStateSpace.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/base/spaces/ReedsSheppStateSpace.h>
+#include <ompl/base/spaces/constraint/ProjectedStateSpace.h>
 #include <ompl/geometric/PathGeometric.h>
 #include <ompl/geometric/planners/informedtrees/BITstar.h>
 #include <ompl/geometric/planners/prm/LazyPRMstar.h>
@@ -68,17 +72,61 @@ class SeededSampler : public ob::RealVectorStateSampler {
   }
 };
 
-/// Joint space: a bounded real vector space whose samplers draw from the request seed.
+/// Fraction of each path-constraint tolerance the planners aim for: the states they project
+/// keep a margin (tolerance/5) for the chords between them, which the checker certifies against
+/// the whole tolerance, and for the timing's blends.
+constexpr double kConstraintShrink = 0.8;
+
+/// A seeded sampler whose samples are projected onto the path constraints (tightened by
+/// kConstraintShrink); a sample that does not project is redrawn, up to 20 times (the last
+/// draw is returned as it is: the validity checker rejects it).
+class ProjectingSampler : public SeededSampler {
+ public:
+  ProjectingSampler(const ob::StateSpace* space, std::uint32_t seed, const PathConstraints* constraints)
+      : SeededSampler(space, seed), constraints_(constraints) {}
+  void sampleUniform(ob::State* state) override {
+    for (int attempt = 0; attempt < 20; ++attempt) {
+      SeededSampler::sampleUniform(state);
+      if (Project(state)) return;
+    }
+  }
+  void sampleUniformNear(ob::State* state, const ob::State* near, double distance) override {
+    SeededSampler::sampleUniformNear(state, near, distance);
+    Project(state);
+  }
+  void sampleGaussian(ob::State* state, const ob::State* mean, double std_dev) override {
+    SeededSampler::sampleGaussian(state, mean, std_dev);
+    Project(state);
+  }
+
+ private:
+  bool Project(ob::State* state) const {
+    double* v = state->as<ob::RealVectorStateSpace::StateType>()->values;
+    const int n = constraints_->robot().num_dofs();
+    Eigen::VectorXd q = Eigen::Map<const Eigen::VectorXd>(v, n);
+    const bool ok = constraints_->Project(&q, kConstraintShrink);
+    Eigen::Map<Eigen::VectorXd>(v, n) = q;
+    return ok;
+  }
+  const PathConstraints* constraints_;
+};
+
+/// Joint space: a bounded real vector space whose samplers draw from the request seed (and,
+/// with ProjectSamples, project their samples onto path constraints).
 class JointSpace : public ob::RealVectorStateSpace {
  public:
   JointSpace(unsigned int dim, std::uint64_t seed) : ob::RealVectorStateSpace(dim), seed_(seed) {}
+  /// Samplers allocated from now on project onto `constraints` (null: plain uniform samples).
+  void ProjectSamples(const PathConstraints* constraints) { project_onto_ = constraints; }
   /// As constructed with `seed`: the next sampler draws what a new space's first would.
   void Reseed(std::uint64_t seed) {
     seed_ = seed;
     counter_ = 0;
   }
   ob::StateSamplerPtr allocDefaultStateSampler() const override {
-    return std::make_shared<SeededSampler>(this, MixSeed(seed_ + 0x100 + counter_++));
+    const std::uint32_t seed = MixSeed(seed_ + 0x100 + counter_++);
+    if (project_onto_ != nullptr) return std::make_shared<ProjectingSampler>(this, seed, project_onto_);
+    return std::make_shared<SeededSampler>(this, seed);
   }
   /// No default projection: none of the planners offered here uses one (OMPL's projection
   /// planners — KPIECE, SBL, EST — are not), and registering it made every setup sample the
@@ -88,6 +136,45 @@ class JointSpace : public ob::RealVectorStateSpace {
  private:
   std::uint64_t seed_;
   mutable std::atomic<std::uint64_t> counter_{0};
+  const PathConstraints* project_onto_ = nullptr;
+};
+
+/// Path constraints as one OMPL constraint for its projected state space: F(q) = the norm of
+/// the errors' excess over kConstraintShrink·tolerance (zero inside the tightened band, as
+/// MoveIt's box constraints), projected by PathConstraints::Project.
+class ExcessConstraint : public ob::Constraint {
+ public:
+  explicit ExcessConstraint(const PathConstraints* constraints)
+      : ob::Constraint(static_cast<unsigned>(constraints->robot().num_dofs()), 1, 1e-8), constraints_(constraints) {}
+  void function(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> out) const override {
+    thread_local Eigen::VectorXd q, e;
+    q = x;
+    constraints_->Errors(q, &e);
+    out[0] = (e.cwiseAbs() - kConstraintShrink * constraints_->tolerances()).cwiseMax(0.0).norm();
+  }
+  bool project(Eigen::Ref<Eigen::VectorXd> x) const override {
+    thread_local Eigen::VectorXd q;
+    q = x;
+    const bool ok = constraints_->Project(&q, kConstraintShrink);
+    x = q;
+    return ok;
+  }
+
+ private:
+  const PathConstraints* constraints_;
+};
+
+/// The first joint with fixed 0.1 rad cells: a projection for OMPL's wrapper spaces, whose
+/// setup wraps the joint space's default projection unconditionally (and logs an error when
+/// there is none). None of our planners uses it; it costs nothing to set up (no sampling).
+class FirstJointProjection : public ob::ProjectionEvaluator {
+ public:
+  explicit FirstJointProjection(const ob::StateSpace* space) : ob::ProjectionEvaluator(space) {}
+  unsigned int getDimension() const override { return 1; }
+  void defaultCellSizes() override { cellSizes_.assign(1, 0.1); }
+  void project(const ob::State* state, Eigen::Ref<Eigen::VectorXd> projection) const override {
+    projection[0] = state->as<ob::RealVectorStateSpace::StateType>()->values[0];
+  }
 };
 
 /// Path length, with informed sampling by rejection from the space's (seeded) sampler.
@@ -115,9 +202,14 @@ double WrapAngle(double x) {
 struct StateMap {
   int n = 0;
   bool se2 = false;
+  bool constrained = false;  ///< states of a ProjectedStateSpace over the joint space
 
   void ToEigen(const ob::State* state, Eigen::VectorXd* q) const {
     q->resize(n);
+    if (constrained) {
+      *q = *state->as<ob::ConstrainedStateSpace::StateType>();
+      return;
+    }
     if (se2) {
       const auto* s = state->as<ob::SE2StateSpace::StateType>();
       (*q)[0] = s->getX();
@@ -129,6 +221,10 @@ struct StateMap {
     for (int i = 0; i < n; ++i) (*q)[i] = v[i];
   }
   void FromEigen(const Eigen::VectorXd& q, ob::State* state) const {
+    if (constrained) {
+      state->as<ob::ConstrainedStateSpace::StateType>()->copy(q);
+      return;
+    }
     if (se2) {
       auto* s = state->as<ob::SE2StateSpace::StateType>();
       s->setXY(q[0], q[1]);
@@ -268,6 +364,80 @@ class MotionChecker : public ob::MotionValidator {
   }
 
  private:
+  std::shared_ptr<const CollisionChecker> checker_;
+  double max_step_;
+  StateMap map_;
+  std::atomic<std::uint64_t>* checks_;
+};
+
+/// Motions in OMPL's projected state space (path constraints): the discrete geodesic from s1
+/// towards s2 (steps of the space's delta, each projected onto the tightened constraints) must
+/// reach s2, and each chord between its consecutive states must pass the checker — certified,
+/// with the constraints over the whole chord, when checker->certifies_motion(). The returned
+/// path is made of the same chords (GeodesicStates), so what was checked is what is returned.
+class GeodesicMotionChecker : public ob::MotionValidator {
+ public:
+  GeodesicMotionChecker(const ob::SpaceInformationPtr& si, std::shared_ptr<const CollisionChecker> checker,
+                        double max_step, StateMap map, std::atomic<std::uint64_t>* checks)
+      : ob::MotionValidator(si), checker_(std::move(checker)), max_step_(max_step), map_(map), checks_(checks) {}
+
+  bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
+    std::pair<ob::State*, double> unused(nullptr, 0.0);
+    return checkMotion(s1, s2, unused);
+  }
+
+  bool checkMotion(const ob::State* s1, const ob::State* s2,
+                   std::pair<ob::State*, double>& last_valid) const override {
+    std::vector<Eigen::VectorXd> states;
+    bool ok = GeodesicStates(*si_, map_, s1, s2, &states);
+    std::size_t k = 0;
+    for (; ok && k + 1 < states.size(); ++k) {
+      CheckCounters counters;
+      ok = checker_->certifies_motion() ? checker_->IsMotionCertified(states[k], states[k + 1], &counters)
+                                        : checker_->IsMotionValid(states[k], states[k + 1], max_step_, &counters);
+      checks_->fetch_add(counters.state_checks, std::memory_order_relaxed);
+      if (!ok) break;
+    }
+    if (!ok) {
+      if (last_valid.first != nullptr) {
+        if (states.empty()) {
+          si_->copyState(last_valid.first, s1);
+        } else {
+          map_.FromEigen(states[k], last_valid.first);
+        }
+      }
+      last_valid.second = states.size() > 1 ? static_cast<double>(k) / static_cast<double>(states.size() - 1) : 0.0;
+    }
+    ok ? ++valid_ : ++invalid_;
+    return ok;
+  }
+
+  /// The states of the discrete geodesic s1 → s2 (s1 first, s2 last) in *states; false when it
+  /// does not reach s2.
+  static bool GeodesicStates(const ob::SpaceInformation& si, const StateMap& map, const ob::State* s1,
+                             const ob::State* s2, std::vector<Eigen::VectorXd>* states) {
+    const auto& space = *si.getStateSpace()->as<ob::ProjectedStateSpace>();
+    std::vector<ob::State*> geodesic;
+    const bool reached = space.discreteGeodesic(s1, s2, true, &geodesic);
+    states->clear();
+    for (ob::State* g : geodesic) {
+      Eigen::VectorXd q;
+      map.ToEigen(g, &q);
+      states->push_back(std::move(q));
+      space.freeState(g);
+    }
+    if (!reached) return false;
+    Eigen::VectorXd end;
+    map.ToEigen(s2, &end);
+    Eigen::VectorXd start;
+    map.ToEigen(s1, &start);
+    if (states->empty() || states->front() != start) states->insert(states->begin(), std::move(start));
+    if (states->back() != end) states->push_back(std::move(end));
+    return true;
+  }
+
+ private:
+
   std::shared_ptr<const CollisionChecker> checker_;
   double max_step_;
   StateMap map_;
@@ -425,6 +595,19 @@ ParameterSpec RewireParam() {
   return {"rewire_factor", "multiplier of the optimal rewiring radius / neighbour count [-]",
           ParameterType::kDouble, 1.1, 1.0, 10.0};
 }
+ParameterSpec ConstrainedSpaceParam() {
+  return {"constrained_space",
+          "with path constraints: 1 = plan in OMPL's projected state space (steps follow the constraints), 0 = in the "
+          "joint space with samples projected onto them (straight steps must stay within the tolerances); ignored "
+          "without path constraints",
+          ParameterType::kBool, 1.0, 0.0, 1.0};
+}
+ParameterSpec ConstraintDeltaParam() {
+  return {"constraint_delta",
+          "with path constraints in the projected space: the step along the constraints between projected states "
+          "(Euclidean joint distance) [rad]",
+          ParameterType::kDouble, 0.05, 0.001, 1.0};
+}
 ParameterSpec IterationsParam() {
   return {"max_iterations",
           "stop after this many termination checks (about one per iteration); 0 = run to the time budget. "
@@ -452,9 +635,16 @@ class OmplPlanner : public Planner {
 
     map_.n = n;
     map_.se2 = IsCar(robot.kind());
+    const PathConstraints* constraints = problem.checker->path_constraints();
+    if (constraints != nullptr && map_.se2) {
+      ThrowInvalid("path_constraints: planner '" + spec_.id + "' plans a car's path along its curves, which cannot "
+                   "follow path constraints; plan for a car without them");
+    }
+    const bool projected_space = constraints != nullptr && params.at("constrained_space") != 0.0;
+    map_.constrained = projected_space;
     const std::uint32_t seed = MixSeed(problem.seed);
     max_iterations_ = static_cast<std::uint64_t>(params.count("max_iterations") ? params.at("max_iterations") : 0);
-    if (kind_ == Kind::kRrtConnect && !map_.se2 && t_reusable_rrt_connect &&
+    if (kind_ == Kind::kRrtConnect && !map_.se2 && constraints == nullptr && t_reusable_rrt_connect &&
         t_reusable_rrt_connect->Fits(robot, params.at("range"))) {
       reused_ = std::move(t_reusable_rrt_connect);
       reused_->space->Reseed(problem.seed);
@@ -494,8 +684,20 @@ class OmplPlanner : public Planner {
       }
       joints->setBounds(bounds);
       space = joints;
+      if (constraints != nullptr && !projected_space) joints->ProjectSamples(constraints);
     }
-    si_ = std::make_shared<ob::SpaceInformation>(space);
+    if (projected_space) {
+      // OMPL's projected state space over the joint space: samples and steps (delta) projected
+      // onto the tightened constraints; ConstrainedSpaceInformation ties the space to si_.
+      constraint_ = std::make_shared<ExcessConstraint>(constraints);
+      space->registerDefaultProjection(std::make_shared<FirstJointProjection>(space.get()));
+      auto projected = std::make_shared<ob::ProjectedStateSpace>(space, constraint_);
+      projected->setDelta(params.at("constraint_delta"));
+      space = projected;
+      si_ = std::make_shared<ob::ConstrainedSpaceInformation>(projected);
+    } else {
+      si_ = std::make_shared<ob::SpaceInformation>(space);
+    }
     AttachChecker(problem);
     DefineProblem(problem);
 
@@ -540,7 +742,7 @@ class OmplPlanner : public Planner {
         auto p = std::make_shared<CountedRrtConnect>(si_, seed);
         if (params.at("range") > 0) p->setRange(params.at("range"));
         rrt_connect_ = p.get();
-        if (!map_.se2) {  // kept for the thread's next request (a car's SE(2) space is built anew)
+        if (!map_.se2 && constraints == nullptr) {  // kept for the thread's next request (a car's SE(2) space is built anew)
           reused_ = std::make_unique<ReusableRrtConnect>(
               ReusableRrtConnect{robot.lower_limits(), robot.upper_limits(), params.at("range"),
                                  std::static_pointer_cast<JointSpace>(space), si_, p});
@@ -588,6 +790,17 @@ class OmplPlanner : public Planner {
     const bool approximate = status == ob::PlannerStatus::APPROXIMATE_SOLUTION;
     if (exact && map_.se2) {
       FinishCarPath(*pdef_->getSolutionPath()->as<og::PathGeometric>(), &result);
+    } else if (exact && map_.constrained) {
+      // Consecutive states are joined by discrete geodesics, whose chords the motion checks
+      // certified: return those chords' states.
+      const std::vector<ob::State*>& states = pdef_->getSolutionPath()->as<og::PathGeometric>()->getStates();
+      map_.ToEigen(states.front(), &result.path.emplace_back());
+      for (std::size_t k = 0; k + 1 < states.size(); ++k) {
+        std::vector<Eigen::VectorXd> geodesic;
+        GeodesicMotionChecker::GeodesicStates(*si_, map_, states[k], states[k + 1], &geodesic);
+        result.path.insert(result.path.end(), geodesic.begin() + 1, geodesic.end());
+      }
+      FinishAtGoal(&result);
     } else if (exact) {
       for (const ob::State* s : pdef_->getSolutionPath()->as<og::PathGeometric>()->getStates()) {
         Eigen::VectorXd q;
@@ -638,6 +851,8 @@ class OmplPlanner : public Planner {
     planner_.reset();
     pdef_.reset();
     si_.reset();
+    constraint_.reset();
+    map_.constrained = false;
     checks_.store(0);
   }
 
@@ -645,7 +860,10 @@ class OmplPlanner : public Planner {
   /// Validity and motion checks of si_ by the problem's checker; sets si_ up.
   void AttachChecker(const PlanningProblem& problem) {
     si_->setStateValidityChecker(std::make_shared<ValidityChecker>(si_, problem.checker, map_, &checks_));
-    if (map_.se2) {
+    if (map_.constrained) {
+      si_->setMotionValidator(
+          std::make_shared<GeodesicMotionChecker>(si_, problem.checker, problem.max_step, map_, &checks_));
+    } else if (map_.se2) {
       si_->setMotionValidator(std::make_shared<CarMotionChecker>(si_, problem.checker, problem.max_step,
                                                                  problem.checker->robot().motion().turning_radius,
                                                                  map_, &checks_));
@@ -884,6 +1102,7 @@ class OmplPlanner : public Planner {
   std::unique_ptr<ReusableRrtConnect> reused_;      // its objects, to keep for the thread's next request
   std::uint64_t max_iterations_ = 0;
   StateMap map_;
+  std::shared_ptr<ExcessConstraint> constraint_;  ///< with path constraints in the projected space
   mutable std::atomic<std::uint64_t> checks_{0};
 };
 
@@ -898,6 +1117,8 @@ void Add(PlannerRegistry* registry, Kind kind, PlannerSpec spec) {
   if (tree) spec.robot_kinds.push_back(RobotKind::kDubinsCar);
   spec.refusal_reason = "its roadmap joins states in both directions, but a Dubins car's curve from a to b is not "
                         "the reverse of its curve from b to a";
+  spec.parameters.push_back(ConstrainedSpaceParam());
+  spec.parameters.push_back(ConstraintDeltaParam());
   PlannerSpec copy = spec;
   registry->Register(std::move(spec), [kind, copy] { return std::make_unique<OmplPlanner>(kind, copy); });
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <Eigen/Cholesky>
@@ -109,6 +110,57 @@ bool IsSingular(const Jacobian& J, double tolerance) {
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J);
   const Eigen::VectorXd& s = svd.singularValues();  // min(6, n) values, descending
   return s[s.size() - 1] < tolerance;
+}
+
+Eigen::VectorXd PointLevers(const RobotModel& robot, int link, const Eigen::Vector3d& point) {
+  if (link < 0 || link >= robot.num_links()) {
+    ThrowInvalid("PointLevers: link = " + std::to_string(link) + " must be within [0, " +
+                 std::to_string(robot.num_links() - 1) + "]");
+  }
+  // Walking up from the point's link, in the child frame F of each joint J the point is
+  // x = t + v: t the translation of the joint below (its origin in F; at the point's own link,
+  // t = the point and v = 0), |v| <= reach. J turns x about its axis a through F's origin at
+  // |a × x| <= |a × t| + reach per radian, never more than the distance bound |t| + reach.
+  Eigen::VectorXd levers = Eigen::VectorXd::Zero(robot.num_moving_joints());
+  Eigen::Vector3d t = point;
+  double reach = 0.0;
+  for (int l = link; robot.links()[l].parent_joint >= 0;) {
+    const int ji = robot.links()[l].parent_joint;
+    const Joint& j = robot.joints()[ji];
+    const int m = robot.moving_index(ji);
+    double dist = t.norm() + reach;  // bound on the point's distance from F's origin
+    if (m >= 0) {
+      const double scale = j.mimic ? std::abs(j.mimic->multiplier) : 1.0;  // |dθ/dq|
+      if (j.type == JointType::kPrismatic) {
+        levers[m] += scale;
+        // |θ| over the dof's limits (θ = m·q + c is monotone in q, also as rounded).
+        const double lo = robot.lower_limits()[j.dof], hi = robot.upper_limits()[j.dof];
+        const double travel = j.mimic ? std::max(std::abs(j.mimic->multiplier * lo + j.mimic->offset),
+                                                 std::abs(j.mimic->multiplier * hi + j.mimic->offset))
+                                      : std::max(std::abs(lo), std::abs(hi));
+        dist += std::isfinite(travel) ? travel : std::numeric_limits<double>::infinity();
+      } else {
+        levers[m] += scale * std::min(dist, j.axis.normalized().cross(t).norm() + reach);
+      }
+    }
+    t = j.origin.translation();
+    reach = dist;
+    l = j.parent_link;
+  }
+  return levers;
+}
+
+Eigen::VectorXd AngularLevers(const RobotModel& robot, int link) {
+  if (link < 0 || link >= robot.num_links()) {
+    ThrowInvalid("AngularLevers: link = " + std::to_string(link) + " must be within [0, " +
+                 std::to_string(robot.num_links() - 1) + "]");
+  }
+  Eigen::VectorXd levers = Eigen::VectorXd::Zero(robot.num_moving_joints());
+  for (const int m : robot.link_chain(link)) {
+    const Joint& j = robot.joints()[robot.moving_joint(m)];
+    if (j.type != JointType::kPrismatic) levers[m] = std::abs(j.multiplier());
+  }
+  return levers;
 }
 
 }  // namespace chasles

@@ -240,24 +240,56 @@ std::string ProtoContentId(const google::protobuf::Message& message) {
   return ContentId(message.GetTypeName() + '\0' + bytes);
 }
 
-Eigen::Isometry3d PoseFromProto(const v1::Pose& pose, const std::string& field) {
-  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  out.translation() = VectorFromProto(pose.position(), field + ".position");
-  const v1::Quaternion& q = pose.orientation();
-  const std::string qfield = field + ".orientation";
-  RequireFinite(q.x(), qfield + ".x");
-  RequireFinite(q.y(), qfield + ".y");
-  RequireFinite(q.z(), qfield + ".z");
-  RequireFinite(q.w(), qfield + ".w");
-  if (q.x() == 0.0 && q.y() == 0.0 && q.z() == 0.0 && q.w() == 0.0) return out;  // identity
+Eigen::Quaterniond QuaternionFromProto(const v1::Quaternion& q, const std::string& field) {
+  RequireFinite(q.x(), field + ".x");
+  RequireFinite(q.y(), field + ".y");
+  RequireFinite(q.z(), field + ".z");
+  RequireFinite(q.w(), field + ".w");
+  if (q.x() == 0.0 && q.y() == 0.0 && q.z() == 0.0 && q.w() == 0.0) return Eigen::Quaterniond::Identity();
   Eigen::Quaterniond quat(q.w(), q.x(), q.y(), q.z());
   const double norm = quat.norm();
   if (std::abs(norm - 1.0) > 1e-3) {
-    ThrowInvalid(qfield + " has norm " + FormatNumber(norm) +
+    ThrowInvalid(field + " has norm " + FormatNumber(norm) +
                  ", must be a unit quaternion (norm 1 within 1e-3) or all zero for identity");
   }
-  out.linear() = quat.normalized().toRotationMatrix();
+  return quat.normalized();
+}
+
+Eigen::Isometry3d PoseFromProto(const v1::Pose& pose, const std::string& field) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.translation() = VectorFromProto(pose.position(), field + ".position");
+  out.linear() = QuaternionFromProto(pose.orientation(), field + ".orientation").toRotationMatrix();
   return out;
+}
+
+std::shared_ptr<const PathConstraints> PathConstraintsFromProto(const v1::PathConstraints& constraints,
+                                                                std::shared_ptr<const RobotModel> robot,
+                                                                const std::string& field) {
+  std::vector<OrientationConstraintSpec> orientation;
+  for (int i = 0; i < constraints.orientation_size(); ++i) {
+    const v1::OrientationConstraint& c = constraints.orientation(i);
+    const std::string f = Indexed(field + ".orientation", i);
+    OrientationConstraintSpec spec;
+    spec.link = LinkFromProto(*robot, c.link(), f + ".link");
+    spec.orientation = QuaternionFromProto(c.orientation(), f + ".orientation");
+    spec.tolerance = VectorFromProto(c.tolerance(), f + ".tolerance");
+    spec.parameterization = c.parameterization() == v1::OrientationConstraint::ROTATION_VECTOR
+                                ? OrientationParameterization::kRotationVector
+                                : OrientationParameterization::kXyzEulerAngles;
+    orientation.push_back(spec);
+  }
+  std::vector<PositionConstraintSpec> position;
+  for (int i = 0; i < constraints.position_size(); ++i) {
+    const v1::PositionConstraint& c = constraints.position(i);
+    const std::string f = Indexed(field + ".position", i);
+    PositionConstraintSpec spec;
+    spec.link = LinkFromProto(*robot, c.link(), f + ".link");
+    spec.point = VectorFromProto(c.point(), f + ".point");
+    spec.region = PoseFromProto(c.region(), f + ".region");
+    spec.half_extents = VectorFromProto(c.half_extents(), f + ".half_extents");
+    position.push_back(spec);
+  }
+  return std::make_shared<const PathConstraints>(std::move(robot), std::move(orientation), std::move(position), field);
 }
 
 DhDescription DhFromProto(const v1::DhRobot& dh, const std::string& field) {
@@ -691,6 +723,10 @@ PlanQuery PlanQueryFromProto(const v1::PlanRequest& request, std::shared_ptr<con
   const RobotModel& robot = checker->robot();
   PlanQuery query;
   query.checker = std::move(checker);
+  if (request.has_path_constraints()) {
+    query.checker = CollisionChecker::WithPathConstraints(
+        query.checker, PathConstraintsFromProto(request.path_constraints(), query.checker->robot_ptr(), "path_constraints"));
+  }
 
   // Budget: 0 = 5 s, else (0, 600].
   double budget = request.time_budget();
@@ -867,6 +903,7 @@ void QualityToProto(const TrajectoryQuality& quality, v1::TrajectoryQuality* out
   out->set_min_clearance(std::isfinite(quality.min_clearance) ? quality.min_clearance
                                                               : std::numeric_limits<double>::max());
   out->set_jerk_integral(quality.jerk_integral);
+  out->set_max_constraint_ratio(quality.max_constraint_ratio);
 }
 
 void OptimizerToProto(const OptimizerSummary& summary, v1::OptimizerStatistics* out) {
@@ -1051,6 +1088,8 @@ v1::PlanOutcome OutcomeToProto(PlanOutcomeCode code) {
     case PlanOutcomeCode::kNoPathWithinBudget: return v1::NO_PATH_WITHIN_BUDGET;
     case PlanOutcomeCode::kStartInCollision: return v1::START_IN_COLLISION;
     case PlanOutcomeCode::kGoalInCollision: return v1::GOAL_IN_COLLISION;
+    case PlanOutcomeCode::kStartViolatesConstraints: return v1::START_VIOLATES_CONSTRAINTS;
+    case PlanOutcomeCode::kGoalViolatesConstraints: return v1::GOAL_VIOLATES_CONSTRAINTS;
     case PlanOutcomeCode::kGoalUnreachable: return v1::GOAL_UNREACHABLE;
     case PlanOutcomeCode::kVerificationFailed: return v1::VERIFICATION_FAILED;
     case PlanOutcomeCode::kApproximateOnly: return v1::APPROXIMATE_ONLY;

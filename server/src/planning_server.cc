@@ -1137,6 +1137,10 @@ class PlanningService final : public RawService {
     call.record.fields.push_back({"scene", IdPrefix(scene.id)});
     const double padding = PaddingFromProto(request.padding(), "padding");
     if (request.has_workcell()) {
+      if (request.has_path_constraints()) {
+        ThrowInvalid("path_constraints are not supported with workcell (a workcell plan is coordinated in space-time "
+                     "without them); plan without workcell, or without path_constraints");
+      }
       if (padding != 0.0) {
         ThrowInvalid("padding = " + FormatNumber(padding) +
                      " is not supported with workcell (a workcell plan is coordinated without robot padding); "
@@ -1190,6 +1194,11 @@ class PlanningService final : public RawService {
       exact.id = robot.id + "/exact";
       exact.model = robot.exact;
       std::shared_ptr<const CollisionChecker> exact_checker = store_->Checker(exact, scene, padding);
+      if (const PathConstraints* constraints = query.checker->path_constraints()) {
+        exact_checker = CollisionChecker::WithPathConstraints(
+            exact_checker, std::make_shared<const PathConstraints>(exact.model, constraints->orientation(),
+                                                                   constraints->position(), "path_constraints"));
+      }
       if (exact_checker->IsValid(query.start) && (query.pose_goal || exact_checker->IsValid(query.goal))) {
         settings.warnings.push_back(
             std::string(outcome.code == PlanOutcomeCode::kStartInCollision ? "start" : "goal") +

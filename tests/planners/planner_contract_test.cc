@@ -275,7 +275,7 @@ TEST(ParameterTest, ResolveFillsDefaultsAndRejectsBadValues) {
   EXPECT_EQ(message(rrt, {{"goal_bias", 1.5}}),
             "planner.parameters['goal_bias'] = 1.5 must be within [0, 1] (planner 'rrt')");
   EXPECT_EQ(message(rrt, {{"foo", 1}}),
-            "planner.parameters['foo'] is not a parameter of planner 'rrt' (known: range, goal_bias)");
+            "planner.parameters['foo'] is not a parameter of planner 'rrt' (known: range, goal_bias, constrained_space, constraint_delta)");
   EXPECT_EQ(message(registry.Spec("prm"), {{"max_nearest_neighbors", 2.5}}),
             "planner.parameters['max_nearest_neighbors'] = 2.5 must be an integer");
   EXPECT_EQ(message(rrt, {{"range", std::nan("")}}), "planner.parameters['range'] = nan must be finite");

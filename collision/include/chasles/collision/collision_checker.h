@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include "chasles/collision/scene.h"
+#include "chasles/robot/path_constraints.h"
 #include "chasles/robot/robot_model.h"
 
 namespace chasles {
@@ -46,6 +47,10 @@ struct CollisionResult {
   bool self_collision = false;   ///< the first contact found is robot–robot
   std::string link_a;            ///< first contact: a robot link
   std::string other;             ///< the other link, or the scene object / occupancy map name
+  /// Set (with in_collision) when the state is free but breaks a path constraint of a checker
+  /// made by WithPathConstraints: PathConstraints::Violation (which constraint, error and
+  /// tolerance); link_a is then the constrained link and `other` is empty.
+  std::string violation;
 };
 
 /// Per-caller counters (not shared between threads, so no contention).
@@ -68,6 +73,16 @@ class CollisionChecker {
   CollisionChecker(std::shared_ptr<const RobotModel> robot, std::shared_ptr<const Scene> scene,
                    CollisionOptions options = {});
   ~CollisionChecker();
+
+  /// `base` that also requires `constraints` at every state: IsValid, Check, IsMotionValid,
+  /// IsMotionCertified and IsCurveCertified reject a state or motion that leaves them (motions
+  /// certified along their continuous path, PathConstraints::IsCurveSatisfied, whether or not
+  /// collisions are certified). Shares base's geometry (no rebuild); Clearance is base's.
+  /// \throws Error(kInvalidArgument) when `constraints` are for a robot with another number of joints.
+  static std::shared_ptr<const CollisionChecker> WithPathConstraints(std::shared_ptr<const CollisionChecker> base,
+                                                                     std::shared_ptr<const PathConstraints> constraints);
+  /// The path constraints every check applies (null: none).
+  const PathConstraints* path_constraints() const { return constraints_.get(); }
   CollisionChecker(const CollisionChecker&) = delete;
   CollisionChecker& operator=(const CollisionChecker&) = delete;
 
@@ -191,7 +206,9 @@ class CollisionChecker {
   struct Impl;
   std::shared_ptr<const RobotModel> robot_;
   std::shared_ptr<const Scene> scene_;
-  std::unique_ptr<Impl> impl_;
+  std::shared_ptr<Impl> impl_;  // shared by the checkers WithPathConstraints makes
+  std::shared_ptr<const PathConstraints> constraints_;
+  CollisionChecker() = default;
 };
 
 }  // namespace chasles

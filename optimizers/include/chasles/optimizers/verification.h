@@ -114,6 +114,10 @@ struct TrajectoryQuality {
   /// true minimum.
   double min_clearance = 0.0;
   double jerk_integral = 0.0;           ///< ∫‖q⃛‖² dt over the pieces (exact) [rad²/s⁵]
+  /// With a checker that has path constraints: the largest PathConstraints::WorstRatio (|error| /
+  /// tolerance) over the sampled states, <= 1 when each keeps them; 0 without constraints.
+  /// Verification certifies them along the whole motion; this says how close the path came.
+  double max_constraint_ratio = 0.0;
 };
 
 /// Measures `trajectory` against the limits and the input `path` (may be empty: deviation 0),

@@ -42,7 +42,10 @@ void SetPoseGoalIk(const PoseGoalSpec& goal, double seconds_left, IkRequest* ik)
 
 /// One planning query in domain types. Defaults match the proto documentation.
 struct PlanQuery {
-  std::shared_ptr<const CollisionChecker> checker;  ///< robot + scene
+  /// robot + scene; with path constraints (CollisionChecker::WithPathConstraints) every stage
+  /// keeps them: the planners plan on them, shortcuts and timing are checked, and verification
+  /// certifies them along the trajectory.
+  std::shared_ptr<const CollisionChecker> checker;
   Eigen::VectorXd start;
   Eigen::VectorXd goal;                ///< joint goal; ignored when pose_goal is set
   std::optional<PoseGoalSpec> pose_goal;  ///< set: the goal is a link pose (IK before planning)
@@ -86,6 +89,8 @@ enum class PlanOutcomeCode {
   kDeadlineExceeded,
   kLocalMinimum,      ///< a descent planner (potential field) stopped in a local minimum
   kInfeasibleLimits,  ///< the trajectory limits cannot be met (max_effort below what gravity needs)
+  kStartViolatesConstraints,  ///< the start breaks a path constraint of the checker
+  kGoalViolatesConstraints,   ///< the joint goal breaks a path constraint of the checker
 };
 const char* ToString(PlanOutcomeCode code);
 

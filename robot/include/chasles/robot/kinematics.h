@@ -28,6 +28,21 @@ Jacobian BodyJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int lin
 Jacobian PointJacobian(const RobotModel& robot, const Eigen::VectorXd& q, int link,
                        const Eigen::Vector3d& point);
 
+/// Lever arms of a point fixed on `link` (`point` in the link frame), one per moving joint m
+/// (RobotModel::num_moving_joints()): over ALL configurations, the point moves at most
+/// levers[m] [m] per unit of the coordinate that drives m (|dθ_m/dq| = |multiplier| included),
+/// so |ṗ| <= Σ_m levers[m]·|q̇_dof(m)| along any path. A revolute joint's lever bounds the
+/// point's distance from its axis: |a × t| + reach, t the next joint's origin in the joint's
+/// frame and reach the bound on the point's distance from that origin (the point's norm in its
+/// link frame plus the translations below; a prismatic joint in between adds its largest |θ|
+/// over its limits). A prismatic joint's lever is |multiplier|. 0 for joints off the link's chain.
+/// 	hrows Error(kInvalidArgument) when link is out of range.
+Eigen::VectorXd PointLevers(const RobotModel& robot, int link, const Eigen::Vector3d& point);
+
+/// Angular levers of `link`, one per moving joint: |multiplier| for a revolute joint on the
+/// link's chain, else 0, so the link's angular speed |ω| <= Σ_m levers[m]·|q̇_dof(m)|.
+Eigen::VectorXd AngularLevers(const RobotModel& robot, int link);
+
 /// Yoshikawa's manipulability √det(J Jᵀ) of a 6×n Jacobian (0 at a singularity).
 /// In general the product of the min(6, n) singular values of J: √det(J Jᵀ) for n >= 6 and
 /// √det(Jᵀ J) for n < 6 (so an arm with fewer than 6 joints is not identically 0); 0 for n = 0.

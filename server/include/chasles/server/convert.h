@@ -27,6 +27,14 @@ std::string ProtoContentId(const google::protobuf::Message& message);
 /// Pose → isometry. An all-zero quaternion is identity; others must have norm 1 (±1e-3, then
 /// normalised); every number must be finite.
 Eigen::Isometry3d PoseFromProto(const v1::Pose& pose, const std::string& field);
+/// A unit quaternion (norm 1 within 1e-3, normalised); all zero = identity.
+/// \throws Error(kInvalidArgument) naming `field` (and .x/.y/.z/.w).
+Eigen::Quaterniond QuaternionFromProto(const v1::Quaternion& q, const std::string& field);
+/// Path constraints on `robot`, links by name (empty = "tool", else the last link).
+/// \throws Error(kInvalidArgument) naming `field`.orientation[i] / .position[i] and the rule.
+std::shared_ptr<const PathConstraints> PathConstraintsFromProto(const v1::PathConstraints& constraints,
+                                                                std::shared_ptr<const RobotModel> robot,
+                                                                const std::string& field);
 
 /// Parses a robot: URDF (every mesh file through ParseMesh, then RobotModel::FromUrdf), a DH
 /// table (RobotFromDh) or a PoE screw list (RobotFromPoe). Errors name the proto field, e.g.
