@@ -33,6 +33,8 @@
 namespace chasles::moveit {
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+
 constexpr double kMaxGoalTolerance = 0.1;  // JointGoal.tolerance range [rad]
 constexpr double kMaxTimeBudget = 600.0;   // PlanRequest.time_budget range [s]
 
@@ -719,6 +721,16 @@ void ReadStart(const Value& root, const ParsedScene& scene, const RobotInfo& rob
   }
 }
 
+/// A constraint's link_name, which must be a link of the robot.
+std::string LinkName(const Value& constraint, const RobotInfo& robot) {
+  const Value link_value = constraint.Get("link_name");
+  const std::string link = link_value.Text();
+  if (std::find(robot.link_names.begin(), robot.link_names.end(), link) == robot.link_names.end()) {
+    link_value.Fail("= '" + link + "' is not a link of the robot (" + JoinNames(robot.link_names) + ")");
+  }
+  return link;
+}
+
 /// One position constraint and one orientation constraint on the same link -> a PoseGoal,
 /// conservatively: the position tolerance is the radius of the largest ball about the region's
 /// centre inside it (a SPHERE's radius, half a BOX's least extent, a CYLINDER's radius or half
@@ -734,11 +746,7 @@ void ReadPoseGoal(const Value& goal, const Frames& frames, const RobotInfo& robo
   }
   const Value& position = positions[0];
   const Value& orientation = orientations[0];
-  const Value link_value = position.Get("link_name");
-  const std::string link = link_value.Text();
-  if (std::find(robot.link_names.begin(), robot.link_names.end(), link) == robot.link_names.end()) {
-    link_value.Fail("= '" + link + "' is not a link of the robot (" + JoinNames(robot.link_names) + ")");
-  }
+  const std::string link = LinkName(position, robot);
   const Value other = orientation.Get("link_name");
   if (other.Text() != link) other.Fail("= '" + other.Text() + "' differs from the position constraint's '" + link + "'");
   if (auto offset = position.Find("target_point_offset")) {
@@ -790,12 +798,90 @@ void ReadPoseGoal(const Value& goal, const Frames& frames, const RobotInfo& robo
   out->set_orientation_tolerance(std::min(angle, 0.5));
 }
 
-void RejectPathConstraints(const Value& root) {
+void RejectPathConstraints(const Value& root, const char* why) {
   if (auto path = root.Find("path_constraints")) {
     for (const char* key :
          {"joint_constraints", "position_constraints", "orientation_constraints", "visibility_constraints"}) {
-      RejectNonEmpty(*path, key, "path constraints are not supported");
+      RejectNonEmpty(*path, key, why);
     }
+  }
+}
+
+/// moveit_msgs/Constraints path_constraints -> PathConstraints: each orientation constraint as
+/// it is (its frame resolved to the base; tolerances above π, which no angle exceeds, become π);
+/// each position constraint whose region is one BOX as a box (the target point offset is the
+/// point on the link). Joint and visibility constraints, and other regions, are refused by name.
+void ReadPathConstraints(const Value& root, const Frames& frames, const RobotInfo& robot, v1::PathConstraints* out) {
+  const std::optional<Value> path = root.Find("path_constraints");
+  if (!path) return;
+  RejectNonEmpty(*path, "joint_constraints", "joint path constraints are not supported (orientation and position ones are)");
+  RejectNonEmpty(*path, "visibility_constraints", "visibility constraints are not supported");
+  for (const Value& c : ListAt(*path, "orientation_constraints")) {
+    v1::OrientationConstraint* o = out->add_orientation();
+    o->set_link(LinkName(c, robot));
+    const Eigen::Quaterniond q(frames.Of(c).linear() * ReadQuaternion(c.Get("orientation")).toRotationMatrix());
+    o->mutable_orientation()->set_x(q.x());
+    o->mutable_orientation()->set_y(q.y());
+    o->mutable_orientation()->set_z(q.z());
+    o->mutable_orientation()->set_w(q.w());
+    const auto tolerance = [&c](const char* key) {
+      const Value value = c.Get(key);
+      const double t = value.Number();
+      if (!(t > 0.0)) value.Fail("= " + FormatNumber(t) + " must be > 0");
+      return std::min(t, kPi);
+    };
+    o->mutable_tolerance()->set_x(tolerance("absolute_x_axis_tolerance"));
+    o->mutable_tolerance()->set_y(tolerance("absolute_y_axis_tolerance"));
+    o->mutable_tolerance()->set_z(tolerance("absolute_z_axis_tolerance"));
+    long long parameterization = 0;  // moveit_msgs: XYZ_EULER_ANGLES = 0, ROTATION_VECTOR = 1
+    if (auto p = c.Find("parameterization")) {
+      parameterization = static_cast<long long>(p->Number());
+      if (parameterization != 0 && parameterization != 1) {
+        p->Fail("= " + std::to_string(parameterization) + " must be 0 (XYZ_EULER_ANGLES) or 1 (ROTATION_VECTOR)");
+      }
+    }
+    o->set_parameterization(parameterization == 1 ? v1::OrientationConstraint::ROTATION_VECTOR
+                                                  : v1::OrientationConstraint::XYZ_EULER_ANGLES);
+    if (parameterization == 0 && o->tolerance().y() >= kPi / 2) {
+      c.Get("absolute_y_axis_tolerance")
+          .Fail("= " + FormatNumber(o->tolerance().y()) +
+                " is not supported with XYZ_EULER_ANGLES (at |y| = π/2 the x and z angles are undefined): give less "
+                "than π/2, or parameterization 1 (ROTATION_VECTOR)");
+    }
+  }
+  for (const Value& c : ListAt(*path, "position_constraints")) {
+    v1::PositionConstraint* p = out->add_position();
+    p->set_link(LinkName(c, robot));
+    if (auto offset = c.Find("target_point_offset")) {
+      const Eigen::Vector3d v = ReadVector(*offset);
+      p->mutable_point()->set_x(v.x());
+      p->mutable_point()->set_y(v.y());
+      p->mutable_point()->set_z(v.z());
+    }
+    const Value region = c.Get("constraint_region");
+    RejectNonEmpty(region, "meshes", "mesh regions are not supported in path constraints (a BOX is)");
+    const std::vector<Value> primitives = ListAt(region, "primitives");
+    const std::vector<Value> poses = ListAt(region, "primitive_poses");
+    if (primitives.size() != 1 || poses.size() != 1) {
+      region.Fail("has " + std::to_string(primitives.size()) + " primitives and " + std::to_string(poses.size()) +
+                  " poses: a path constraint's region here is one BOX with its pose");
+    }
+    const Value type_value = primitives[0].Get("type");
+    const long long type = ReadPrimitiveType(type_value);
+    std::vector<double> dims;
+    for (const Value& item : primitives[0].Get("dimensions").Items()) {
+      const double d = item.Number();
+      if (!(d >= 0.0)) item.Fail("= " + FormatNumber(d) + " must be >= 0");
+      dims.push_back(d);
+    }
+    if (type != 1 || dims.size() != 3) {
+      type_value.Fail("= " + std::to_string(type) + " (" + PrimitiveName(type) +
+                      ") is not a path constraint region here (a BOX [x, y, z] is)");
+    }
+    PoseToProto(frames.Of(c) * ReadPose(poses[0]), p->mutable_region());
+    p->mutable_half_extents()->set_x(0.5 * dims[0]);
+    p->mutable_half_extents()->set_y(0.5 * dims[1]);
+    p->mutable_half_extents()->set_z(0.5 * dims[2]);
   }
 }
 
@@ -928,7 +1014,7 @@ v1::CartesianPathRequest ImportCartesianPathRequest(const std::string& scene_yam
   // moveit_msgs leaves avoid_collisions false when absent; a Cartesian path here is checked
   // unless the file says false.
   if (auto avoid = root.Find("avoid_collisions")) request.set_ignore_collisions(!avoid->Bool());
-  RejectPathConstraints(root);
+  RejectPathConstraints(root, "path constraints are not supported on Cartesian paths (the link follows its lines)");
   if (auto speed = root.Find("max_cartesian_speed")) {
     if (speed->Number() != 0.0) speed->Fail("is not supported (a Cartesian speed limit on a link)");
   }
@@ -1033,7 +1119,10 @@ v1::PlanRequest ImportMotionPlanRequest(const std::string& scene_yaml, const std
     if (tolerance > 0.0) request.set_bounds_tolerance(std::min(tolerance, 0.01));
   }
 
-  RejectPathConstraints(root);
+  ReadPathConstraints(root, *scene.frames, robot, request.mutable_path_constraints());
+  if (request.path_constraints().orientation_size() == 0 && request.path_constraints().position_size() == 0) {
+    request.clear_path_constraints();
+  }
   if (auto trajectory = root.Find("trajectory_constraints")) {
     RejectNonEmpty(*trajectory, "constraints", "trajectory constraints are not supported");
   }

@@ -567,8 +567,8 @@ TEST(MoveItErrors, UnsupportedGoals) {
   const std::string path = Replace(Data("request_full.yaml"), "joint_constraints: []",
                                    "joint_constraints:\n    - {joint_name: panda_joint1, position: 0}");
   EXPECT_NE(RequestError(Data("scene_full.yaml"), path)
-                .find("path_constraints.joint_constraints has 1 entries: path "
-                      "constraints are not supported"),
+                .find("path_constraints.joint_constraints has 1 entries: joint path constraints are not supported "
+                      "(orientation and position ones are)"),
             std::string::npos);
   const std::string two =
       Replace(Data("request_full.yaml"), "goal_constraints:\n",
@@ -953,6 +953,65 @@ TEST_F(MoveItExamples, StartsAndGoalsAreClearAndEveryProblemPlans) {
     EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
     EXPECT_GT(response.trajectory().points_size(), 1);
   }
+}
+
+// glass_request.yaml: its orientation path constraint becomes path_constraints (frame resolved,
+// the π tolerance clamped onto π, ROTATION_VECTOR kept) and plans through the server, which keeps
+// it (max_constraint_ratio <= 1; tests/server/path_constraints_test.cc re-checks such plans densely).
+TEST_F(MoveItExamples, TheGlassPathConstraintConvertsAndPlans) {
+  const v1::PlanRequest request =
+      moveit::ImportMotionPlanRequest(testing::ReadText(ExamplesDir() + "/glass_scene.yaml"),
+                                      testing::ReadText(ExamplesDir() + "/glass_request.yaml"), Panda(),
+                                      "glass_scene.yaml", "glass_request.yaml");
+  ASSERT_EQ(request.path_constraints().orientation_size(), 1);
+  EXPECT_EQ(request.path_constraints().position_size(), 0);
+  const v1::OrientationConstraint& c = request.path_constraints().orientation(0);
+  EXPECT_EQ(c.link(), "panda_hand");
+  EXPECT_NEAR(c.orientation().x(), std::sqrt(0.5), kTight);
+  EXPECT_NEAR(c.orientation().z(), std::sqrt(0.5), kTight);
+  EXPECT_EQ(c.tolerance().x(), 3.14159265358979323846);
+  EXPECT_EQ(c.tolerance().y(), 0.1);
+  EXPECT_EQ(c.parameterization(), v1::OrientationConstraint::ROTATION_VECTOR);
+  EXPECT_EQ(request.scene().boxes_size(), 8);
+  v1::PlanResponse response;
+  const grpc::Status status = server_->Plan(request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.outcome(), v1::SUCCESS) << response.message();
+  EXPECT_GT(response.quality().max_constraint_ratio(), 0.0);
+  EXPECT_LE(response.quality().max_constraint_ratio(), 1.0);
+}
+
+TEST(MoveItErrors, PathConstraintsTheServerCannotKeepAreNamed) {
+  const std::string scene = testing::ReadText(ExamplesDir() + "/glass_scene.yaml");
+  const std::string glass = testing::ReadText(ExamplesDir() + "/glass_request.yaml");
+  const auto error = [&scene](const std::string& yaml) {
+    try {
+      moveit::ImportMotionPlanRequest(scene, yaml, Panda(), "s.yaml", "request.yaml");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error(Replace(Replace(glass, "parameterization: 1", "parameterization: 0"), "absolute_y_axis_tolerance: 0.1",
+                          "absolute_y_axis_tolerance: 1.6"))
+                .find("absolute_y_axis_tolerance = 1.6 is not supported with XYZ_EULER_ANGLES"),
+            std::string::npos);
+  EXPECT_NE(error(Replace(glass, "parameterization: 1", "parameterization: 2")).find("parameterization = 2 must be 0"),
+            std::string::npos);
+  EXPECT_NE(error(Replace(glass, "link_name: panda_hand", "link_name: gripper")).find("link_name = 'gripper' is not a link"),
+            std::string::npos);
+  const std::string sphere = Replace(glass, "  position_constraints: []\n  orientation_constraints:",
+                                     "  position_constraints:\n    - link_name: panda_hand\n      constraint_region:\n"
+                                     "        primitives: [{type: 2, dimensions: [0.1]}]\n"
+                                     "        primitive_poses: [{position: [0.5, 0, 0.5], orientation: [0, 0, 0, 1]}]\n"
+                                     "  orientation_constraints:");
+  EXPECT_NE(error(sphere).find("is not a path constraint region here (a BOX [x, y, z] is)"), std::string::npos)
+      << error(sphere);
+  const std::string box = Replace(sphere, "{type: 2, dimensions: [0.1]}", "{type: 1, dimensions: [2, 2, 0.4]}");
+  const v1::PlanRequest request = moveit::ImportMotionPlanRequest(scene, box, Panda(), "s.yaml", "request.yaml");
+  ASSERT_EQ(request.path_constraints().position_size(), 1);
+  EXPECT_EQ(request.path_constraints().position(0).half_extents().z(), 0.2);
+  EXPECT_EQ(request.path_constraints().position(0).region().position().x(), 0.5);
 }
 
 // request0001 with its joint goal replaced by a 4 cm box and 0.1 rad axis tolerances about the hand's
