@@ -381,16 +381,18 @@ OptimizeOutcome OptimizePath(const OptimizeQuery& query, const Termination& term
     const Eigen::VectorXd& b = query.path[k + 1];
     if (checker.IsMotionValid(a, b, query.collision_resolution)) continue;
     std::string where = "segment path[" + std::to_string(k) + "] → path[" + std::to_string(k + 1) + "]";
-    std::string what = "it collides between its checked states";
+    std::string what = "it collides between its checked states, or leaves its path constraints";
+    std::string broken = "is not collision-free";
     const int steps = std::max(1, static_cast<int>(std::ceil((b - a).cwiseAbs().maxCoeff() / query.collision_resolution)));
     for (int s = 0; s <= steps; ++s) {
       const double fraction = static_cast<double>(s) / steps;
       const CollisionResult contact = checker.Check(a + (b - a) * fraction);
       if (!contact.in_collision) continue;
       what = "at s = " + FormatNumber(fraction) + " " + describe(contact);
+      if (!contact.violation.empty()) broken = "leaves its path constraints";
       break;
     }
-    return finish(TrajectoryStageCode::kVerificationFailed, "the input path is not collision-free: " + where + " " + what);
+    return finish(TrajectoryStageCode::kVerificationFailed, "the input path " + broken + ": " + where + " " + what);
   }
   out.stage = RunTrajectoryStage(query.path, checker, query.trajectory, std::min(0.005, query.collision_resolution),
                                  termination);

@@ -111,6 +111,54 @@ void PathConstraints::Errors(const Eigen::VectorXd& q, Eigen::VectorXd* errors) 
   }
 }
 
+void PathConstraints::ErrorJacobian(const Eigen::VectorXd& q, Eigen::VectorXd* errors, Eigen::MatrixXd* jacobian) const {
+  Errors(q, errors);
+  const int n = robot_->num_dofs();
+  jacobian->resize(num_errors(), n);
+  thread_local std::vector<Eigen::Isometry3d> poses;
+  int row = 0;
+  for (const OrientationConstraintSpec& c : orientation_) {
+    const Jacobian J = PointJacobian(*robot_, q, c.link, Eigen::Vector3d::Zero());
+    const Eigen::Matrix3d Rt = c.orientation.toRotationMatrix().transpose();
+    const Eigen::Vector3d e = errors->segment<3>(row);
+    Eigen::Matrix3d map;  // error rate per angular velocity in the base frame
+    if (c.parameterization == OrientationParameterization::kRotationVector) {
+      // d log(E)/dt = J_l⁻¹(e)·ω_E, ω_E = R_tᵀ ω (E = R_tᵀ R turns with R_tᵀ ω on the left).
+      const double theta = e.norm();
+      const Eigen::Matrix3d K = Skew(e);
+      const double k = theta < 1e-6 ? 1.0 / 12.0
+                                     : 1.0 / (theta * theta) - (1.0 + std::cos(theta)) / (2.0 * theta * std::sin(theta));
+      map = (Eigen::Matrix3d::Identity() - 0.5 * K + k * K * K) * Rt;
+    } else {
+      // Body angular velocity ω_b = Eᵀ R_tᵀ ω = Rᵀ ω; ẋ = (ω_bx cos z − ω_by sin z)/cos y,
+      // ẏ = ω_bx sin z + ω_by cos z, ż = ω_bz − ẋ sin y.
+      robot_->ForwardKinematics(q, &poses);
+      const Eigen::Matrix3d Rb = poses[static_cast<std::size_t>(c.link)].linear().transpose();
+      const double sy = std::sin(e[1]), cy = std::cos(e[1]), sz = std::sin(e[2]), cz = std::cos(e[2]);
+      Eigen::Matrix3d rates;
+      rates << cz / cy, -sz / cy, 0.0,  //
+          sz, cz, 0.0,                  //
+          -sy * cz / cy, sy * sz / cy, 1.0;
+      map = rates * Rb;
+    }
+    jacobian->middleRows<3>(row) = map * J.topRows<3>();
+    row += 3;
+  }
+  for (const PositionConstraintSpec& c : position_) {
+    const Jacobian J = PointJacobian(*robot_, q, c.link, c.point);
+    jacobian->middleRows<3>(row) = c.region.linear().transpose() * J.bottomRows<3>();
+    row += 3;
+  }
+}
+
+Eigen::VectorXd PathConstraints::TightenedBounds(double shrink) const {
+  Eigen::VectorXd bounds = shrink * tolerance_;
+  for (int row = 0; row < 3 * static_cast<int>(orientation_.size()); ++row) {
+    if (tolerance_[row] >= kPi) bounds[row] = kInf;
+  }
+  return bounds;
+}
+
 bool PathConstraints::Satisfied(const Eigen::VectorXd& q) const {
   if (empty()) return true;
   thread_local Eigen::VectorXd e;
@@ -231,37 +279,52 @@ bool PathConstraints::IsSegmentSatisfied(const Eigen::VectorXd& a, const Eigen::
 
 bool PathConstraints::Project(Eigen::VectorXd* q, double shrink, int max_iterations) const {
   if (empty()) return true;
-  const int n = robot_->num_dofs();
   const int m = num_errors();
-  const Eigen::VectorXd bound = shrink * tolerance_;
-  Eigen::VectorXd e, ep, em, excess(m);
-  Eigen::MatrixXd J(m, n);
-  constexpr double kStep = 1e-7;     // finite-difference step [rad] or [m]
+  const int n = robot_->num_dofs();
+  const Eigen::VectorXd bound = TightenedBounds(shrink);
+  Eigen::VectorXd e, excess(m);
+  Eigen::MatrixXd J;
   constexpr double kDamping = 1e-6;  // λ² of the damped least squares
+  double previous = kInf;
+  int stalled = 0;
   for (int it = 0; it <= max_iterations; ++it) {
     Errors(*q, &e);
-    bool done = true;
+    if (!e.allFinite()) return false;
+    double total = 0.0;
     for (int r = 0; r < m; ++r) {
       const double over = std::abs(e[r]) - bound[r];
       excess[r] = over > 0 ? std::copysign(over, e[r]) : 0.0;
-      if (over > 1e-9) done = false;
+      if (over > 1e-9) total += over;
     }
-    if (done) return true;
-    if (it == max_iterations || !e.allFinite()) break;
-    for (int i = 0; i < n; ++i) {
-      Eigen::VectorXd x = *q;
-      x[i] += kStep;
-      Errors(x, &ep);
-      x[i] -= 2 * kStep;
-      Errors(x, &em);
-      J.col(i) = (ep - em) / (2 * kStep);
-    }
+    if (total == 0.0) return true;
+    // Stalled (at a joint limit, or where the errors cannot all shrink): give up after three
+    // iterations in a row that do not cut the excess by 1 %.
+    stalled = total > 0.99 * previous ? stalled + 1 : 0;
+    if (it == max_iterations || stalled == 3) break;
+    previous = total;
+    ErrorJacobian(*q, &e, &J);
     for (int r = 0; r < m; ++r) {
       if (excess[r] == 0.0) J.row(r).setZero();  // inside its bound: not pulled on
     }
-    const Eigen::MatrixXd A = J * J.transpose() + kDamping * Eigen::MatrixXd::Identity(m, m);
-    const Eigen::VectorXd step = J.transpose() * A.ldlt().solve(excess);
-    *q = (*q - step).cwiseMax(robot_->lower_limits()).cwiseMin(robot_->upper_limits());
+    // A joint at a limit that the step would push further out is taken out of the step (its
+    // column zeroed) and the step solved again, so the other joints do the work.
+    const Eigen::VectorXd& lo = robot_->lower_limits();
+    const Eigen::VectorXd& hi = robot_->upper_limits();
+    Eigen::VectorXd next;
+    for (int pass = 0; pass < n; ++pass) {
+      const Eigen::MatrixXd A = J * J.transpose() + kDamping * Eigen::MatrixXd::Identity(m, m);
+      next = *q - J.transpose() * A.ldlt().solve(excess);
+      bool held = false;
+      for (int i = 0; i < n; ++i) {
+        const bool out = (next[i] < lo[i] && (*q)[i] <= lo[i]) || (next[i] > hi[i] && (*q)[i] >= hi[i]);
+        if (out && !J.col(i).isZero()) {
+          J.col(i).setZero();
+          held = true;
+        }
+      }
+      if (!held) break;
+    }
+    *q = next.cwiseMax(lo).cwiseMin(hi);
   }
   return false;
 }

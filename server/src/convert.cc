@@ -953,6 +953,10 @@ OptimizeQuery OptimizeQueryFromProto(const v1::OptimizeRequest& request, std::sh
   const RobotModel& robot = checker->robot();
   OptimizeQuery query;
   query.checker = std::move(checker);
+  if (request.has_path_constraints()) {
+    query.checker = CollisionChecker::WithPathConstraints(
+        query.checker, PathConstraintsFromProto(request.path_constraints(), query.checker->robot_ptr(), "path_constraints"));
+  }
   settings->time_budget = BudgetFromProto(request.time_budget(), 10.0, "time_budget");
   *input_duration = 0.0;
   const bool has_path = request.path_size() > 0;

@@ -286,6 +286,20 @@ class ServerTest(unittest.TestCase):
         self.assertEqual(blocked.outcome, "START_IN_COLLISION", blocked.message)
         self.assertIn("'rod'", blocked.message)
 
+    def test_plan_keeping_a_glass_upright(self) -> None:
+        example = json.loads((ROOT / "examples/requests/panda_shelf_glass.json").read_text(encoding="utf-8"))
+        result = self.client.plan_request(example)
+        self.assertTrue(result.success, f"{result.outcome}: {result.message}")
+        self.assertGreater(result.quality["max_constraint_ratio"], 0.0)
+        self.assertLessEqual(result.quality["max_constraint_ratio"], 1.0)
+        # The keyword call, the constraint as plain data: a start with the hand turned breaks it.
+        start = list(example["start"]["positions"])
+        start[6] += 0.3
+        broken = self.client.plan(start, example["goal"]["positions"], scene=example["scene"],
+                                  path_constraints=example["pathConstraints"])
+        self.assertEqual(broken.outcome, "START_VIOLATES_CONSTRAINTS", broken.message)
+        self.assertIn("path_constraints.orientation[0]", broken.message)
+
     def test_coordinate_a_fleet_and_sample_its_knots(self) -> None:
         request = ROOT / "examples/requests/coordinate_fleet.json"
         response = self.client.coordinate(str(request))

@@ -92,6 +92,34 @@ TEST_F(PathConstraintsTest, TheGlassStaysUprightOnlyWithTheConstraint) {
   }
 }
 
+TEST_F(PathConstraintsTest, OptimizeKeepsThemOnAUsersPath) {
+  // The straight joint-space line from start to goal tips the glass: refused, naming the constraint.
+  const v1::PlanRequest glass = Glass();
+  v1::OptimizeRequest optimize;
+  *optimize.mutable_scene() = glass.scene();
+  *optimize.mutable_path_constraints() = glass.path_constraints();
+  *optimize.add_path() = glass.start();
+  *optimize.add_path()->mutable_positions() = glass.goal().positions();
+  v1::OptimizeResponse refused;
+  grpc::ClientContext a;
+  ASSERT_TRUE(server_->stub().Optimize(&a, optimize, &refused).ok());
+  EXPECT_EQ(refused.outcome(), v1::VERIFICATION_FAILED) << refused.message();
+  EXPECT_EQ(refused.message().rfind("the input path leaves its path constraints: segment path[0] → path[1] at s = ", 0), 0u)
+      << refused.message();
+  EXPECT_NE(refused.message().find("breaks path_constraints.orientation[0]"), std::string::npos) << refused.message();
+  // A constrained plan's waypoints, optimised again: kept along the whole new trajectory.
+  v1::PlanResponse planned;
+  ASSERT_TRUE(server_->Plan(glass, &planned).ok());
+  ASSERT_EQ(planned.outcome(), v1::SUCCESS) << planned.message();
+  optimize.clear_path();
+  for (const v1::JointState& waypoint : planned.path()) *optimize.add_path() = waypoint;
+  v1::OptimizeResponse kept;
+  grpc::ClientContext b;
+  ASSERT_TRUE(server_->stub().Optimize(&b, optimize, &kept).ok());
+  ASSERT_EQ(kept.outcome(), v1::SUCCESS) << kept.message();
+  EXPECT_LE(WorstHandRatio(glass, kept.trajectory()), 1.0 + 1e-9);
+}
+
 TEST_F(PathConstraintsTest, AStartOrGoalThatBreaksItIsAnOutcome) {
   v1::PlanRequest request = Glass();
   request.mutable_start()->set_positions(6, request.start().positions(6) + 0.3);  // the hand turned 0.3 rad

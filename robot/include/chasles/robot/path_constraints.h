@@ -66,10 +66,19 @@ class PathConstraints {
   /// The tolerances in the order of Errors() ([rad] then [m]).
   const Eigen::VectorXd& tolerances() const { return tolerance_; }
 
+  /// The tolerances tightened to shrink·tolerance for planning, except that an orientation axis
+  /// whose tolerance is π stays unbounded (+inf): no angle exceeds π, and a tightened bound would
+  /// cut that axis' circle — a link free to turn about the vertical could no longer turn all the way.
+  Eigen::VectorXd TightenedBounds(double shrink) const;
   /// The signed errors at q, in the order of tolerances(): rotation-vector components or Euler
   /// angles [rad] of R_targetᵀ·R_link; the point's coordinates in the box frame [m].
   /// Precondition: q.size() == num_dofs() (no allocation once *errors has its size).
   void Errors(const Eigen::VectorXd& q, Eigen::VectorXd* errors) const;
+  /// The errors at q (as Errors) and their Jacobian d errors / dq (num_errors() × num_dofs()),
+  /// from the link's geometric Jacobian: a rotation vector e changes by J_l⁻¹(e)·R_targetᵀ·ω, the
+  /// Euler angles by the inverse of their rate map (finite while |y| < π/2), the point in the box
+  /// frame by R_boxᵀ·ṗ.
+  void ErrorJacobian(const Eigen::VectorXd& q, Eigen::VectorXd* errors, Eigen::MatrixXd* jacobian) const;
   /// Every |error| <= its tolerance.
   bool Satisfied(const Eigen::VectorXd& q) const;
   /// max_a |e_a| / tolerance_a over all errors (<= 1: satisfied); 0 without constraints. For
@@ -93,10 +102,11 @@ class PathConstraints {
   /// IsCurveSatisfied of the straight segment a → b.
   bool IsSegmentSatisfied(const Eigen::VectorXd& a, const Eigen::VectorXd& b, std::uint64_t* states = nullptr) const;
 
-  /// Moves *q onto the constraints tightened to shrink·tolerance (shrink in (0, 1]) by damped
-  /// Gauss–Newton steps on the excess errors (finite-difference Jacobian), kept within the
-  /// joint limits. True when every |e_a| <= shrink·tolerance_a + 1e-9 within max_iterations.
-  bool Project(Eigen::VectorXd* q, double shrink, int max_iterations = 50) const;
+  /// Moves *q onto the constraints tightened to TightenedBounds(shrink) (shrink in (0, 1]) by damped
+  /// Gauss–Newton steps on the excess errors (ErrorJacobian), kept within the joint limits.
+  /// True when every |e_a| <= its tightened bound + 1e-9 within max_iterations; false early
+  /// after three iterations in a row that do not reduce the excess by 1 %.
+  bool Project(Eigen::VectorXd* q, double shrink, int max_iterations = 30) const;
 
  private:
   /// Per constraint (orientation then position): the bound on each error's rate per unit of
