@@ -731,6 +731,35 @@ std::string LinkName(const Value& constraint, const RobotInfo& robot) {
   return link;
 }
 
+/// The region of a moveit_msgs/PositionConstraint: one primitive with its pose (meshes refused).
+/// `what` names the use in messages ("a goal region", "a path constraint's region"); dimensions
+/// must be > 0, or >= 0 with `allow_zero` (a box that is a plane).
+struct PositionRegion {
+  Value type_value;
+  long long type = 0;
+  std::vector<double> dims;
+  Eigen::Isometry3d pose;  ///< in the constraint's header frame
+};
+PositionRegion ReadPositionRegion(const Value& constraint, const std::string& what, const char* mesh_message,
+                                  bool allow_zero) {
+  const Value region = constraint.Get("constraint_region");
+  RejectNonEmpty(region, "meshes", mesh_message);
+  const std::vector<Value> primitives = ListAt(region, "primitives");
+  const std::vector<Value> poses = ListAt(region, "primitive_poses");
+  if (primitives.size() != 1 || poses.size() != 1) {
+    region.Fail("has " + std::to_string(primitives.size()) + " primitives and " + std::to_string(poses.size()) +
+                " poses: " + what + " here is one primitive with its pose");
+  }
+  PositionRegion out{primitives[0].Get("type"), 0, {}, ReadPose(poses[0])};
+  out.type = ReadPrimitiveType(out.type_value);
+  for (const Value& item : primitives[0].Get("dimensions").Items()) {
+    const double d = item.Number();
+    if (!(allow_zero ? d >= 0.0 : d > 0.0)) item.Fail("= " + FormatNumber(d) + (allow_zero ? " must be >= 0" : " must be > 0"));
+    out.dims.push_back(d);
+  }
+  return out;
+}
+
 /// One position constraint and one orientation constraint on the same link -> a PoseGoal,
 /// conservatively: the position tolerance is the radius of the largest ball about the region's
 /// centre inside it (a SPHERE's radius, half a BOX's least extent, a CYLINDER's radius or half
@@ -752,22 +781,11 @@ void ReadPoseGoal(const Value& goal, const Frames& frames, const RobotInfo& robo
   if (auto offset = position.Find("target_point_offset")) {
     if (!ReadVector(*offset).isZero()) offset->Fail("is not supported (a point offset from the link frame): give 0");
   }
-  const Value region = position.Get("constraint_region");
-  RejectNonEmpty(region, "meshes", "mesh regions are not supported (a SPHERE, BOX or CYLINDER is)");
-  const std::vector<Value> primitives = ListAt(region, "primitives");
-  const std::vector<Value> poses = ListAt(region, "primitive_poses");
-  if (primitives.size() != 1 || poses.size() != 1) {
-    region.Fail("has " + std::to_string(primitives.size()) + " primitives and " + std::to_string(poses.size()) +
-                " poses: a goal region here is one primitive with its pose");
-  }
-  const Value type_value = primitives[0].Get("type");
-  const long long type = ReadPrimitiveType(type_value);
-  std::vector<double> dims;
-  for (const Value& item : primitives[0].Get("dimensions").Items()) {
-    const double d = item.Number();
-    if (!(d > 0.0)) item.Fail("= " + FormatNumber(d) + " must be > 0");
-    dims.push_back(d);
-  }
+  const PositionRegion region =
+      ReadPositionRegion(position, "a goal region", "mesh regions are not supported (a SPHERE, BOX or CYLINDER is)", false);
+  const Value& type_value = region.type_value;
+  const long long type = region.type;
+  const std::vector<double>& dims = region.dims;
   double radius = 0.0;
   if (type == 2 && dims.size() == 1) {
     radius = dims[0];
@@ -787,7 +805,7 @@ void ReadPoseGoal(const Value& goal, const Frames& frames, const RobotInfo& robo
     if (!(t > 0.0)) value.Fail("= " + FormatNumber(t) + " must be > 0");
     angle = std::min(angle, t);
   }
-  const Eigen::Vector3d centre = frames.Of(position) * ReadPose(poses[0]).translation();
+  const Eigen::Vector3d centre = frames.Of(position) * region.pose.translation();
   const Eigen::Matrix3d rotation = frames.Of(orientation).linear() * ReadQuaternion(orientation.Get("orientation")).toRotationMatrix();
   Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
   target.translation() = centre;
@@ -858,27 +876,16 @@ void ReadPathConstraints(const Value& root, const Frames& frames, const RobotInf
       p->mutable_point()->set_y(v.y());
       p->mutable_point()->set_z(v.z());
     }
-    const Value region = c.Get("constraint_region");
-    RejectNonEmpty(region, "meshes", "mesh regions are not supported in path constraints (a BOX is)");
-    const std::vector<Value> primitives = ListAt(region, "primitives");
-    const std::vector<Value> poses = ListAt(region, "primitive_poses");
-    if (primitives.size() != 1 || poses.size() != 1) {
-      region.Fail("has " + std::to_string(primitives.size()) + " primitives and " + std::to_string(poses.size()) +
-                  " poses: a path constraint's region here is one BOX with its pose");
-    }
-    const Value type_value = primitives[0].Get("type");
-    const long long type = ReadPrimitiveType(type_value);
-    std::vector<double> dims;
-    for (const Value& item : primitives[0].Get("dimensions").Items()) {
-      const double d = item.Number();
-      if (!(d >= 0.0)) item.Fail("= " + FormatNumber(d) + " must be >= 0");
-      dims.push_back(d);
-    }
+    const PositionRegion region = ReadPositionRegion(c, "a path constraint's region",
+                                                     "mesh regions are not supported in path constraints (a BOX is)", true);
+    const Value& type_value = region.type_value;
+    const long long type = region.type;
+    const std::vector<double>& dims = region.dims;
     if (type != 1 || dims.size() != 3) {
       type_value.Fail("= " + std::to_string(type) + " (" + PrimitiveName(type) +
                       ") is not a path constraint region here (a BOX [x, y, z] is)");
     }
-    PoseToProto(frames.Of(c) * ReadPose(poses[0]), p->mutable_region());
+    PoseToProto(frames.Of(c) * region.pose, p->mutable_region());
     p->mutable_half_extents()->set_x(0.5 * dims[0]);
     p->mutable_half_extents()->set_y(0.5 * dims[1]);
     p->mutable_half_extents()->set_z(0.5 * dims[2]);

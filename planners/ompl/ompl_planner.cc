@@ -76,6 +76,8 @@ class SeededSampler : public ob::RealVectorStateSampler {
 /// keep a margin (tolerance/5) for the chords between them, which the checker certifies against
 /// the whole tolerance, and for the timing's blends.
 constexpr double kConstraintShrink = 0.8;
+/// The default range [rad] of a tree planner with path constraints in the joint space.
+constexpr double kConstrainedRange = 0.5;
 
 /// A seeded sampler whose samples are projected onto the path constraints (tightened by
 /// kConstraintShrink); a sample that does not project is redrawn, up to 20 times (the last
@@ -116,8 +118,26 @@ class ProjectingSampler : public SeededSampler {
 class JointSpace : public ob::RealVectorStateSpace {
  public:
   JointSpace(unsigned int dim, std::uint64_t seed) : ob::RealVectorStateSpace(dim), seed_(seed) {}
-  /// Samplers allocated from now on project onto `constraints` (null: plain uniform samples).
+  /// Samplers allocated from now on project onto `constraints` (null: plain uniform samples),
+  /// and so does interpolate: a tree's step towards a sample ends on the constraints too.
   void ProjectSamples(const PathConstraints* constraints) { project_onto_ = constraints; }
+  /// With ProjectSamples: the straight interpolation projected onto the constraints, when that
+  /// keeps at least half of the step's progress towards `to` (else the straight interpolation).
+  /// The bound on progress matters: RRT-Connect extends towards the other tree in a loop that
+  /// ends only when a step is trapped or arrives; projected steps that turned back would never end.
+  void interpolate(const ob::State* from, const ob::State* to, double t, ob::State* state) const override {
+    ob::RealVectorStateSpace::interpolate(from, to, t, state);
+    if (project_onto_ == nullptr || t <= 0.0 || t >= 1.0) return;
+    double* v = state->as<ob::RealVectorStateSpace::StateType>()->values;
+    const int n = static_cast<int>(getDimension());
+    const Eigen::Map<const Eigen::VectorXd> a(from->as<ob::RealVectorStateSpace::StateType>()->values, n);
+    const Eigen::Map<const Eigen::VectorXd> b(to->as<ob::RealVectorStateSpace::StateType>()->values, n);
+    Eigen::VectorXd q = Eigen::Map<const Eigen::VectorXd>(v, n);
+    const double d = (b - a).norm();
+    if (project_onto_->Project(&q, kConstraintShrink) && (b - q).norm() <= d - 0.5 * t * d) {
+      Eigen::Map<Eigen::VectorXd>(v, n) = q;
+    }
+  }
   /// As constructed with `seed`: the next sampler draws what a new space's first would.
   void Reseed(std::uint64_t seed) {
     seed_ = seed;
@@ -653,7 +673,9 @@ class SingleThreadPrm : public Base {
 enum class Kind { kPrm, kPrmStar, kLazyPrmStar, kRrt, kRrtStar, kInformedRrtStar, kRrtConnect, kBitStar };
 
 ParameterSpec RangeParam() {
-  return {"range", "maximum length of a tree extension (Euclidean joint distance) [rad]; 0 = 20% of the joint-space diagonal",
+  return {"range",
+          "maximum length of a tree extension (Euclidean joint distance) [rad]; 0 = 20% of the joint-space diagonal "
+          "(0.5 rad with path constraints, unless constrained_space)",
           ParameterType::kDouble, 0.0, 0.0, 100.0};
 }
 ParameterSpec GoalBiasParam() {
@@ -711,6 +733,12 @@ class OmplPlanner : public Planner {
     }
     const bool projected_space = constraints != nullptr && params.at("constrained_space") != 0.0;
     map_.constrained = projected_space;
+    // Projected samples take short steps unless told otherwise: a straight step of 20 % of the
+    // joint-space diagonal leaves a thin band (chasles-bench --section constraints).
+    const double range = params.count("range") == 0         ? 0.0
+                         : params.at("range") > 0.0          ? params.at("range")
+                         : constraints != nullptr && !projected_space ? kConstrainedRange
+                                                                      : 0.0;
     const std::uint32_t seed = MixSeed(problem.seed);
     max_iterations_ = static_cast<std::uint64_t>(params.count("max_iterations") ? params.at("max_iterations") : 0);
     if (kind_ == Kind::kRrtConnect && !map_.se2 && constraints == nullptr && t_reusable_rrt_connect &&
@@ -782,13 +810,13 @@ class OmplPlanner : public Planner {
         break;
       case Kind::kLazyPrmStar: {
         auto p = std::make_shared<og::LazyPRMstar>(si_);
-        if (params.at("range") > 0) p->setRange(params.at("range"));
+        if (range > 0) p->setRange(range);
         planner_ = p;
         break;
       }
       case Kind::kRrt: {
         auto p = std::make_shared<Seeded<og::RRT>>(si_, seed);
-        if (params.at("range") > 0) p->setRange(params.at("range"));
+        if (range > 0) p->setRange(range);
         p->setGoalBias(params.at("goal_bias"));
         planner_ = p;
         break;
@@ -801,7 +829,7 @@ class OmplPlanner : public Planner {
         } else {
           p = std::make_shared<Seeded<og::InformedRRTstar>>(si_, seed);
         }
-        if (params.at("range") > 0) p->setRange(params.at("range"));
+        if (range > 0) p->setRange(range);
         p->setGoalBias(params.at("goal_bias"));
         p->setRewireFactor(params.at("rewire_factor"));
         planner_ = p;
@@ -809,7 +837,7 @@ class OmplPlanner : public Planner {
       }
       case Kind::kRrtConnect: {
         auto p = std::make_shared<CountedRrtConnect>(si_, seed);
-        if (params.at("range") > 0) p->setRange(params.at("range"));
+        if (range > 0) p->setRange(range);
         rrt_connect_ = p.get();
         if (!map_.se2 && constraints == nullptr) {  // kept for the thread's next request (a car's SE(2) space is built anew)
           reused_ = std::make_unique<ReusableRrtConnect>(
