@@ -92,6 +92,23 @@ TEST_F(PathConstraintsTest, TheGlassStaysUprightOnlyWithTheConstraint) {
   }
 }
 
+TEST_F(PathConstraintsTest, ATightToleranceIsKeptAndEveryRangeEnds) {
+  // 0.01 rad about the horizontal axes. With short ranges the projected steps once turned back
+  // forever inside RRT-Connect's connect loop (the request ran past its deadline).
+  for (const double range : {0.0, 0.2, 0.5}) {
+    v1::PlanRequest request = Glass();
+    v1::Vector3* t = request.mutable_path_constraints()->mutable_orientation(0)->mutable_tolerance();
+    t->set_y(0.01);
+    t->set_z(0.01);
+    (*request.mutable_planner()->mutable_parameters())["range"].set_double_value(range);
+    v1::PlanResponse response;
+    const grpc::Status status = server_->Plan(request, &response);
+    ASSERT_TRUE(status.ok()) << "range " << range << ": " << status.error_message();
+    ASSERT_EQ(response.outcome(), v1::SUCCESS) << "range " << range << ": " << response.message();
+    EXPECT_LE(WorstHandRatio(request, response.trajectory()), 1.0 + 1e-9) << "range " << range;
+  }
+}
+
 TEST_F(PathConstraintsTest, OptimizeKeepsThemOnAUsersPath) {
   // The straight joint-space line from start to goal tips the glass: refused, naming the constraint.
   const v1::PlanRequest glass = Glass();
