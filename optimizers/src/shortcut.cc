@@ -41,8 +41,7 @@ JointPath RemoveDuplicates(const JointPath& path) {
 /// otherwise discrete at max_step.
 bool SegmentValid(const CollisionChecker& checker, const Eigen::VectorXd& a, const Eigen::VectorXd& b,
                   double max_step, CheckCounters* counters) {
-  return checker.certifies_motion() ? checker.IsMotionCertified(a, b, counters)
-                                    : checker.IsMotionValid(a, b, max_step, counters);
+  return checker.IsMotionFree(a, b, max_step, counters);
 }
 
 /// Greedy vertex reduction: from each kept waypoint, jump to the farthest later waypoint (at most

@@ -167,8 +167,7 @@ CartesianPathResult ComputeCartesianPath(const CollisionChecker& checker, const 
           return go(middle, b, depth + 1, at);
         }
         if (spec.check_collisions) {
-          const bool free = checker.certifies_motion() ? checker.IsMotionCertified(q, next)
-                                                       : checker.IsMotionValid(q, next, spec.collision_resolution);
+          const bool free = checker.IsMotionFree(q, next, spec.collision_resolution);
           if (!free) {
             const CollisionResult contact = checker.Check(next);
             end(CartesianStop::kCollision,

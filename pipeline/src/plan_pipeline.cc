@@ -38,8 +38,7 @@ std::vector<std::size_t> CollidingSegments(const JointPath& path, const Collisio
   std::vector<std::size_t> colliding;
   CheckCounters counters;
   for (std::size_t k = 0; k + 1 < path.size(); ++k) {
-    const bool free = checker.certifies_motion() ? checker.IsMotionCertified(path[k], path[k + 1], &counters)
-                                                 : checker.IsMotionValid(path[k], path[k + 1], step, &counters);
+    const bool free = checker.IsMotionFree(path[k], path[k + 1], step, &counters);
     if (!free) colliding.push_back(k);
   }
   *state_checks += counters.state_checks;

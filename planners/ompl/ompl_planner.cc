@@ -400,8 +400,7 @@ class MotionChecker : public ob::MotionValidator {
     map_.ToEigen(s1, &a);
     map_.ToEigen(s2, &b);
     CheckCounters counters;
-    const bool ok = checker_->certifies_motion() ? checker_->IsMotionCertified(a, b, &counters)
-                                                 : checker_->IsMotionValid(a, b, max_step_, &counters);
+    const bool ok = checker_->IsMotionFree(a, b, max_step_, &counters);
     checks_->fetch_add(counters.state_checks, std::memory_order_relaxed);
     ok ? ++valid_ : ++invalid_;
     return ok;
@@ -481,8 +480,7 @@ class GeodesicMotionChecker : public ob::MotionValidator {
     std::size_t k = 0;
     for (; ok && k + 1 < states.size(); ++k) {
       CheckCounters counters;
-      ok = checker_->certifies_motion() ? checker_->IsMotionCertified(states[k], states[k + 1], &counters)
-                                        : checker_->IsMotionValid(states[k], states[k + 1], max_step_, &counters);
+      ok = checker_->IsMotionFree(states[k], states[k + 1], max_step_, &counters);
       checks_->fetch_add(counters.state_checks, std::memory_order_relaxed);
       if (!ok) break;
     }

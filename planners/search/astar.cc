@@ -288,8 +288,7 @@ class LatticeSearch {
   }
 
   bool EdgeValid(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-    return checker_.certifies_motion() ? checker_.IsMotionCertified(a, b, counters_)
-                                       : checker_.IsMotionValid(a, b, problem_.max_step, counters_);
+    return checker_.IsMotionFree(a, b, problem_.max_step, counters_);
   }
 
   void Push(std::uint32_t parent, std::uint32_t node, double edge_cost) {

@@ -72,7 +72,7 @@ class CheckerMotionValidator : public ob::MotionValidator {
     return ok;
   }
   bool Valid(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const {
-    return checker_.certifies_motion() ? checker_.IsMotionCertified(a, b) : checker_.IsMotionValid(a, b, 0.005);
+    return checker_.IsMotionFree(a, b, 0.005);
   }
 
  private:

@@ -137,6 +137,14 @@ class CollisionChecker {
   bool IsMotionCertified(const Eigen::VectorXd& a, const Eigen::VectorXd& b,
                          CheckCounters* counters = nullptr) const;
 
+  /// The motion check of the planners and the pipeline: IsMotionCertified when
+  /// certifies_motion() (no state on the segment is invalid), else IsMotionValid(a, b, max_step)
+  /// (the states at most max_step apart are valid).
+  bool IsMotionFree(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double max_step,
+                    CheckCounters* counters = nullptr) const {
+    return certifies_motion() ? IsMotionCertified(a, b, counters) : IsMotionValid(a, b, max_step, counters);
+  }
+
   /// A joint-space curve q(s), s ∈ [0, 1]: writes q(s) (num_dofs values) into *q.
   using Curve = std::function<void(double s, Eigen::VectorXd* q)>;
 
