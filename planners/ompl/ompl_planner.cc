@@ -499,7 +499,7 @@ class GeodesicMotionChecker : public ob::MotionValidator {
   }
 
   /// The states of the discrete geodesic s1 → s2 (s1 first, s2 last) in *states; false when it
-  /// does not reach s2.
+  /// does not reach s2 (*states then holds how far it got).
   static bool GeodesicStates(const ob::SpaceInformation& si, const StateMap& map, const ob::State* s1,
                              const ob::State* s2, std::vector<Eigen::VectorXd>* states) {
     const auto& space = *si.getStateSpace()->as<BoundedProjectedSpace>();
@@ -512,18 +512,10 @@ class GeodesicMotionChecker : public ob::MotionValidator {
       states->push_back(std::move(q));
       space.freeState(g);
     }
-    if (!reached) return false;
-    Eigen::VectorXd end;
-    map.ToEigen(s2, &end);
-    Eigen::VectorXd start;
-    map.ToEigen(s1, &start);
-    if (states->empty() || states->front() != start) states->insert(states->begin(), std::move(start));
-    if (states->back() != end) states->push_back(std::move(end));
-    return true;
+    return reached;  // BoundedProjectedSpace's geodesic starts at s1 and, reached, ends at s2
   }
 
  private:
-
   std::shared_ptr<const CollisionChecker> checker_;
   double max_step_;
   StateMap map_;
@@ -784,9 +776,8 @@ class OmplPlanner : public Planner {
     if (projected_space) {
       // OMPL's projected state space over the joint space: samples and steps (delta) projected
       // onto the tightened constraints; ConstrainedSpaceInformation ties the space to si_.
-      constraint_ = std::make_shared<ExcessConstraint>(constraints);
       space->registerDefaultProjection(std::make_shared<FirstJointProjection>(space.get()));
-      auto projected = std::make_shared<BoundedProjectedSpace>(space, constraint_);
+      auto projected = std::make_shared<BoundedProjectedSpace>(space, std::make_shared<ExcessConstraint>(constraints));
       projected->setDelta(params.at("constraint_delta"));
       space = projected;
       si_ = std::make_shared<ob::ConstrainedSpaceInformation>(projected);
@@ -946,8 +937,6 @@ class OmplPlanner : public Planner {
     planner_.reset();
     pdef_.reset();
     si_.reset();
-    constraint_.reset();
-    map_.constrained = false;
     checks_.store(0);
   }
 
@@ -1197,7 +1186,6 @@ class OmplPlanner : public Planner {
   std::unique_ptr<ReusableRrtConnect> reused_;      // its objects, to keep for the thread's next request
   std::uint64_t max_iterations_ = 0;
   StateMap map_;
-  std::shared_ptr<ExcessConstraint> constraint_;  ///< with path constraints in the projected space
   mutable std::atomic<std::uint64_t> checks_{0};
 };
 

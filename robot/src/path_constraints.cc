@@ -21,8 +21,6 @@ constexpr double kMinInterval = 1e-9;
 
 const char* AxisName(int a) { return a == 0 ? "x" : a == 1 ? "y" : "z"; }
 
-bool Finite(const Eigen::Vector3d& v) { return v.allFinite(); }
-
 /// The per-dof sums of per-moving-joint levers (a dof drives its own joint and its mimics).
 Eigen::VectorXd PerDof(const RobotModel& robot, const Eigen::VectorXd& moving) {
   Eigen::VectorXd out = Eigen::VectorXd::Zero(robot.num_dofs());
@@ -59,11 +57,10 @@ PathConstraints::PathConstraints(std::shared_ptr<const RobotModel> robot, std::v
     const bool euler = c.parameterization == OrientationParameterization::kXyzEulerAngles;
     for (int a = 0; a < 3; ++a) {
       const double t = c.tolerance[a];
-      const double most = euler && a == 1 ? kPi / 2 : kPi;
-      const bool ok = euler && a == 1 ? (t > 0 && t < most) : (t > 0 && t <= most);
-      if (!ok) {
+      const bool euler_y = euler && a == 1;
+      if (!(t > 0 && (euler_y ? t < kPi / 2 : t <= kPi))) {
         ThrowInvalid(where + ".tolerance." + AxisName(a) + " = " + FormatNumber(t) + " must be within (0, " +
-                     (euler && a == 1 ? std::string("π/2) with XYZ_EULER_ANGLES: at |y| = π/2 the x and z angles are "
+                     (euler_y ? std::string("π/2) with XYZ_EULER_ANGLES: at |y| = π/2 the x and z angles are "
                                                     "undefined (use ROTATION_VECTOR)")
                                       : std::string("π] [rad]")));
       }
@@ -75,7 +72,7 @@ PathConstraints::PathConstraints(std::shared_ptr<const RobotModel> robot, std::v
     PositionConstraintSpec& c = position_[i];
     const std::string where = field_ + ".position[" + std::to_string(i) + "]";
     check_link(c.link, where);
-    if (!Finite(c.point)) ThrowInvalid(where + ".point must be finite");
+    if (!c.point.allFinite()) ThrowInvalid(where + ".point must be finite");
     if (!c.region.matrix().allFinite()) ThrowInvalid(where + ".region must be a finite pose");
     for (int a = 0; a < 3; ++a) {
       const double h = c.half_extents[a];
@@ -90,8 +87,12 @@ PathConstraints::PathConstraints(std::shared_ptr<const RobotModel> robot, std::v
 
 void PathConstraints::Errors(const Eigen::VectorXd& q, Eigen::VectorXd* errors) const {
   thread_local std::vector<Eigen::Isometry3d> poses;
-  errors->resize(num_errors());
   robot_->ForwardKinematics(q, &poses);
+  ErrorsFromPoses(poses, errors);
+}
+
+void PathConstraints::ErrorsFromPoses(const std::vector<Eigen::Isometry3d>& poses, Eigen::VectorXd* errors) const {
+  errors->resize(num_errors());
   int row = 0;
   for (const OrientationConstraintSpec& c : orientation_) {
     const Eigen::Matrix3d E = c.orientation.toRotationMatrix().transpose() * poses[c.link].linear();
@@ -112,15 +113,20 @@ void PathConstraints::Errors(const Eigen::VectorXd& q, Eigen::VectorXd* errors) 
 }
 
 void PathConstraints::ErrorJacobian(const Eigen::VectorXd& q, Eigen::VectorXd* errors, Eigen::MatrixXd* jacobian) const {
-  Errors(q, errors);
-  const int n = robot_->num_dofs();
-  jacobian->resize(num_errors(), n);
   thread_local std::vector<Eigen::Isometry3d> poses;
+  robot_->ForwardKinematics(q, &poses);
+  ErrorsFromPoses(poses, errors);
+  JacobianAt(q, poses, *errors, jacobian);
+}
+
+void PathConstraints::JacobianAt(const Eigen::VectorXd& q, const std::vector<Eigen::Isometry3d>& poses,
+                                 const Eigen::VectorXd& errors, Eigen::MatrixXd* jacobian) const {
+  jacobian->resize(num_errors(), robot_->num_dofs());
   int row = 0;
   for (const OrientationConstraintSpec& c : orientation_) {
     const Jacobian J = PointJacobian(*robot_, q, c.link, Eigen::Vector3d::Zero());
     const Eigen::Matrix3d Rt = c.orientation.toRotationMatrix().transpose();
-    const Eigen::Vector3d e = errors->segment<3>(row);
+    const Eigen::Vector3d e = errors.segment<3>(row);
     Eigen::Matrix3d map;  // error rate per angular velocity in the base frame
     if (c.parameterization == OrientationParameterization::kRotationVector) {
       // d log(E)/dt = J_l⁻¹(e)·ω_E, ω_E = R_tᵀ ω (E = R_tᵀ R turns with R_tᵀ ω on the left).
@@ -132,7 +138,6 @@ void PathConstraints::ErrorJacobian(const Eigen::VectorXd& q, Eigen::VectorXd* e
     } else {
       // Body angular velocity ω_b = Eᵀ R_tᵀ ω = Rᵀ ω; ẋ = (ω_bx cos z − ω_by sin z)/cos y,
       // ẏ = ω_bx sin z + ω_by cos z, ż = ω_bz − ẋ sin y.
-      robot_->ForwardKinematics(q, &poses);
       const Eigen::Matrix3d Rb = poses[static_cast<std::size_t>(c.link)].linear().transpose();
       const double sy = std::sin(e[1]), cy = std::cos(e[1]), sz = std::sin(e[2]), cz = std::cos(e[2]);
       Eigen::Matrix3d rates;
@@ -284,11 +289,13 @@ bool PathConstraints::Project(Eigen::VectorXd* q, double shrink, int max_iterati
   const Eigen::VectorXd bound = TightenedBounds(shrink);
   Eigen::VectorXd e, excess(m);
   Eigen::MatrixXd J;
+  thread_local std::vector<Eigen::Isometry3d> poses;
   constexpr double kDamping = 1e-6;  // λ² of the damped least squares
   double previous = kInf;
   int stalled = 0;
   for (int it = 0; it <= max_iterations; ++it) {
-    Errors(*q, &e);
+    robot_->ForwardKinematics(*q, &poses);
+    ErrorsFromPoses(poses, &e);
     if (!e.allFinite()) return false;
     double total = 0.0;
     for (int r = 0; r < m; ++r) {
@@ -302,7 +309,7 @@ bool PathConstraints::Project(Eigen::VectorXd* q, double shrink, int max_iterati
     stalled = total > 0.99 * previous ? stalled + 1 : 0;
     if (it == max_iterations || stalled == 3) break;
     previous = total;
-    ErrorJacobian(*q, &e, &J);
+    JacobianAt(*q, poses, e, &J);
     for (int r = 0; r < m; ++r) {
       if (excess[r] == 0.0) J.row(r).setZero();  // inside its bound: not pulled on
     }

@@ -109,6 +109,11 @@ class PathConstraints {
   bool Project(Eigen::VectorXd* q, double shrink, int max_iterations = 30) const;
 
  private:
+  /// Errors (as Errors) from the robot's link poses at q (RobotModel::ForwardKinematics).
+  void ErrorsFromPoses(const std::vector<Eigen::Isometry3d>& poses, Eigen::VectorXd* errors) const;
+  /// ErrorJacobian's Jacobian at q, given q's link poses and errors.
+  void JacobianAt(const Eigen::VectorXd& q, const std::vector<Eigen::Isometry3d>& poses, const Eigen::VectorXd& errors,
+                  Eigen::MatrixXd* jacobian) const;
   /// Per constraint (orientation then position): the bound on each error's rate per unit of
   /// Σ levers·speed (rotation vector: (θ/2)/sin(θ/2), Euler: 1/cos(y_tol), position: 1).
   double RateFactor(std::size_t c) const;
