@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -25,6 +26,7 @@ const char* ToString(CoordinationMethod method) {
     case CoordinationMethod::kVelocityTuning: return "velocity_tuning";
     case CoordinationMethod::kSequential: return "sequential";
     case CoordinationMethod::kFleet: return "fleet";
+    case CoordinationMethod::kVelocityObstacles: return "velocity_obstacles";
   }
   return "?";
 }
@@ -372,11 +374,43 @@ class Coordinator {
       case CoordinationMethod::kComposite: return RunComposite(termination);
       case CoordinationMethod::kSequential: return RunSequential(termination);
       case CoordinationMethod::kFleet: return RunFleetMethod(termination);
+      case CoordinationMethod::kVelocityObstacles: return RunVelocityObstacles(termination);
       case CoordinationMethod::kAuto: break;
     }
     Attempt none;
     none.message = "no method";
     return none;
+  }
+
+  /// VELOCITY_OBSTACLES: the one robot steered among query_.moving_discs along its path alone.
+  Attempt RunVelocityObstacles(const Termination& termination) {
+    Attempt attempt;
+    attempt.order = {0};
+    const SinglePlan& alone = Alone(0);
+    if (!alone.ok) {
+      attempt.message = "robot '" + members_[0].placement.name + "' " +
+                        (alone.out_of_time ? alone.message : "has no path even alone: " + alone.message);
+      attempt.out_of_time = alone.out_of_time;
+      return attempt;
+    }
+    const Member& m = members_[0];
+    const VelocityObstacleResult steered = PlanWithVelocityObstacles(
+        *Own(0), m.start, m.goal, query_.moving_discs, m.limits, alone.path, VelocityObstacleOptions{}, termination);
+    if (!steered.reached) {
+      attempt.message = steered.message;
+      attempt.out_of_time = termination.ShouldStop();
+      return attempt;
+    }
+    attempt.ok = true;
+    attempt.trajectories = {steered.trajectory};
+    attempt.paths = {steered.path};
+    attempt.start_delay = {0.0};
+    attempt.wait_time = {0.0};
+    char closest[64];
+    std::snprintf(closest, sizeof closest, "%.1f mm", 1e3 * steered.min_disc_distance);
+    attempt.message = "steered in " + std::to_string(steered.steps) + " steps of 0.1 s along its path alone (" +
+                      std::to_string(alone.path.size()) + " states); closest approach to a disc " + closest;
+    return attempt;
   }
 
   /// The joint verification of an attempt; "" when it passes.
@@ -460,7 +494,9 @@ Attempt Coordinator::RunPriorityLoop(bool prm, const Termination& termination) {
       for (const CommittedMotion& c : query_.committed) {
         actors.push_back(Actor{&c.placement, &c.trajectory, c.begin, c.until});
         actor_member.push_back(-1);
-        hold_until = std::max(hold_until, c.until);
+        // One that stays for good (a moving obstacle) stands still after its motion: the goal
+        // must be held clear until then, and a check at that time covers the rest.
+        hold_until = std::max(hold_until, std::isfinite(c.until) ? c.until : c.begin + c.trajectory.duration());
       }
       blocked_by.assign(actors.size(), 0.0);
       std::vector<const CollisionChecker*> checkers;
@@ -523,7 +559,13 @@ Attempt Coordinator::RunPriorityLoop(bool prm, const Termination& termination) {
       if (!found.found) {
         failed = k;
         last_failure = "robot '" + m.placement.name + "' found no way past the robots before it (" +
-                       std::to_string(position) + " planned): " + found.message;
+                       std::to_string(position) + " planned) and the committed motions: " + found.message;
+        const auto most = std::max_element(blocked_by.begin(), blocked_by.end());
+        if (most != blocked_by.end() && *most > 0.0) {
+          const std::size_t a = static_cast<std::size_t>(most - blocked_by.begin());
+          last_failure += "; most conflicts with " + (actor_member[a] >= 0 ? "robot '" + members_[actor_member[a]].placement.name + "'"
+                                                                          : query_.committed[a - static_cast<std::size_t>(position)].id);
+        }
         break;
       }
       attempt.trajectories[k] = found.trajectory;
@@ -710,7 +752,7 @@ std::string Coordinator::Verify(const Attempt& attempt, TeamVerificationReport* 
     report->collision_guarantee = "discrete";
     report->collision_guarantee_reason =
         "certified against the scene, itself and each other, but against the workcell's committed trajectories "
-        "only at states at most " + FormatNumber(query_.time_step) + " s and " +
+        "and moving obstacles only at states at most " + FormatNumber(query_.time_step) + " s and " +
         FormatNumber(query_.collision_resolution) + " rad (m for prismatic and base joints) apart";
   }
   for (std::size_t k = 0; k < members_.size(); ++k) {
@@ -999,6 +1041,14 @@ void CoordinationQuery::Validate(const PlannerRegistry& registry) const {
   if (method == CoordinationMethod::kFleet) {
     const std::string why = detail::FleetInapplicable(*this);
     if (!why.empty()) ThrowInvalid("method = FLEET cannot plan this team: " + why);
+  }
+  if (method == CoordinationMethod::kVelocityObstacles) {
+    if (robots.size() != 1 || robots.front().placement.model->kind() != RobotKind::kPlanar) {
+      ThrowInvalid("method velocity_obstacles steers one planar base (x, y, theta); this query has " +
+                   std::to_string(robots.size()) + " robots, the first a " +
+                   ToString(robots.front().placement.model->kind()) + " robot");
+    }
+    if (robots.front().pose_goal) ThrowInvalid("method velocity_obstacles needs a joint goal (x, y, theta)");
   }
   if (max_reorderings < 0) ThrowInvalid("max_reorderings = " + std::to_string(max_reorderings) + " must be >= 0");
   const PlannerSpec& spec = registry.Spec(planner_id);  // throws NotFound

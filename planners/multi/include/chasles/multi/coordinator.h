@@ -16,14 +16,17 @@
 #include "chasles/collision/scene.h"
 #include "chasles/multi/fleet_lattice.h"
 #include "chasles/multi/team.h"
+#include "chasles/multi/velocity_obstacles.h"
 #include "chasles/pipeline/plan_pipeline.h"
 #include "chasles/planners/registry.h"
 #include "chasles/planners/termination.h"
 
 namespace chasles {
 
-enum class CoordinationMethod { kAuto, kPrioritized, kComposite, kVelocityTuning, kSequential, kFleet };
-/// "auto", "prioritized", "composite", "velocity_tuning", "sequential", "fleet".
+/// kVelocityObstacles: one planar base steered among moving discs (velocity_obstacles.h); never
+/// part of kAuto.
+enum class CoordinationMethod { kAuto, kPrioritized, kComposite, kVelocityTuning, kSequential, kFleet, kVelocityObstacles };
+/// "auto", "prioritized", "composite", "velocity_tuning", "sequential", "fleet", "velocity_obstacles".
 const char* ToString(CoordinationMethod method);
 
 /// One robot of a team.
@@ -65,7 +68,10 @@ struct CoordinationQuery {
   SampleCap sample_cap{1000000, 64ull << 20, "sample_period"};  ///< per robot; checked before sampling
   double robot_padding = 0.0;          ///< [m] kept between robots
   int max_reorderings = 0;             ///< 0 = 2 × robots
-  std::vector<CommittedMotion> committed;  ///< workcell reservations to avoid
+  std::vector<CommittedMotion> committed;  ///< workcell reservations and moving obstacles to avoid
+  /// VELOCITY_OBSTACLES: the committed motions as discs in the plane, to steer by (the result is
+  /// verified against `committed` itself).
+  std::vector<MovingDisc> moving_discs;
   /// FLEET: lattice spacing [m]; 0 = FleetResolution of the footprints and robot_padding.
   double fleet_resolution = 0.0;
   /// FLEET: the scene's content id and a cache of lattices under it (both optional: without
