@@ -510,6 +510,14 @@ std::vector<AttachedObject> AttachedObjectsFromProto(const google::protobuf::Rep
   return out;
 }
 
+std::vector<Shape> MovingObstacleShapesFromProto(const v1::MovingObstacle& obstacle, const std::string& field) {
+  std::vector<Shape> shapes;
+  ForEachPrimitive(obstacle, field, [&shapes](Shape shape, const std::string&, const std::string&, const char*, int) {
+    shapes.push_back(std::move(shape));
+  });
+  return shapes;
+}
+
 void IkResultToProto(const IkResult& result, const IkRequest& ik, const RobotModel& robot,
                      v1::InverseKinematicsResponse* response) {
   response->set_solved(!result.solutions.empty());

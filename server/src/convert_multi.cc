@@ -122,9 +122,10 @@ CoordinationQuery WorkcellPlanQuery(const v1::PlanRequest& request, std::shared_
                                     std::vector<std::string>* warnings) {
   const RobotModel& model = *robot;
   const v1::TrajectoryOptions& options = request.trajectory();
-  const auto refuse = [](const std::string& what) {
-    ThrowInvalid(what + " is not supported with workcell: a workcell plan is a sequence of exact moves and waits "
-                        "checked against the committed trajectories");
+  const std::string with = request.has_workcell() ? "workcell" : "moving_obstacles";
+  const auto refuse = [&with](const std::string& what) {
+    ThrowInvalid(what + " is not supported with " + with + ": such a plan is a sequence of exact moves and waits "
+                        "checked against the committed trajectories and moving obstacles");
   };
   if (options.post_processing() != v1::TrajectoryOptions::POST_PROCESSING_UNSPECIFIED &&
       options.post_processing() != v1::TrajectoryOptions::TOPP) {
@@ -165,6 +166,29 @@ CoordinationQuery WorkcellPlanQuery(const v1::PlanRequest& request, std::shared_
   query.collision_resolution = Defaulted(request.collision_resolution(), 0.005, 1e-4, 0.1, "collision_resolution");
   query.sample_period = Defaulted(options.sample_period(), 0.01, 1e-4, 1.0, "trajectory.sample_period");
   return query;
+}
+
+std::vector<MovingObstacle> MovingObstaclesFromProto(const google::protobuf::RepeatedPtrField<v1::MovingObstacle>& obstacles,
+                                                     int max_obstacles) {
+  if (obstacles.size() > max_obstacles) {
+    ThrowInvalid("moving_obstacles has " + std::to_string(obstacles.size()) + " entries, more than the cap of " +
+                 std::to_string(max_obstacles));
+  }
+  std::vector<MovingObstacle> out;
+  for (int i = 0; i < obstacles.size(); ++i) {
+    const v1::MovingObstacle& proto = obstacles.Get(i);
+    const std::string field = Indexed("moving_obstacles", i);
+    MovingObstacle obstacle;
+    obstacle.name = proto.name().empty() ? "obstacle" + std::to_string(i) : proto.name();
+    obstacle.shapes = MovingObstacleShapesFromProto(proto, field);
+    for (int k = 0; k < proto.waypoints_size(); ++k) {
+      obstacle.times.push_back(proto.waypoints(k).time());
+      obstacle.poses.push_back(PoseFromProto(proto.waypoints(k).pose(), Indexed(field + ".waypoints", k) + ".pose"));
+    }
+    obstacle.Validate(field);
+    out.push_back(std::move(obstacle));
+  }
+  return out;
 }
 
 v1::PlanOutcome CoordinationCodeToProto(CoordinationCode code) {

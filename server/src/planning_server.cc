@@ -37,6 +37,7 @@
 #include "chasles/server/metrics.h"
 #include "chasles/server/model_store.h"
 #include "chasles/server/redis_client.h"
+#include "chasles/server/replan.h"
 #include "chasles/server/request_log.h"
 #include "chasles/server/security.h"
 #include "chasles/server/status.h"
@@ -249,7 +250,8 @@ using RawService = v1::Planning::WithRawCallbackMethod_Plan<v1::Planning::WithRa
                                 v1::Planning::WithRawCallbackMethod_AssignFleetGoals<
                                     v1::Planning::WithRawCallbackMethod_CloseFleetSession<
                                         v1::Planning::WithRawCallbackMethod_StreamFleetSession<
-                                            v1::Planning::Service>>>>>>>>>>>>>>>>>>;
+                                            v1::Planning::WithRawCallbackMethod_Replan<
+                                            v1::Planning::Service>>>>>>>>>>>>>>>>>>>;
 
 /// The service's collaborators and its share of the server options.
 struct ServiceContext {
@@ -384,35 +386,41 @@ class PlanningService final : public RawService {
                                         grpc::ByteBuffer* out) override {
     return Serve<v1::UpdateSceneRequest, v1::UpdateSceneResponse>(
         "UpdateScene", context, in, out, Where::kPool, [this](auto& call) {
-          const v1::UpdateSceneRequest& request = call.request;
-          v1::UpdateSceneResponse& response = call.response;
           const StoredScene base =
-              request.scene_id().empty() ? store_->default_scene() : store_->FindScene(request.scene_id());
-          const PointCloudInsertion insertion = PointCloudInsertionFromProto(request);
-          PointCloudInsertionStats stats;
-          std::shared_ptr<const Scene> updated;
-          std::uint64_t bytes = 0;
-          {
-            HeapScope measure;
-            updated = std::make_shared<const Scene>(base.scene->InsertPointCloud(insertion, &stats, store_->limits()));
-            bytes = static_cast<std::uint64_t>(std::max<std::int64_t>(measure.live_bytes(), 0));
-          }
-          // Content id: the base scene's id and the update (the same update of the same scene
-          // gives the same id).
-          v1::UpdateSceneRequest key = request;
-          key.set_scene_id(base.id);
-          const StoredScene scene = store_->PutScene(ProtoContentId(key), std::move(updated), bytes);
-          response.set_scene_id(scene.id);
-          response.set_octomap(stats.octomap);
-          response.set_points_inserted(stats.points_inserted);
-          response.set_occupied_leaves(stats.occupied_leaves);
-          response.set_resolution(stats.resolution);
-          response.set_seconds(stats.seconds);
-          call.record.fields = {{"scene", IdPrefix(base.id) + "->" + IdPrefix(scene.id)},
-                                {"map", stats.octomap + (stats.created ? " (new)" : "")},
-                                {"points", std::to_string(stats.points_inserted)},
-                                {"occupied", std::to_string(stats.occupied_leaves)}};
+              call.request.scene_id().empty() ? store_->default_scene() : store_->FindScene(call.request.scene_id());
+          InsertPoints(call.request, base, &call.response, &call.record.fields);
         });
+  }
+
+  /// UpdateScene's work: `request`'s points into `base` (request.scene_id is base's), the new
+  /// scene stored under its content id and returned; *response and *fields filled.
+  StoredScene InsertPoints(const v1::UpdateSceneRequest& request, const StoredScene& base,
+                           v1::UpdateSceneResponse* response, std::vector<std::pair<std::string, std::string>>* fields) {
+    const PointCloudInsertion insertion = PointCloudInsertionFromProto(request);
+    PointCloudInsertionStats stats;
+    std::shared_ptr<const Scene> updated;
+    std::uint64_t bytes = 0;
+    {
+      HeapScope measure;
+      updated = std::make_shared<const Scene>(base.scene->InsertPointCloud(insertion, &stats, store_->limits()));
+      bytes = static_cast<std::uint64_t>(std::max<std::int64_t>(measure.live_bytes(), 0));
+    }
+    // Content id: the base scene's id and the update (the same update of the same scene gives
+    // the same id).
+    v1::UpdateSceneRequest key = request;
+    key.set_scene_id(base.id);
+    const StoredScene scene = store_->PutScene(ProtoContentId(key), std::move(updated), bytes);
+    response->set_scene_id(scene.id);
+    response->set_octomap(stats.octomap);
+    response->set_points_inserted(stats.points_inserted);
+    response->set_occupied_leaves(stats.occupied_leaves);
+    response->set_resolution(stats.resolution);
+    response->set_seconds(stats.seconds);
+    *fields = {{"scene", IdPrefix(base.id) + "->" + IdPrefix(scene.id)},
+               {"map", stats.octomap + (stats.created ? " (new)" : "")},
+               {"points", std::to_string(stats.points_inserted)},
+               {"occupied", std::to_string(stats.occupied_leaves)}};
+    return scene;
   }
 
   grpc::ServerUnaryReactor* InverseKinematics(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
@@ -687,6 +695,10 @@ class PlanningService final : public RawService {
   grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* StreamFleetSession(
       grpc::CallbackServerContext* context) override {
     return new FleetStream(this, context);
+  }
+
+  grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* Replan(grpc::CallbackServerContext* context) override {
+    return new ReplanStream(this, context);
   }
 
   grpc::ServerUnaryReactor* Release(grpc::CallbackServerContext* context, const grpc::ByteBuffer* in,
@@ -964,6 +976,423 @@ class PlanningService final : public RawService {
     CallCancellation cancellation_;
   };
 
+  /// One answer's plan inside a Replan stream: what RunPlan needs of a call.
+  struct PlanJob {
+    v1::PlanRequest request;
+    v1::PlanResponse response;
+    RequestRecord record;
+    Clock::time_point arrival;
+    Clock::time_point deadline;
+    CallCancellation* cancellation = nullptr;
+    const StoredScene* scene = nullptr;  ///< the stream's scene (not the request's)
+    TimedTrajectory trajectory;          ///< set by RunPlan on success: exactly what was returned
+    Termination Start(Clock::time_point budget_end, Clock::time_point call_deadline) {
+      return cancellation->Start(budget_end, call_deadline);
+    }
+    bool cancelled() const { return cancellation->cancelled(); }
+  };
+  StoredScene SceneOfCall(const UnaryCall<v1::PlanRequest, v1::PlanResponse>&, const v1::PlanRequest& request) {
+    return SceneOfRequest(*store_, request);
+  }
+  StoredScene SceneOfCall(const PlanJob& job, const v1::PlanRequest&) { return *job.scene; }
+  static void KeepTrajectory(UnaryCall<v1::PlanRequest, v1::PlanResponse>&, const TimedTrajectory&) {}
+  static void KeepTrajectory(PlanJob& job, const TimedTrajectory& trajectory) { job.trajectory = trajectory; }
+
+  /// One Replan call (see ReplanRequest): a message is read, answered on the pool, the answer
+  /// written, then the next message read, as FleetStream does. The stream keeps its problem, its
+  /// scene (changed by the messages), its moving obstacles on the stream's clock and the current
+  /// trajectory (stream time current_begin_ is its t = 0). An invalid message ends the stream
+  /// with INVALID_ARGUMENT naming the message, field and rule; expected failures are outcomes.
+  class ReplanStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
+   public:
+    ReplanStream(PlanningService* service, grpc::CallbackServerContext* context)
+        : service_(service), arrival_(Clock::now()), deadline_(SteadyDeadline(*context)) {
+      record_.rpc = "Replan";
+      record_.client = service_->ClientOf(*context);
+      service_->services_.metrics->RequestStarted(record_.rpc);
+      service_->in_flight_.fetch_add(1);
+      if (service_->draining_.load()) {
+        End(grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                         "this server is shutting down and takes no new calls; send it to another replica"));
+        return;
+      }
+      if (grpc::Status refused = service_->access_->Authorize(*context, record_.rpc); !refused.ok()) {
+        End(refused);
+        return;
+      }
+      StartRead(&in_);
+    }
+
+    void OnReadDone(bool ok) override {
+      if (!ok) {
+        End(grpc::Status::OK);
+        return;
+      }
+      if (service_->draining_.load()) {
+        End(grpc::Status(grpc::StatusCode::UNAVAILABLE, Prefix() + "this server is shutting down; reopen the stream "
+                                                                   "on another replica with the problem and the state"));
+        return;
+      }
+      request_.Clear();
+      grpc::ProtoBufferReader reader(&in_);
+      if (!request_.ParseFromZeroCopyStream(&reader)) {
+        End(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                         Prefix() + "not a valid chasles.v1.ReplanRequest message (" + std::to_string(in_.Length()) +
+                             " bytes); check that the client and server use the same chasles.v1 proto"));
+        return;
+      }
+      JobTicket ticket;
+      ticket.client = record_.client;
+      switch (service_->pool_->TrySubmit([this] { Answer(); }, ticket)) {
+        case SubmitResult::kQueued: return;
+        case SubmitResult::kClientQueueFull:
+        case SubmitResult::kQueueFull:
+          End(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                           Prefix() + "the server's work queue is full; reopen the stream later"));
+          return;
+        case SubmitResult::kStopping:
+          End(grpc::Status(grpc::StatusCode::UNAVAILABLE, Prefix() + "the server is shutting down"));
+          return;
+      }
+    }
+
+    void OnWriteDone(bool ok) override {
+      if (!ok) {
+        End(grpc::Status(grpc::StatusCode::CANCELLED, "the stream ended before an answer was delivered"));
+        return;
+      }
+      ++answered_;
+      StartRead(&in_);
+    }
+
+    void OnCancel() override { cancellation_.Cancel(); }
+
+    void OnDone() override {
+      record_.fields = {{"messages", std::to_string(answered_)},
+                        {"planned", std::to_string(planned_)},
+                        {"kept", std::to_string(kept_)}};
+      record_.total_seconds = SecondsSince(arrival_);
+      service_->Record(record_);
+      service_->in_flight_.fetch_sub(1);
+      delete this;
+    }
+
+   private:
+    std::string Prefix() const { return "message " + std::to_string(answered_) + ": "; }
+
+    /// On a worker: answers request_ and writes it, or ends the stream.
+    void Answer() {
+      const Clock::time_point started = Clock::now();
+      v1::ReplanResponse response;
+      std::uint64_t peak = 0;
+      const grpc::Status status = service_->RunCapped([&] { Respond(&response); }, &peak);
+      record_.peak_heap_bytes = std::max(record_.peak_heap_bytes, peak);
+      if (!status.ok()) {
+        End(grpc::Status(status.error_code(), Prefix() + status.error_message()));
+        return;
+      }
+      response.set_sequence(answered_);
+      response.set_seconds(SecondsSince(started));
+      out_.Clear();
+      grpc::ProtoBufferWriter writer(&out_, grpc::kProtoBufferWriterMaxBufferLength, response.ByteSizeLong());
+      if (!response.SerializeToZeroCopyStream(&writer)) {
+        End(grpc::Status(grpc::StatusCode::INTERNAL, Prefix() + "the answer could not be serialised"));
+        return;
+      }
+      StartWrite(&out_);
+    }
+
+    /// The robot the problem plans for, with what it carries (as RunPlan resolves it).
+    StoredRobot Robot() const {
+      std::vector<std::string> ignored;
+      return service_->store_->Carrying(RobotOfRequest(*service_->store_, problem_), problem_.attached_objects(),
+                                        "plan.attached_objects", &ignored);
+    }
+
+    /// The work of one message (throws Error / StatusError for invalid input).
+    void Respond(v1::ReplanResponse* response) {
+      const bool first = answered_ == 0;
+      // 1. The problem (first message, or a new one) and the time.
+      if (first && !request_.has_plan()) {
+        ThrowInvalid("plan is required in the first message (the problem: robot, scene, start, goal, planner)");
+      }
+      const double time = first ? 0.0 : request_.time();
+      if (!std::isfinite(time) || time < last_time_) {
+        ThrowInvalid("time = " + FormatNumber(time) + " must be finite and >= the previous message's " +
+                     FormatNumber(last_time_) + " s");
+      }
+      if (request_.time_budget() != 0.0 &&
+          !(std::isfinite(request_.time_budget()) && request_.time_budget() > 0.0 && request_.time_budget() <= 600.0)) {
+        ThrowInvalid("time_budget = " + FormatNumber(request_.time_budget()) + " must be within (0, 600] s (0 = the plan's)");
+      }
+      bool new_problem = false;
+      if (request_.has_plan()) {
+        const v1::PlanRequest& plan = request_.plan();
+        if (plan.has_workcell()) ThrowInvalid("plan.workcell is not supported in Replan: plan in the workcell with Plan");
+        if (!plan.group().empty()) ThrowInvalid("plan.group is not supported in Replan: give every joint");
+        if (plan.has_path_constraints()) ThrowInvalid("plan.path_constraints are not supported in Replan");
+        if (plan.target_case() != v1::PlanRequest::kGoal) ThrowInvalid("plan.goal (joint positions) is required in Replan");
+        if (const grpc::Status refused = service_->CheckBudgets(BudgetsOf(plan)); !refused.ok()) {
+          throw StatusError{refused};
+        }
+        const bool keep_scene = !first && plan.scene_source_case() == v1::PlanRequest::SCENE_SOURCE_NOT_SET;
+        problem_ = plan;
+        problem_.clear_moving_obstacles();
+        if (!keep_scene) scene_ = SceneOfRequest(*service_->store_, problem_, "plan.scene");
+        obstacles_ = ShiftedMovingObstacles(plan.moving_obstacles(), -time);  // on the stream's clock
+        new_problem = true;
+      }
+      // 2. What changed.
+      std::string changed;
+      if (request_.has_scene()) {
+        scene_ = service_->store_->AddScene(request_.scene(), "scene");
+        changed = "the scene changed";
+      }
+      if (request_.has_points()) {
+        v1::UpdateSceneRequest points = request_.points();
+        points.set_scene_id(scene_.id);
+        v1::UpdateSceneResponse ignored;
+        std::vector<std::pair<std::string, std::string>> fields;
+        scene_ = service_->InsertPoints(points, scene_, &ignored, &fields);
+        changed = changed.empty() ? "points were added to the scene" : changed + " and points were added";
+      }
+      bool obstacles_changed = false;
+      if (request_.moving_obstacles_changed() && !first) {
+        MovingObstaclesFromProto(request_.moving_obstacles());  // validates (names the field)
+        obstacles_ = request_.moving_obstacles();
+        obstacles_changed = true;
+      }
+      last_time_ = time;
+      const StoredRobot robot = Robot();
+      const RobotModel& model = *robot.model;
+
+      // 3. The state at `time`.
+      Eigen::VectorXd q, v;
+      const bool on_trajectory = has_current_ && request_.state().positions_size() == 0 && !first;
+      if (first || new_problem) {
+        // A new problem starts from its start (first message) or the reported state.
+      }
+      if (request_.state().positions_size() > 0) {
+        q = ConfigurationFromProto(request_.state().positions(), model, "state.positions", 1e-6, nullptr);
+      } else if (on_trajectory) {
+        q = current_.Evaluate(time - current_begin_).q;
+      } else if (first) {
+        q = ConfigurationFromProto(problem_.start().positions(), model, "plan.start.positions",
+                                   BoundsToleranceFromProto(problem_.bounds_tolerance()), nullptr);
+      } else {
+        ThrowInvalid("state.positions is empty and there is no current trajectory to take the state from; "
+                     "send the robot's joint positions");
+      }
+      if (request_.velocities_size() > 0) {
+        if (request_.velocities_size() != model.num_dofs()) {
+          ThrowInvalid("velocities has " + std::to_string(request_.velocities_size()) + " values, robot '" +
+                       model.name() + "' has " + std::to_string(model.num_dofs()) + " joints (or send none)");
+        }
+        v.resize(model.num_dofs());
+        for (int i = 0; i < model.num_dofs(); ++i) {
+          v[i] = request_.velocities(i);
+          if (!std::isfinite(v[i])) ThrowInvalid("velocities[" + std::to_string(i) + "] = " + FormatNumber(v[i]) + " must be finite");
+        }
+      } else if (on_trajectory) {
+        v = current_.Evaluate(time - current_begin_).qd;
+      } else {
+        v = Eigen::VectorXd::Zero(model.num_dofs());
+      }
+      response->set_time(time);
+
+      // 4. Keep the current trajectory while it holds.
+      std::string reason;
+      if (!first && !new_problem) {
+        reason = Invalidation(robot, q, v, time, changed, obstacles_changed);
+        if (reason.empty()) {
+          ++kept_;
+          response->set_action(v1::ReplanResponse::KEPT);
+          KeptToProto(model, time, response->mutable_plan());
+          return;
+        }
+      }
+      response->set_action(first || new_problem ? v1::ReplanResponse::PLANNED : v1::ReplanResponse::REPLANNED);
+      response->set_reason(reason);
+
+      // 5. Plan: brake first when moving, then plan from where it stops.
+      ++planned_;
+      has_current_ = false;
+      const Eigen::VectorXd limits = AccelerationLimits(model);
+      const TimedTrajectory braking = BrakingTrajectory(q, v, limits);
+      const double stop = braking.duration();
+      const Eigen::VectorXd rest = braking.Evaluate(stop).q;
+      if (stop > 0.0) {
+        if (std::string hit = BrakingConflict(robot, braking, time); !hit.empty()) {
+          v1::PlanResponse* plan = response->mutable_plan();
+          plan->set_outcome(v1::START_IN_COLLISION);
+          plan->set_message("the robot cannot stop without a collision: braking from its velocity at t = " +
+                            FormatNumber(time) + " s along a straight line over " + FormatNumber(stop) + " s " + hit);
+          return;
+        }
+      }
+      PlanJob job;
+      job.request = problem_;
+      job.request.mutable_start()->clear_positions();
+      for (int i = 0; i < rest.size(); ++i) job.request.mutable_start()->add_positions(rest[i]);
+      *job.request.mutable_moving_obstacles() = ShiftedMovingObstacles(obstacles_, time + stop);
+      if (request_.time_budget() != 0.0) job.request.set_time_budget(request_.time_budget());
+      job.arrival = Clock::now();
+      job.deadline = deadline_;
+      job.cancellation = &cancellation_;
+      job.scene = &scene_;
+      service_->RunPlan(job);
+      *response->mutable_plan() = std::move(job.response);
+      v1::PlanResponse* plan = response->mutable_plan();
+      if (plan->outcome() != v1::SUCCESS) return;
+      // The new current trajectory: the braking, then the plan.
+      current_ = Concatenated(braking, job.trajectory);
+      current_begin_ = time;
+      has_current_ = true;
+      if (stop > 0.0) {
+        plan->set_duration(current_.duration());
+        SamplePlan(model, plan);
+        plan->set_message("braked for " + FormatNumber(stop) + " s from its velocity, then: " + plan->message());
+      }
+    }
+
+    /// Acceleration limits of the problem: trajectory.max_acceleration, else 2 × the velocity limits.
+    Eigen::VectorXd AccelerationLimits(const RobotModel& model) const {
+      const v1::TrajectoryOptions& options = problem_.trajectory();
+      Eigen::VectorXd a(model.num_dofs());
+      for (int i = 0; i < model.num_dofs(); ++i) {
+        a[i] = options.max_acceleration_size() == model.num_dofs() ? options.max_acceleration(i)
+                                                                    : 2.0 * model.velocity_limits()[i];
+      }
+      return a;
+    }
+
+    /// Why the current trajectory no longer holds from `time`, or "".
+    std::string Invalidation(const StoredRobot& robot, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                             double time, const std::string& changed, bool obstacles_changed) {
+      if (!has_current_) return "there is no current trajectory (the previous answer had none)";
+      const double local = time - current_begin_;
+      const TrajectorySample expected = current_.Evaluate(local);
+      const double off = (q - expected.q).cwiseAbs().maxCoeff();
+      if (off > kStateTolerance) {
+        return "the state is " + FormatNumber(off) + " rad off the current trajectory at t = " + FormatNumber(time) +
+               " s (tolerance " + FormatNumber(kStateTolerance) + ")";
+      }
+      const double off_speed = (v - expected.qd).cwiseAbs().maxCoeff();
+      if (off_speed > kVelocityTolerance) {
+        return "the velocity is " + FormatNumber(off_speed) + " rad/s off the current trajectory's at t = " +
+               FormatNumber(time) + " s (tolerance " + FormatNumber(kVelocityTolerance) + ")";
+      }
+      const TimedTrajectory rest = TrajectoryFrom(current_, local);
+      if (!changed.empty()) {
+        const double padding = PaddingFromProto(problem_.padding(), "plan.padding");
+        const std::shared_ptr<const CollisionChecker> checker = service_->store_->Checker(robot, scene_, padding);
+        const double resolution = problem_.collision_resolution() == 0.0 ? 0.005 : problem_.collision_resolution();
+        if (std::string hit = FindTrajectoryCollision(*checker, rest, 0.0, resolution); !hit.empty()) {
+          return changed + ": the current trajectory collides " + ShiftedTime(hit, time);
+        }
+      }
+      if (obstacles_changed) {
+        if (std::string hit = ObstacleConflict(robot, rest, time); !hit.empty()) return hit;
+      }
+      return "";
+    }
+
+    /// "at t = x s (...)" with x moved from the trajectory's clock to the stream's.
+    static std::string ShiftedTime(const std::string& hit, double origin) {
+      const std::string key = "at t = ";
+      const std::size_t at = hit.find(key);
+      if (at == std::string::npos) return hit;
+      const std::size_t end = hit.find(" s", at);
+      const double t = std::stod(hit.substr(at + key.size(), end - at - key.size()));
+      return hit.substr(0, at) + key + FormatNumber(std::round((t + origin) * 1e6) / 1e6) + hit.substr(end);  // µs
+    }
+
+    /// The first conflict of `motion` (starting at stream time `time`) with a moving obstacle, or "".
+    std::string ObstacleConflict(const StoredRobot& robot, const TimedTrajectory& motion, double time) const {
+      CommittedMotion mine;
+      mine.id = "the current trajectory";
+      mine.placement.name = "robot";
+      mine.placement.model = robot.model;
+      mine.trajectory = motion;
+      mine.until = std::numeric_limits<double>::infinity();
+      const std::vector<MovingObstacle> obstacles = MovingObstaclesFromProto(ShiftedMovingObstacles(obstacles_, time));
+      const double resolution = problem_.collision_resolution() == 0.0 ? 0.005 : problem_.collision_resolution();
+      for (std::size_t i = 0; i < obstacles.size(); ++i) {
+        const CommittedMotion other = MotionOfObstacle(obstacles[i], "moving_obstacles[" + std::to_string(i) + "]");
+        const std::string conflict = FindMotionConflict(mine, other, 0.0, 1e-3, resolution);
+        if (!conflict.empty()) return ShiftedTime(conflict, time);
+      }
+      return "";
+    }
+
+    /// The braking motion against the scene and the moving obstacles, or "".
+    std::string BrakingConflict(const StoredRobot& robot, const TimedTrajectory& braking, double time) {
+      const double padding = PaddingFromProto(problem_.padding(), "plan.padding");
+      const std::shared_ptr<const CollisionChecker> checker = service_->store_->Checker(robot, scene_, padding);
+      if (!checker->IsMotionFree(braking.Evaluate(0.0).q, braking.Evaluate(braking.duration()).q, 0.005)) {
+        return "(the scene): " + ShiftedTime(FindTrajectoryCollision(*checker, braking, 0.0, 0.005), time);
+      }
+      const std::string conflict = ObstacleConflict(robot, braking, time);
+      return conflict.empty() ? "" : "(" + conflict + ")";
+    }
+
+    /// The current trajectory's rest from `time`, as Plan returns a trajectory.
+    void KeptToProto(const RobotModel& model, double time, v1::PlanResponse* plan) {
+      const TimedTrajectory rest = TrajectoryFrom(current_, time - current_begin_);
+      current_ = rest;
+      current_begin_ = time;
+      plan->set_outcome(v1::SUCCESS);
+      plan->set_message("kept: the current trajectory still holds from t = " + FormatNumber(time) + " s");
+      plan->set_duration(rest.duration());
+      SamplePlan(model, plan);
+    }
+
+    /// The response's samples and path from current_ at the problem's sample period.
+    void SamplePlan(const RobotModel& model, v1::PlanResponse* plan) const {
+      const v1::TrajectoryOptions& options = problem_.trajectory();
+      plan->clear_trajectory();
+      plan->clear_knots();
+      // As Plan answers: knots when asked for (and the pieces allow), samples unless only knots.
+      const bool knots = options.knots_only() && KnotsToProto(current_, model.dof_names(), plan->mutable_knots());
+      if (!knots || options.sample_period() != 0.0) {
+        const double period = options.sample_period() == 0.0 ? 0.01 : options.sample_period();
+        SamplesToProto(current_.Sample(period), model, plan->mutable_trajectory());
+      }
+      plan->clear_path();
+      for (const Eigen::VectorXd& q : current_.Waypoints()) {
+        google::protobuf::RepeatedField<double>* positions = plan->add_path()->mutable_positions();
+        positions->Add(q.data(), q.data() + q.size());
+      }
+    }
+
+    /// Finishes the stream once, recording its status.
+    void End(const grpc::Status& status) {
+      const grpc::Status sent(status.error_code(), StatusMessage(status.error_message()));
+      record_.status_code = static_cast<int>(sent.error_code());
+      record_.status_message = sent.error_message();
+      Finish(sent);
+    }
+
+    static constexpr double kStateTolerance = 1e-3;     ///< [rad or m] state off the trajectory
+    static constexpr double kVelocityTolerance = 1e-2;  ///< [rad/s or m/s]
+
+    PlanningService* const service_;
+    const Clock::time_point arrival_;
+    const Clock::time_point deadline_;
+    RequestRecord record_;
+    grpc::ByteBuffer in_, out_;
+    v1::ReplanRequest request_;
+    std::uint64_t answered_ = 0, planned_ = 0, kept_ = 0;
+    CallCancellation cancellation_;
+    v1::PlanRequest problem_;
+    StoredScene scene_;
+    google::protobuf::RepeatedPtrField<v1::MovingObstacle> obstacles_;  ///< on the stream's clock
+    TimedTrajectory current_;
+    double current_begin_ = 0.0;
+    bool has_current_ = false;
+    double last_time_ = 0.0;
+  };
+
   /// A write reactor that only answers an error (a Benchmark refused before it starts).
   class RefusedWriter final : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
    public:
@@ -1104,7 +1533,10 @@ class PlanningService final : public RawService {
     services_.metrics->RequestFinished(record);
   }
 
-  void RunPlan(UnaryCall<v1::PlanRequest, v1::PlanResponse>& call) {
+  /// A Plan call's work. `Call` is a UnaryCall or a ReplanStream's PlanJob: request, response,
+  /// record, arrival, deadline, Start(budget_end, deadline) and cancelled().
+  template <typename Call>
+  void RunPlan(Call& call) {
     v1::PlanResponse& response = call.response;
     call.record.request_id = RequestId(call.request.request_id(), "req");
     response.set_request_id(call.record.request_id);
@@ -1131,35 +1563,54 @@ class PlanningService final : public RawService {
     if (request.attached_objects_size() > 0) {
       call.record.fields.push_back({"attached", std::to_string(request.attached_objects_size())});
     }
-    const StoredScene scene = SceneOfRequest(*store_, request);
+    const StoredScene scene = SceneOfCall(call, request);
     response.set_scene_id(scene.id);
     call.record.fields.push_back({"robot", IdPrefix(robot.id)});
     call.record.fields.push_back({"scene", IdPrefix(scene.id)});
     const double padding = PaddingFromProto(request.padding(), "padding");
-    if (request.has_workcell()) {
+    if (request.has_workcell() || request.moving_obstacles_size() > 0) {
+      // Both are planned in space-time: a team of one among committed motions.
+      const std::string with = request.has_workcell() ? "workcell" : "moving_obstacles";
       if (request.has_path_constraints()) {
-        ThrowInvalid("path_constraints are not supported with workcell (a workcell plan is coordinated in space-time "
-                     "without them); plan without workcell, or without path_constraints");
+        ThrowInvalid("path_constraints are not supported with " + with + " (it is planned in space-time "
+                     "without them); plan without " + with + ", or without path_constraints");
       }
       if (padding != 0.0) {
-        ThrowInvalid("padding = " + FormatNumber(padding) +
-                     " is not supported with workcell (a workcell plan is coordinated without robot padding); "
-                     "send padding 0, or plan without workcell");
+        ThrowInvalid("padding = " + FormatNumber(padding) + " is not supported with " + with +
+                     " (it is planned in space-time without robot padding); send padding 0, or plan without " + with);
       }
-      // A team of one among the workcell's committed trajectories.
-      call.record.fields.front().second = "workcell:" + planner;
+      const bool steer = request.moving_obstacle_method() == v1::PlanRequest::VELOCITY_OBSTACLES;
+      if (!v1::PlanRequest::MovingObstacleMethod_IsValid(request.moving_obstacle_method())) {
+        ThrowInvalid("moving_obstacle_method = " + std::to_string(request.moving_obstacle_method()) +
+                     " is not a method (SPACE_TIME, VELOCITY_OBSTACLES)");
+      }
+      if (steer && request.has_workcell()) {
+        ThrowInvalid("moving_obstacle_method = VELOCITY_OBSTACLES is not supported with workcell: its committed "
+                     "trajectories are not discs; use SPACE_TIME");
+      }
+      const std::vector<MovingObstacle> obstacles = MovingObstaclesFromProto(request.moving_obstacles());
+      call.record.fields.front().second = (request.has_workcell() ? "workcell:" : steer ? "velocity_obstacles:" : "space_time:") + planner;
+      if (!obstacles.empty()) call.record.fields.push_back({"moving_obstacles", std::to_string(obstacles.size())});
       std::vector<std::string> warnings = group_warnings;
       CoordinationQuery query = WorkcellPlanQuery(request, robot.model, scene.scene, registry_, &warnings);
       ApplyReplyCap(&query.sample_cap);
       query.sample_cap.field = "trajectory.sample_period";
-      const double origin =
-          request.workcell().start_time() == 0.0 ? workcells_->Now() : request.workcell().start_time();
-      for (const Reservation& r : workcells_->Active(request.workcell().name())) {
-        if (r.robot_name != query.robots.front().placement.name) query.committed.push_back(MotionOf(r, origin));
+      if (request.has_workcell()) {
+        const double origin =
+            request.workcell().start_time() == 0.0 ? workcells_->Now() : request.workcell().start_time();
+        for (const Reservation& r : workcells_->Active(request.workcell().name())) {
+          if (r.robot_name != query.robots.front().placement.name) query.committed.push_back(MotionOf(r, origin));
+        }
       }
+      for (std::size_t i = 0; i < obstacles.size(); ++i) {
+        query.committed.push_back(MotionOfObstacle(obstacles[i], "moving_obstacles[" + std::to_string(i) + "]"));
+        if (steer) query.moving_discs.push_back(DiscOfObstacle(obstacles[i]));
+      }
+      if (steer) query.method = CoordinationMethod::kVelocityObstacles;
       const Termination termination = call.Start(BudgetEnd(query.time_budget, call.deadline), call.deadline);
       const CoordinationOutcome outcome = chasles::Coordinate(query, registry_, termination);
       WorkcellPlanToProto(outcome, query, &response);
+      if (outcome.code == CoordinationCode::kSuccess) KeepTrajectory(call, outcome.robots.front().trajectory);
       AddPlanWarnings(request, described, warnings, &response);
       call.record.outcome = v1::PlanOutcome_Name(response.outcome());
       if (outcome.code == CoordinationCode::kCancelled) {
@@ -1215,6 +1666,7 @@ class PlanningService final : public RawService {
                           {"optimize", outcome.seconds.optimize},   {"verify", outcome.seconds.verify}};
     outcome.seconds.total = SecondsSince(call.arrival);
     PlanOutcomeToProto(outcome, query, &response, request.trajectory().knots_only());
+    if (outcome.code == PlanOutcomeCode::kSuccess) KeepTrajectory(call, outcome.trajectory);
     group_warnings.insert(group_warnings.end(), settings.warnings.begin(), settings.warnings.end());
     AddPlanWarnings(request, described, group_warnings, &response);
     grpc::Status status = StatusFromOutcome(outcome.code, outcome.message);

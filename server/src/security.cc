@@ -334,7 +334,7 @@ Permission RequiredPermission(std::string_view rpc) {
   if (method.rfind(kPlanningService, 0) == 0) method.remove_prefix(kPlanningService.size());
   static constexpr std::string_view kPlanMethods[] = {
       "Plan",        "Optimize",    "InverseKinematics", "CartesianPath", "ListPlanners", "UploadRobot",
-      "UploadScene", "UpdateScene", "Coordinate",        "Benchmark",     "StopBenchmark"};
+      "UploadScene", "UpdateScene", "Coordinate",        "Benchmark",     "StopBenchmark", "Replan"};
   for (std::string_view plan : kPlanMethods) {
     if (method == plan) return Permission::kPlan;
   }

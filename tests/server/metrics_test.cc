@@ -298,7 +298,7 @@ TEST(ServerMetrics, LabelValuesStayInTheirBoundedSets) {
                                          "InverseKinematics", "CartesianPath", "Optimize", "Coordinate", "CreateWorkcell",
                                          "CommitTrajectory", "Release", "Benchmark", "StopBenchmark",
                                          "OpenFleetSession", "AssignFleetGoals", "CloseFleetSession", "StreamFleetSession",
-                                         "other"};
+                                         "Replan", "other"};
   for (const Sample& sample : samples) {
     const auto rpc = sample.labels.find("rpc");
     if (rpc != sample.labels.end()) {

@@ -216,7 +216,8 @@ TEST_F(SecurityTest, TokensFileErrorsNameTheLineAndNeverTheToken) {
 
 TEST(Security, PermissionsOfEveryRpc) {
   for (const char* rpc : {"Plan", "Optimize", "InverseKinematics", "ListPlanners", "UploadRobot", "UploadScene",
-                          "UpdateScene", "Coordinate", "Benchmark", "StopBenchmark", "/chasles.v1.Planning/Plan"}) {
+                          "UpdateScene", "Coordinate", "Benchmark", "StopBenchmark", "Replan",
+                          "/chasles.v1.Planning/Plan"}) {
     EXPECT_EQ(RequiredPermission(rpc), Permission::kPlan) << rpc;
   }
   for (const char* rpc : {"CreateWorkcell", "CommitTrajectory", "Release", "/chasles.v1.Planning/Release",

@@ -165,6 +165,9 @@ void OptimizeOutcomeToProto(const OptimizeOutcome& outcome, const OptimizeQuery&
 std::vector<AttachedObject> AttachedObjectsFromProto(const google::protobuf::RepeatedPtrField<v1::AttachedObject>& objects,
                                                      const RobotModel& robot, const std::string& field);
 
+/// A moving obstacle's primitives (errors name `field.boxes[i]...`). \throws Error(kInvalidArgument).
+std::vector<Shape> MovingObstacleShapesFromProto(const v1::MovingObstacle& obstacle, const std::string& field);
+
 /// Fills a catalogue entry.
 void PlannerSpecToProto(const PlannerSpec& spec, v1::PlannerDescription* description);
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "chasles/multi/coordinator.h"
+#include "chasles/multi/moving_obstacles.h"
 #include "chasles/planners/registry.h"
 #include "chasles/server/model_store.h"
 #include "chasles/server/workcells.h"
@@ -29,7 +30,7 @@ CoordinationQuery CoordinationQueryFromProto(const v1::CoordinateRequest& reques
                                              const TeamRobotResolver& resolve, const PlannerRegistry& registry,
                                              std::vector<std::string>* warnings, int max_robots = 1000);
 
-/// A Plan request with a WorkcellContext as a team of one (PRIORITIZED: its path, a roadmap and
+/// A Plan request with a WorkcellContext or moving obstacles as a team of one (PRIORITIZED: its path, a roadmap and
 /// the space-time search around the committed motions). Trajectory options beyond the velocity
 /// and acceleration limits and the sample period are refused with INVALID_ARGUMENT. Start and
 /// goal values within `bounds_tolerance` outside a limit are clamped, each reported in *warnings.
@@ -38,6 +39,12 @@ CoordinationQuery WorkcellPlanQuery(const v1::PlanRequest& request, std::shared_
                                     std::vector<std::string>* warnings);
 
 v1::PlanOutcome CoordinationCodeToProto(CoordinationCode code);
+
+/// PlanRequest.moving_obstacles in domain types (errors name `moving_obstacles[i]...`: no shapes,
+/// no waypoints, times negative or not increasing, non-finite poses). At most `max_obstacles`.
+/// \throws Error(kInvalidArgument).
+std::vector<MovingObstacle> MovingObstaclesFromProto(const google::protobuf::RepeatedPtrField<v1::MovingObstacle>& obstacles,
+                                                     int max_obstacles = 1000);
 
 
 /// With `knots` (KnotsFor), each robot's trajectory also as knots (KnotsToProto).
