@@ -61,6 +61,12 @@ const char kUsage[] =
     "                                  straight lines through waypoint poses); print where it stopped,\n"
     "                                  the fraction achieved and the timed trajectory; --out and --method\n"
     "                                  as for plan; exit 0 only when the whole path was achieved and timed\n"
+    "  replan MESSAGES.jsonl [--out F]\n"
+    "                                  a replanning stream: one chasles.v1.ReplanRequest per line\n"
+    "                                  (protobuf JSON; blank lines and lines starting with # skipped; the\n"
+    "                                  first carries the plan); print each answer (time, KEPT / PLANNED /\n"
+    "                                  REPLANNED and why, outcome, duration); --out writes the last\n"
+    "                                  answer as for plan; exit 0 only when the last answer has a trajectory\n"
     "  upload-robot FILE.urdf [--srdf FILE.srdf [--strict-srdf]] [--mesh NAME=FILE]... [--exact-meshes]\n"
     "  upload-robot --dh FILE.json | --poe FILE.json\n"
     "                                  store a robot (URDF, or a chasles.v1.DhRobot / PoeRobot in\n"
@@ -526,6 +532,59 @@ int CartesianPath(const Options& options) {
     return kExitFailed;
   }
   return kExitOk;
+}
+
+// --- replan ------------------------------------------------------------------------------------
+
+int Replan(const Options& options) {
+  if (options.positional.size() != 2) UsageError("replan takes one MESSAGES.jsonl");
+  RequireOutFormat(options);
+  const std::string& path = options.positional[1];
+  std::istringstream lines(ReadFileOrExit(path, "chasles.v1.ReplanRequest lines"));
+  std::vector<v1::ReplanRequest> messages;
+  std::string line;
+  for (int number = 1; std::getline(lines, line); ++number) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos || line[line.find_first_not_of(" \t")] == '#') continue;
+    v1::ReplanRequest message;
+    const auto status = google::protobuf::util::JsonStringToMessage(line, &message);
+    if (!status.ok()) {
+      std::cerr << "chasles: '" << path << "' line " << number << " is not a valid chasles.v1.ReplanRequest in protobuf JSON: "
+                << status.ToString() << "\n";
+      return kExitUsage;
+    }
+    messages.push_back(std::move(message));
+  }
+  if (messages.empty()) UsageError("'" + path + "' holds no ReplanRequest");
+  auto stub = v1::Planning::NewStub(MakeChannel(options));
+  grpc::ClientContext context;
+  double budget = 0.0;
+  for (const v1::ReplanRequest& m : messages) budget += m.plan().time_budget() > 0 ? m.plan().time_budget() : 5.0;
+  SetDeadline(&context, options.timeout > 0 ? options.timeout : budget + 30.0);
+  auto stream = stub->Replan(&context);
+  v1::ReplanResponse last;
+  bool answered = false;
+  for (const v1::ReplanRequest& message : messages) {
+    if (!stream->Write(message)) break;
+    v1::ReplanResponse answer;
+    if (!stream->Read(&answer)) break;
+    const v1::PlanResponse& plan = answer.plan();
+    std::printf("message %-3llu t = %-8.3f %-9s %s, %.4f s, %d samples, %.2f ms%s%s\n",
+                static_cast<unsigned long long>(answer.sequence()), answer.time(),
+                v1::ReplanResponse::Action_Name(answer.action()).c_str(), v1::PlanOutcome_Name(plan.outcome()).c_str(),
+                plan.duration(), plan.trajectory().points_size(), 1e3 * answer.seconds(),
+                answer.reason().empty() ? "" : "\n            because ", answer.reason().c_str());
+    if (plan.outcome() != v1::SUCCESS) std::printf("            %s\n", plan.message().c_str());
+    last = answer;
+    answered = true;
+  }
+  stream->WritesDone();
+  const grpc::Status status = stream->Finish();
+  if (!status.ok()) return ReportRpcError("Replan", options, status);
+  if (!answered) {
+    std::cerr << "chasles: the stream ended without an answer\n";
+    return kExitFailed;
+  }
+  return FinishWithTrajectory(options, last, last.plan().outcome(), last.plan().message(), last.plan().trajectory());
 }
 
 // --- ik ----------------------------------------------------------------------------------------
@@ -1056,6 +1115,7 @@ int main(int argc, char** argv) {
   if (command == "optimize") return Optimize(options);
   if (command == "ik") return InverseKinematics(options);
   if (command == "cartesian") return CartesianPath(options);
+  if (command == "replan") return Replan(options);
   if (command == "upload-robot") return UploadRobot(options);
   if (command == "upload-scene") return UploadScene(options);
   if (command == "update-scene") return UpdateScene(options);

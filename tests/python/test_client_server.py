@@ -300,6 +300,46 @@ class ServerTest(unittest.TestCase):
         self.assertEqual(broken.outcome, "START_VIOLATES_CONSTRAINTS", broken.message)
         self.assertIn("path_constraints.orientation[0]", broken.message)
 
+    def test_plan_around_people_walking_by_and_replan(self) -> None:
+        example = json.loads((ROOT / "examples/requests/base_crossing_people.json").read_text(encoding="utf-8"))
+        walkers = example["movingObstacles"]
+
+        def clearance(result, offset: float = 0.0) -> float:
+            # The base's two body spheres (r 0.2 at ±0.15 m along its heading) against each walker
+            # (an upright cylinder, r 0.3, walking linearly between its waypoints), every sample.
+            traj = result.trajectory
+            closest = np.inf
+            for t, q in zip(traj.t, traj.q):
+                for walker in walkers:
+                    times = [w["time"] for w in walker["waypoints"]]
+                    xs = [w["pose"]["position"]["x"] for w in walker["waypoints"]]
+                    ys = [w["pose"]["position"]["y"] for w in walker["waypoints"]]
+                    centre = np.array([np.interp(t + offset, times, xs), np.interp(t + offset, times, ys)])
+                    for along in (0.15, -0.15):
+                        body = q[:2] + along * np.array([np.cos(q[2]), np.sin(q[2])])
+                        closest = min(closest, np.linalg.norm(body - centre) - 0.5)
+            return closest
+
+        for method in ("SPACE_TIME", "VELOCITY_OBSTACLES"):
+            result = self.client.plan(example["start"]["positions"], example["goal"]["positions"],
+                                      robot=example["robot"], scene=example["scene"], sample_period=0.005,
+                                      moving_obstacles=walkers, moving_obstacle_method=method)
+            self.assertTrue(result.success, f"{method}: {result.outcome}: {result.message}")
+            self.assertGreater(clearance(result), 0.0, method)
+        blind = self.client.plan(example["start"]["positions"], example["goal"]["positions"], robot=example["robot"],
+                                 scene=example["scene"], sample_period=0.005)
+        self.assertLess(clearance(blind), 0.0)
+        # The stream: kept while nothing changes, replanned round a walker seen at t = 1 s.
+        problem = dict(example, movingObstacles=[])
+        answers = list(self.client.replan([{"plan": problem}, {"time": 0.5},
+                                           {"time": 1.0, "moving_obstacles_changed": True,
+                                            "moving_obstacles": walkers[:1]}]))
+        self.assertEqual([a.action for a in answers], ["PLANNED", "KEPT", "REPLANNED"])
+        self.assertIn("walker_a", answers[2].reason)
+        self.assertTrue(answers[2].plan.success, answers[2].plan.message)
+        walkers = walkers[:1]
+        self.assertGreater(clearance(answers[2].plan, offset=1.0), 0.0)
+
     def test_coordinate_a_fleet_and_sample_its_knots(self) -> None:
         request = ROOT / "examples/requests/coordinate_fleet.json"
         response = self.client.coordinate(str(request))

@@ -493,5 +493,32 @@ TEST(Cli, IkPoseGoalAndDhPoeUploads) {
   EXPECT_EQ(both.exit_code, 2) << both.output;
 }
 
+TEST(Cli, MovingObstaclesAndAReplanningStream) {
+  LoopbackServer server;
+  const std::string at = "--server " + server.address() + " ";
+  for (const char* example : {"base_crossing_people", "base_crossing_people_vo"}) {
+    CommandResult plan = RunCli(at + "plan " + ExamplePath(std::string("requests/") + example + ".json"));
+    EXPECT_EQ(plan.exit_code, 0) << plan.output;
+    EXPECT_NE(plan.output.find("outcome     SUCCESS"), std::string::npos) << plan.output;
+  }
+  // The example stream: kept, the pallet replanned around, the person seen replanned around, kept.
+  const std::string csv = ::testing::TempDir() + "/chasles_cli_replan.csv";
+  CommandResult replan = RunCli(at + "replan " + ExamplePath("requests/replan_base.jsonl") + " --out " + csv);
+  EXPECT_EQ(replan.exit_code, 0) << replan.output;
+  for (const char* line : {"message 0   t = 0.000    PLANNED   SUCCESS", "message 1   t = 1.000    KEPT      SUCCESS",
+                           "message 2   t = 2.000    REPLANNED SUCCESS", "'body' touches 'dropped_pallet'",
+                           "message 3   t = 3.000    REPLANNED SUCCESS", "moving obstacle 'walker_c'",
+                           "message 4   t = 4.000    KEPT      SUCCESS"}) {
+    EXPECT_NE(replan.output.find(line), std::string::npos) << line << "\n" << replan.output;
+  }
+  EXPECT_GT(ReadText(csv).size(), 1000u);
+  // A line that is not a ReplanRequest names the line.
+  const std::string bad = ::testing::TempDir() + "/chasles_cli_replan_bad.jsonl";
+  std::ofstream(bad) << "# comment\n{\"time\": \"soon\"}\n";
+  CommandResult refused = RunCli(at + "replan " + bad);
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("line 2 is not a valid chasles.v1.ReplanRequest"), std::string::npos) << refused.output;
+}
+
 }  // namespace
 }  // namespace chasles::testing

@@ -28,6 +28,7 @@ _EXPORTS = {
     "OptimizeResult": "results",
     "ParameterInfo": "results",
     "PlannerInfo": "results",
+    "ReplanResult": "results",
     "PlanResult": "results",
     "RobotInfo": "results",
     "Trajectory": "trajectory",
@@ -35,14 +36,15 @@ _EXPORTS = {
 
 __all__ = [
     "BenchmarkProgress", "BenchmarkResult", "BenchmarkRun", "CartesianResult", "ChaslesError", "Client", "ConfigSummary",
-    "DEFAULT_TIMEOUT", "OptimizeResult", "ParameterInfo", "PlannerInfo", "PlanResult", "RobotInfo", "Trajectory",
+    "DEFAULT_TIMEOUT", "OptimizeResult", "ParameterInfo", "PlannerInfo", "PlanResult", "ReplanResult", "RobotInfo",
+    "Trajectory",
 ]
 
 if TYPE_CHECKING:
     from .benchmark import BenchmarkProgress, BenchmarkResult, BenchmarkRun, ConfigSummary
     from .client import DEFAULT_TIMEOUT, Client
     from .errors import ChaslesError
-    from .results import CartesianResult, OptimizeResult, ParameterInfo, PlannerInfo, PlanResult, RobotInfo
+    from .results import CartesianResult, OptimizeResult, ParameterInfo, PlannerInfo, PlanResult, ReplanResult, RobotInfo
     from .trajectory import Trajectory
 
 

@@ -23,7 +23,7 @@ from .convert import (JointValues, joint_state, joint_states, joint_values, plan
                       plan_request_from, pose_message, set_fields, set_sources, to_message, trajectory_options)
 from .convert import benchmark_request as build_benchmark_request
 from .errors import ChaslesError
-from .results import CartesianResult, OptimizeResult, PlannerInfo, PlanResult, RobotInfo, limits_used
+from .results import CartesianResult, OptimizeResult, PlannerInfo, PlanResult, ReplanResult, RobotInfo, limits_used
 from .trajectory import Trajectory
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -571,6 +571,31 @@ class Client:
         finally:
             call.cancel()  # (a no-op once the stream has ended)
 
+    def replan(self, messages: Iterable[Any], timeout: Optional[float] = None) -> Iterator[ReplanResult]:
+        """One Replan stream: ``messages`` yields ReplanRequests (or dicts of their fields, e.g.
+        ``{"plan": {...}}`` first, then ``{"time": 2.0, "state": {"positions": [...]}}``,
+        ``{"time": 3.0, "scene": {...}}`` or ``{"time": 4.0, "moving_obstacles_changed": True,
+        "moving_obstacles": [...]}``) as the robot moves; one ReplanResult comes back per message,
+        in order: the current trajectory's rest while it holds (``action == "KEPT"``), else a new
+        trajectory from the robot's state (braking first when it is moving). Ends when
+        ``messages`` does.
+
+        Raises:
+            ChaslesError: a bad message ends the stream; the error names the message's index.
+        """
+        def requests() -> Iterator[pb.ReplanRequest]:
+            for item in messages:
+                yield item if isinstance(item, pb.ReplanRequest) else replan_message(item)
+
+        call = self._stub.Replan(requests(), timeout=self._timeout(timeout))
+        try:
+            for response in call:
+                yield ReplanResult.from_response(response)
+        except grpc.RpcError as error:
+            raise ChaslesError.from_rpc_error(error, "Replan") from None
+        finally:
+            call.cancel()  # (a no-op once the stream has ended)
+
     def close_fleet_session(self, name: str, timeout: Optional[float] = 30.0) -> bool:
         """Closes session ``name``; False when it was not open."""
         return self._call("CloseFleetSession", pb.CloseFleetSessionRequest(name=name), timeout).closed
@@ -708,6 +733,16 @@ class Client:
         Returns True when it was running and is now stopping.
         """
         return self._call("StopBenchmark", pb.StopBenchmarkRequest(request_id=request_id), timeout).stopped
+
+
+def replan_message(fields: Mapping[str, Any]) -> pb.ReplanRequest:
+    """A ReplanRequest from a dict of its fields (``plan`` may already be a PlanRequest)."""
+    fields = dict(fields)
+    plan = fields.pop("plan", None)
+    message = to_message(fields, pb.ReplanRequest, "replan message")
+    if plan is not None:
+        message.plan.CopyFrom(plan if isinstance(plan, pb.PlanRequest) else plan_request_from(plan, "plan"))
+    return message
 
 
 def _text(value: Union[str, os.PathLike]) -> str:

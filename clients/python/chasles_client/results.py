@@ -201,6 +201,34 @@ class PlanResult:
 
 
 @dataclass
+class ReplanResult:
+    """One answer of a replanning stream (``Client.replan``).
+
+    Attributes:
+        sequence: the message answered (0 = the first).
+        action: ``"PLANNED"`` (the first message or a new problem), ``"KEPT"`` (the current
+            trajectory still holds: its rest from ``time``) or ``"REPLANNED"`` (see ``reason``).
+        reason: what invalidated the current trajectory (empty unless replanned).
+        time: [s] the stream's clock at the trajectory's t = 0.
+        plan: the trajectory from the robot's state, as ``Client.plan`` returns it.
+        seconds: [s] the server's time on this answer.
+    """
+
+    sequence: int
+    action: str
+    reason: str
+    time: float
+    plan: PlanResult
+    seconds: float
+
+    @classmethod
+    def from_response(cls, response: Any) -> "ReplanResult":
+        return cls(sequence=response.sequence, action=type(response).Action.Name(response.action),
+                   reason=response.reason, time=response.time, plan=PlanResult.from_response(response.plan),
+                   seconds=response.seconds)
+
+
+@dataclass
 class OptimizeResult:
     """The answer to an Optimize request (fields as in ``PlanResult``).
 
