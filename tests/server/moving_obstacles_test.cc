@@ -299,6 +299,53 @@ TEST_F(Replan, ReplansWhenABoxLandsOnItsWayBrakingFirst) {
   EXPECT_NEAR(last.positions(1), 4.0, 1e-9);
 }
 
+TEST_F(Replan, ReplansAroundPointsASensorSees) {
+  v1::ReplanRequest first;
+  *first.mutable_plan() = Problem();
+  // A sensor at (6, 4, 0.3) sees a 1 m wide wall of points across the route at x = 8, each at the
+  // centre of a 5 cm voxel (OctoMap's voxels span [k·res, (k+1)·res)).
+  v1::ReplanRequest seen = At(1.5);
+  std::vector<Eigen::Vector3d> points;
+  for (int j = 0; j < 20; ++j) {
+    for (int k = 0; k < 12; ++k) points.emplace_back(8.025, 3.525 + 0.05 * j, 0.025 + 0.05 * k);
+  }
+  for (const Eigen::Vector3d& p : points) {
+    for (int i = 0; i < 3; ++i) seen.mutable_points()->add_points(p[i]);
+  }
+  seen.mutable_points()->mutable_sensor_origin()->set_x(6.0);
+  seen.mutable_points()->mutable_sensor_origin()->set_y(4.0);
+  seen.mutable_points()->mutable_sensor_origin()->set_z(0.3);
+  seen.mutable_points()->set_resolution(0.05);
+  grpc::Status status;
+  const auto answers = Run({first, seen}, &status);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(answers.size(), 2u);
+  EXPECT_EQ(answers[1].action(), v1::ReplanResponse::REPLANNED);
+  EXPECT_THAT(answers[1].reason(), HasSubstr("points were added to the scene: the current trajectory collides at t = "));
+  ASSERT_EQ(answers[1].plan().outcome(), v1::SUCCESS) << answers[1].plan().message();
+  // Every sample keeps the body spheres off every point's voxel (exact sphere–cube distance).
+  double closest = std::numeric_limits<double>::infinity();
+  for (const v1::TrajectoryPoint& p : answers[1].plan().trajectory().points()) {
+    for (const double along : {0.15, -0.15}) {
+      const Eigen::Vector3d sphere(p.positions(0) + along * std::cos(p.positions(2)),
+                                   p.positions(1) + along * std::sin(p.positions(2)), 0.25);
+      for (const Eigen::Vector3d& point : points) {
+        const double gap = ((sphere - point).cwiseAbs() - Eigen::Vector3d::Constant(0.025)).cwiseMax(0.0).norm();
+        closest = std::min(closest, gap - 0.2);
+      }
+    }
+  }
+  EXPECT_GT(closest, 0.0);
+  // The first trajectory went through the wall.
+  double through = std::numeric_limits<double>::infinity();
+  for (const v1::TrajectoryPoint& p : answers[0].plan().trajectory().points()) {
+    for (const Eigen::Vector3d& point : points) {
+      through = std::min(through, (Eigen::Vector3d(p.positions(0), p.positions(1), 0.25) - point).norm());
+    }
+  }
+  EXPECT_LT(through, 0.2);
+}
+
 TEST_F(Replan, ReplansAroundAWalkerThatAppears) {
   v1::ReplanRequest first;
   *first.mutable_plan() = Problem();
