@@ -2,7 +2,7 @@
 // overhead. Every figure is a median (and p95) over repeated runs, each next to a baseline
 // measured in the same run, because these machines are shared and noisy.
 //
-//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|effort|cartesian|carry|constraints|moving|coordination|fleet|fleet_coordinate|fleet_lattice|fleet_session|benchmark|fairness|memory|all] [--queries N] [--seed S]
+//   chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|effort|cartesian|carry|constraints|moving|viewer|coordination|fleet|fleet_coordinate|fleet_lattice|fleet_session|benchmark|fairness|memory|all] [--queries N] [--seed S]
 //                 [--planners a,b,...] [--scenes a,b,...] [--budget S] [--anytime-budget S]
 //                 [--grpc-requests N] [--shortcut-attempts N] [--ik-poses N] [--examples DIR]
 //                 [--problems maze,office,drone_course,panda_shelf]
@@ -52,6 +52,7 @@
 #include "bench_cartesian.h"
 #include "bench_constraints.h"
 #include "bench_moving.h"
+#include "bench_viewer.h"
 #include "bench_effort.h"
 #include "bench_fleet.h"
 #include "bench_fleet_lattice.h"
@@ -1102,7 +1103,7 @@ int Main(int argc, char** argv) {
     else if (arg == "--urdf") options.urdfs = Split(value());
     else {
       std::fprintf(stderr,
-                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|effort|cartesian|carry|constraints|moving|coordination|fleet|fleet_coordinate|fleet_lattice|fleet_session|benchmark|fairness|memory|all]\n"
+                   "usage: chasles-bench [--section checks|plan|pipeline|clutter|mesh_robot|sphere_fit|robots|families|grpc|kinematics|trajectory|effort|cartesian|carry|constraints|moving|viewer|coordination|fleet|fleet_coordinate|fleet_lattice|fleet_session|benchmark|fairness|memory|all]\n"
                    "                     [--queries N]\n"
                    "                     [--seed S]\n"
                    "                     [--planners a,b] [--scenes a,b] [--budget S] [--anytime-budget S]\n"
@@ -1189,6 +1190,11 @@ int Main(int argc, char** argv) {
     carry.cases = options.queries;
     carry.seed = options.seed;
     BenchCarry(carry);
+  }
+  if (options.section == "viewer") {  // needs Chromium: not part of "all"
+    ViewerBenchOptions viewer;
+    viewer.examples_dir = examples_dir;
+    BenchViewer(viewer);
   }
   if (options.section == "moving" || options.section == "all") {
     MovingBenchOptions moving;

@@ -20,6 +20,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include <google/protobuf/util/json_util.h>
@@ -27,6 +28,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include "chasles/server/benchmark_report.h"
+#include "chasles/server/model_store.h"
+#include "chasles/server/view_page.h"
 #include "chasles/v1/chasles.grpc.pb.h"
 #include "commands.h"
 #include "moveit_import.h"
@@ -43,7 +46,7 @@ constexpr int kExitUsage = 2;
 
 const char kBenchUsage[] =
     "Usage: chasles [--server ADDR] [--tls-ca F] [--token T] [--timeout S] bench CONFIG.yaml [--out DIR] [--runs N]\n"
-    "                                  [--parallelism N] [--run-budget S] [--no-db] [--quiet]\n"
+    "                                  [--parallelism N] [--run-budget S] [--no-db] [--views] [--quiet]\n"
     "\n"
     "CONFIG.yaml (paths relative to the file):\n"
     "  experiment: NAME           name in the OMPL logs (default: the file's stem)\n"
@@ -65,7 +68,8 @@ const char kBenchUsage[] =
     "      post_processing: topp  topp | collocation | spline | none (default: the problem's)\n"
     "\n"
     "Writes DIR/<problem>.log (OMPL benchmark logs), DIR/results.db (ompl_benchmark_statistics,\n"
-    "unless --no-db), DIR/runs.csv and DIR/results.json; prints a table per configuration.\n"
+    "unless --no-db), DIR/runs.csv and DIR/results.json; prints a table per configuration. --views also\n"
+    "writes DIR/views/index.html, a table of the runs linking each solved run's 3-D viewer page.\n"
     "Ctrl-C stops the benchmark and keeps the finished runs; a second Ctrl-C abandons it.\n";
 
 std::atomic<int> g_interrupts{0};
@@ -310,6 +314,68 @@ void WriteFile(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
   out << text;
   if (!out) throw ConfigError{"cannot write '" + path.string() + "': " + std::strerror(errno)};
+}
+
+/// `text` safe inside HTML text and attribute values.
+std::string HtmlEscaped(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '&': out += "&amp;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+/// --views: DIR/views/<problem>-<config>-<run>.html for every solved run with knots (the
+/// viewer page, three.js shared in DIR/views/three.js) and DIR/views/index.html linking each
+/// run of the table. Returns the number of pages.
+std::size_t WriteViews(const fs::path& dir, const v1::BenchmarkRequest& request, const std::vector<v1::BenchmarkRun>& runs,
+                       const std::vector<std::string>& problem_names, const std::vector<std::string>& config_names) {
+  fs::create_directories(dir);
+  WriteFile(dir / "three.js", ViewerLibraryJs());
+  ModelStore store(DefaultRobotProto(), DefaultSceneProto());
+  std::vector<v1::BenchmarkRun> sorted = runs;
+  std::sort(sorted.begin(), sorted.end(), [](const v1::BenchmarkRun& a, const v1::BenchmarkRun& b) {
+    return std::make_tuple(a.problem(), a.config(), a.run()) < std::make_tuple(b.problem(), b.config(), b.run());
+  });
+  std::string index =
+      "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>chasles bench: runs</title></head>"
+      "<body style=\"font-family:sans-serif\"><h1>Benchmark runs</h1><table cellpadding=\"4\"><tr><th>problem</th>"
+      "<th>configuration</th><th>run</th><th>outcome</th><th>plan [ms]</th><th>total [ms]</th><th>duration [s]</th>"
+      "<th>min clearance [mm]</th></tr>";
+  std::size_t pages = 0;
+  for (const v1::BenchmarkRun& run : sorted) {
+    const std::string problem = run.problem() < problem_names.size() ? problem_names[run.problem()] : "?";
+    const std::string config = run.config() < config_names.size() ? config_names[run.config()] : "?";
+    std::string cell = v1::PlanOutcome_Name(run.outcome());
+    if (run.solved() && run.knots().times_size() > 0 && run.problem() < static_cast<std::uint32_t>(request.problems_size())) {
+      v1::PlanResponse response;
+      response.set_outcome(run.outcome());
+      response.set_message(run.message());
+      response.set_request_id(problem + " / " + config + " / run " + std::to_string(run.run()));
+      response.set_duration(run.duration());
+      *response.mutable_knots() = run.knots();
+      const std::string file = SafeFileName(problem + "-" + config + "-" + std::to_string(run.run())) + ".html";
+      WriteFile(dir / file, ViewPageHtml(ViewDataJson(ViewOfPlan(store, request.problems(run.problem()).request(), response)),
+                                         "three.js"));
+      cell = "<a href=\"" + HtmlEscaped(file) + "\">" + cell + "</a>";
+      ++pages;
+    }
+    char numbers[160];
+    std::snprintf(numbers, sizeof numbers, "<td>%.2f</td><td>%.2f</td><td>%.3f</td><td>%s</td>", 1e3 * run.plan_time(),
+                  1e3 * run.total_time(), run.duration(),
+                  run.min_clearance() < 0.0 ? "" : std::to_string(1e3 * run.min_clearance()).c_str());
+    index += "<tr><td>" + HtmlEscaped(problem) + "</td><td>" + HtmlEscaped(config) + "</td><td>" +
+             std::to_string(run.run()) + "</td><td>" + cell + "</td>" + numbers + "</tr>";
+  }
+  index += "</table></body></html>\n";
+  WriteFile(dir / "index.html", index);
+  return pages;
 }
 
 std::string Json(const google::protobuf::Message& message) {
@@ -604,7 +670,7 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
   std::string config_path, out_dir;
   std::int64_t runs = -1, parallelism = -1;
   double run_budget = -1;
-  bool quiet = false, make_db = true;
+  bool quiet = false, make_db = true, views = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& arg = args[i];
     auto value = [&]() -> std::string {
@@ -638,6 +704,8 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
       quiet = true;
     } else if (arg == "--no-db") {
       make_db = false;
+    } else if (arg == "--views") {
+      views = true;
     } else if (!arg.empty() && arg[0] == '-') {
       std::cerr << "chasles: bench: unknown option '" << arg << "'\n(see chasles bench --help)\n";
       return kExitUsage;
@@ -665,6 +733,7 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
   if (parallelism >= 0) request.set_parallelism(static_cast<std::uint32_t>(parallelism));
   if (run_budget > 0) request.set_run_budget(run_budget);
   if (!out_dir.empty()) config.out = out_dir;
+  if (views) request.set_trajectories(true);
   request.set_request_id("cli-bench-" + std::to_string(getpid()) + "-" +
                          std::to_string(std::chrono::system_clock::now().time_since_epoch().count() % 1000000007));
 
@@ -719,6 +788,11 @@ int BenchCommand(const ConnectionOptions& connection, double timeout, const std:
     std::printf("wrote %s/runs.csv, results.json", out.string().c_str());
     if (!logs.empty()) std::printf(" and %zu OMPL log%s", logs.size(), logs.size() == 1 ? "" : "s");
     std::printf("\n");
+    if (views) {
+      const std::size_t pages = WriteViews(out / "views", request, finished, problem_names, config_names);
+      std::printf("wrote %s/views/index.html and %zu viewer page%s (one per solved run)\n", out.string().c_str(), pages,
+                  pages == 1 ? "" : "s");
+    }
     if (!logs.empty() && make_db) {
       const fs::path db = out / "results.db";
       fs::remove(db);

@@ -22,9 +22,13 @@
 #include <grpcpp/grpcpp.h>
 
 #include "chasles/robot/error.h"
+#include "chasles/server/model_store.h"
+#include "chasles/server/trajectory_export.h"
+#include "chasles/server/view_page.h"
 #include "chasles/v1/chasles.grpc.pb.h"
 #include "commands.h"
 #include "connection.h"
+#include "moveit_import.h"
 #include "plan_overrides.h"
 #include "trajectory_csv.h"
 
@@ -50,10 +54,12 @@ const char kUsage[] =
     "                                  --method topp|collocation|spline|none sets the post-processing;\n"
     "                                  --planner, --budget, --seed, --sample-period, --padding override\n"
     "                                  the request's (see below); exit 0 only when a trajectory came back\n"
-    "  optimize REQUEST.json [--out F] [--method M]\n"
+    "  optimize REQUEST.json [--out F] [--method M] [--ros-trajectory F]\n"
     "                                  send a chasles.v1.OptimizeRequest (protobuf JSON: your own path\n"
     "                                  or timed trajectory); print the optimised trajectory's quality;\n"
-    "                                  --out and --method as for plan\n"
+    "                                  --out and --method as for plan; --ros-trajectory F takes the input\n"
+    "                                  from a trajectory_msgs/JointTrajectory or moveit_msgs/RobotTrajectory\n"
+    "                                  (YAML or JSON, e.g. from view --moveit-yaml / --ros-json)\n"
     "  ik REQUEST.json                 send a chasles.v1.InverseKinematicsRequest (protobuf JSON); print\n"
     "                                  each solution with its manipulability; exit 0 only when solved\n"
     "  cartesian REQUEST.json [--out F] [--method M]\n"
@@ -67,6 +73,14 @@ const char kUsage[] =
     "                                  first carries the plan); print each answer (time, KEPT / PLANNED /\n"
     "                                  REPLANNED and why, outcome, duration); --out writes the last\n"
     "                                  answer as for plan; exit 0 only when the last answer has a trajectory\n"
+    "  view RESPONSE.json [REQUEST.json] --out VIEW.html\n"
+    "                                  write a self-contained 3-D viewer page (opens offline) of a saved\n"
+    "                                  Plan, Optimize or Coordinate response (--out F.json of plan,\n"
+    "                                  optimize, coordinate) with the request it answers (robot and scene;\n"
+    "                                  none = the default robot and scene): the robot moving through the\n"
+    "                                  scene, its trail and waypoints, limit plots, the closest approach\n"
+    "                                  --moveit-yaml F / --ros-json F instead write the trajectory as\n"
+    "                                  moveit_msgs/RobotTrajectory YAML / trajectory_msgs/JointTrajectory JSON\n"
     "  upload-robot FILE.urdf [--srdf FILE.srdf [--strict-srdf]] [--mesh NAME=FILE]... [--exact-meshes]\n"
     "  upload-robot --dh FILE.json | --poe FILE.json\n"
     "                                  store a robot (URDF, or a chasles.v1.DhRobot / PoeRobot in\n"
@@ -127,6 +141,9 @@ struct Options {
   chasles::cli::ConnectionOptions connection;  // --server, --tls-*, --token*
   double timeout = 0.0;  // 0 = per command default
   std::string out;
+  std::string moveit_yaml;   // view: the trajectory as moveit_msgs/RobotTrajectory YAML
+  std::string ros_json;      // view: the trajectory as trajectory_msgs/JointTrajectory JSON
+  std::string ros_trajectory;  // optimize: a trajectory_msgs/JointTrajectory (JSON or YAML) as the input
   std::string srdf;
   bool strict_srdf = false;
   bool exact_meshes = false;  // upload-robot: keep meshes exact (FCL, discrete) instead of fitted spheres
@@ -361,6 +378,18 @@ void PrintOptimizer(const v1::OptimizerStatistics& o, const v1::TrajectoryQualit
   }
 }
 
+/// Writes `text` to `file`; prints where. False (with the reason on stderr) on failure.
+bool WriteText(const std::string& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+  if (!out.good()) {
+    std::cerr << "chasles: cannot write '" << file << "': " << std::strerror(errno) << "\n";
+    return false;
+  }
+  std::printf("wrote       %s\n", file.c_str());
+  return true;
+}
+
 /// Writes the response (.json) or its trajectory (.csv); prints where. False on failure.
 bool WriteOut(const std::string& file, const google::protobuf::Message& response, const v1::JointTrajectory& trajectory) {
   std::ofstream out(file, std::ios::binary);
@@ -468,6 +497,16 @@ int Optimize(const Options& options) {
   RequireOutFormat(options);
   v1::OptimizeRequest request = ParseJsonFileOrExit<v1::OptimizeRequest>(options.positional[1]);
   if (!options.method.empty()) request.mutable_options()->set_post_processing(MethodOrExit(options.method));
+  if (!options.ros_trajectory.empty()) {  // the input: a ROS / MoveIt trajectory instead of the request's
+    try {
+      *request.mutable_trajectory() = chasles::moveit::ImportJointTrajectory(
+          ReadFileOrExit(options.ros_trajectory, "trajectory"), options.ros_trajectory);
+    } catch (const chasles::Error& e) {
+      std::cerr << "chasles: " << e.what() << "\n";
+      return kExitUsage;
+    }
+    request.clear_path();
+  }
   auto stub = v1::Planning::NewStub(MakeChannel(options));
   grpc::ClientContext context;
   const double budget = request.time_budget() > 0 ? request.time_budget() : 10.0;
@@ -585,6 +624,68 @@ int Replan(const Options& options) {
     return kExitFailed;
   }
   return FinishWithTrajectory(options, last, last.plan().outcome(), last.plan().message(), last.plan().trajectory());
+}
+
+// --- view --------------------------------------------------------------------------------------
+
+/// Parses `text` as `Message` (protobuf JSON, unknown fields refused); false when it is not one.
+template <typename Message>
+bool ParsesAs(const std::string& text, Message* message) {
+  return google::protobuf::util::JsonStringToMessage(text, message).ok();
+}
+
+int View(const Options& options) {
+  if (options.positional.size() < 2 || options.positional.size() > 3) UsageError("view takes RESPONSE.json [REQUEST.json]");
+  const bool exports = !options.moveit_yaml.empty() || !options.ros_json.empty();
+  if (options.out.empty() && !exports) UsageError("view needs --out VIEW.html (or --moveit-yaml F / --ros-json F)");
+  if (!options.out.empty() && !EndsWith(options.out, ".html")) UsageError("--out '" + options.out + "' must end in .html");
+  const std::string response_text = ReadFileOrExit(options.positional[1], "response");
+  const std::string request_text = options.positional.size() == 3 ? ReadFileOrExit(options.positional[2], "request") : "";
+  try {
+    chasles::ModelStore store(chasles::DefaultRobotProto(), chasles::DefaultSceneProto());
+    chasles::ViewInput view;
+    v1::CoordinateResponse coordinated;
+    v1::PlanResponse planned;
+    v1::OptimizeResponse optimized;
+    v1::CoordinateRequest team;
+    v1::PlanRequest plan;
+    v1::OptimizeRequest optimize;
+    const bool has_request = !request_text.empty();
+    if (ParsesAs(response_text, &coordinated) && coordinated.robots_size() > 0) {
+      if (has_request && !ParsesAs(request_text, &team)) UsageError("'" + options.positional[2] + "' is not a chasles.v1.CoordinateRequest");
+      view = chasles::ViewOfCoordinate(store, team, coordinated);
+    } else if ((!has_request || ParsesAs(request_text, &plan)) && ParsesAs(response_text, &planned)) {
+      view = chasles::ViewOfPlan(store, plan, planned);
+    } else if ((!has_request || ParsesAs(request_text, &optimize)) && ParsesAs(response_text, &optimized)) {
+      view = chasles::ViewOfOptimize(store, optimize, optimized);
+    } else {
+      std::cerr << "chasles: '" << options.positional[1] << "'" << (has_request ? " with '" + options.positional[2] + "'" : "")
+                << " is not a Plan, Optimize or Coordinate response (and request) in protobuf JSON\n";
+      return kExitUsage;
+    }
+    if (!options.moveit_yaml.empty() || !options.ros_json.empty()) {
+      for (const chasles::ViewRobot& robot : view.robots) {
+        if (robot.samples.empty()) continue;
+        if (!options.moveit_yaml.empty()) {
+          if (!WriteText(options.moveit_yaml, chasles::MoveItTrajectoryYaml(*robot.robot.model, robot.samples))) return kExitFailed;
+        }
+        if (!options.ros_json.empty()) {
+          if (!WriteText(options.ros_json, chasles::RosTrajectoryJson(*robot.robot.model, robot.samples))) return kExitFailed;
+        }
+        break;  // the first robot (the planning robot; Coordinate: the first of the team)
+      }
+    }
+    if (!options.out.empty()) {
+      if (!WriteText(options.out, chasles::ViewPageHtml(chasles::ViewDataJson(view)))) return kExitFailed;
+      std::printf("view        %s (%zu robot%s, %.3f s)\n", view.title.c_str(), view.robots.size(),
+                  view.robots.size() == 1 ? "" : "s", view.robots.empty() || view.robots.front().samples.empty() ? 0.0
+                                                                                 : view.robots.front().samples.back().t);
+    }
+  } catch (const chasles::Error& e) {
+    std::cerr << "chasles: view: " << e.what() << "\n";
+    return kExitFailed;
+  }
+  return kExitOk;
 }
 
 // --- ik ----------------------------------------------------------------------------------------
@@ -1042,6 +1143,12 @@ int main(int argc, char** argv) {
       if (end == text.c_str() || *end != '\0' || !(options.timeout > 0)) {
         UsageError("--timeout '" + text + "' must be a number of seconds > 0");
       }
+    } else if (arg == "--moveit-yaml") {
+      options.moveit_yaml = value();
+    } else if (arg == "--ros-json") {
+      options.ros_json = value();
+    } else if (arg == "--ros-trajectory") {
+      options.ros_trajectory = value();
     } else if (arg == "--out") {
       options.out = value();
     } else if (arg == "--srdf") {
@@ -1116,6 +1223,7 @@ int main(int argc, char** argv) {
   if (command == "ik") return InverseKinematics(options);
   if (command == "cartesian") return CartesianPath(options);
   if (command == "replan") return Replan(options);
+  if (command == "view") return View(options);
   if (command == "upload-robot") return UploadRobot(options);
   if (command == "upload-scene") return UploadScene(options);
   if (command == "update-scene") return UpdateScene(options);

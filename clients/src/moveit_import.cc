@@ -1205,4 +1205,53 @@ std::vector<MoveItProblem> ImportProblemDirectory(const std::string& directory, 
   return problems;
 }
 
+v1::JointTrajectory ImportJointTrajectory(const std::string& text, const std::string& source) {
+  const YAML::Node root = ParseDocument(text, source, "trajectory_msgs/JointTrajectory or moveit_msgs/RobotTrajectory");
+  Value top(root, "", &source);
+  // A RobotTrajectory wraps it (its multi_dof part must be empty: Chasles has no such joints).
+  if (std::optional<Value> wrapped = top.Find("joint_trajectory")) {
+    if (std::optional<Value> multi = top.Find("multi_dof_joint_trajectory")) {
+      if (std::optional<Value> points = multi->Find("points"); points && points->Count() > 0) {
+        points->Fail("has " + std::to_string(points->Count()) + " points: multi-DOF joints are not supported");
+      }
+    }
+    top = *wrapped;
+  }
+  v1::JointTrajectory out;
+  for (const Value& name : top.Get("joint_names").Items()) out.add_joint_names(name.Text());
+  const int n = out.joint_names_size();
+  if (n == 0) top.Get("joint_names").Fail("is empty");
+  for (const Value& point : top.Get("points").Items()) {
+    v1::TrajectoryPoint* p = out.add_points();
+    const auto fill = [&](const char* key, google::protobuf::RepeatedField<double>* values, bool required) {
+      const std::optional<Value> list = point.Find(key);
+      if (!list || list->Count() == 0) {
+        if (required) point.Get(key).Fail("is empty");
+        return;
+      }
+      if (static_cast<int>(list->Count()) != n) {
+        list->Fail("has " + std::to_string(list->Count()) + " values for " + std::to_string(n) + " joint_names");
+      }
+      for (const Value& v : list->Items()) values->Add(v.Number());
+    };
+    fill("positions", p->mutable_positions(), true);
+    fill("velocities", p->mutable_velocities(), false);
+    fill("accelerations", p->mutable_accelerations(), false);
+    // time_from_start: {sec, nanosec} (ROS 2), {secs, nsecs} (ROS 1) or seconds.
+    const Value time = point.Get("time_from_start");
+    double seconds = 0.0;
+    if (time.node().IsScalar()) {
+      seconds = time.Number();
+    } else {
+      const std::optional<Value> sec = time.Find("sec") ? time.Find("sec") : time.Find("secs");
+      const std::optional<Value> nsec = time.Find("nanosec") ? time.Find("nanosec") : time.Find("nsecs");
+      if (!sec && !nsec) time.Fail("must be seconds or {sec, nanosec}");
+      seconds = (sec ? sec->Number() : 0.0) + 1e-9 * (nsec ? nsec->Number() : 0.0);
+    }
+    p->set_time_from_start(seconds);
+  }
+  if (out.points_size() == 0) top.Get("points").Fail("is empty");
+  return out;
+}
+
 }  // namespace chasles::moveit

@@ -122,4 +122,12 @@ struct MoveItProblem {
 ///   request (or the reverse), no pairs at all, or any conversion error (naming the file).
 std::vector<MoveItProblem> ImportProblemDirectory(const std::string& directory, const RobotInfo& robot);
 
+/// A trajectory_msgs/JointTrajectory (or a moveit_msgs/RobotTrajectory holding one) in YAML or
+/// JSON — what `chasles view --moveit-yaml / --ros-json` write, `ros2 topic echo` prints or
+/// rosbridge sends — as the JointTrajectory an OptimizeRequest takes: joint names, positions
+/// (and velocities, accelerations when given), time_from_start as {sec, nanosec}, {secs, nsecs}
+/// or seconds. \throws Error(kInvalidArgument) naming `source` and the field (an empty list,
+/// a point whose positions do not match joint_names, multi-DOF points).
+v1::JointTrajectory ImportJointTrajectory(const std::string& text, const std::string& source);
+
 }  // namespace chasles::moveit

@@ -204,6 +204,7 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
     if (!(run_budget_ > 0.0 && run_budget_ <= 600.0)) {
       ThrowInvalid("run_budget = " + FormatNumber(r.run_budget()) + " must be in (0, 600] s (0 = 5)");
     }
+    trajectories_ = r.trajectories();
     progress_interval_ = r.progress_interval() == 0.0 ? 0.5 : r.progress_interval();
     if (!(progress_interval_ > 0.0 && progress_interval_ <= 3600.0)) {
       ThrowInvalid("progress_interval = " + FormatNumber(r.progress_interval()) + " must be in (0, 3600] s (0 = 0.5)");
@@ -383,6 +384,9 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
         result.set_collision_checks(outcome.state_checks);
         result.set_graph_states(outcome.graph_states);
         result.set_peak_memory(heap.peak_bytes());
+        if (solved && trajectories_) {
+          KnotsToProto(outcome.trajectory, query.checker->robot().dof_names(), result.mutable_knots());
+        }
       }
     }
 
@@ -564,6 +568,7 @@ class BenchmarkCall final : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
   std::vector<PlanQuery> queries_;  // problem-major: [p * C + c]
   std::uint32_t runs_ = 0, total_ = 0, parallelism_ = 1;
   double run_budget_ = 5.0, progress_interval_ = 0.5;
+  bool trajectories_ = false;  ///< each solved run's knots in its BenchmarkRun
   std::uint64_t seed_ = 1;
   std::string experiment_;
   bool registered_ = false;

@@ -100,6 +100,12 @@ void AddFlags(CLI::App& app, chasles::ServerOptions& o, std::size_t& document_mb
   app.add_option("--metrics-listen", o.metrics_listen,
                  "serve Prometheus metrics on http://ADDR/metrics (default: off); a bare PORT means 127.0.0.1:PORT")
       ->group(ops);
+  app.add_option("--http-listen", o.http_listen,
+                 "serve the 3-D viewer of recent Plan, Optimize and Coordinate requests on http://HOST:PORT/ "
+                 "(read-only; with --tokens a plan token, and a loopback address; default: off)")
+      ->group(ops);
+  app.add_option("--http-recent", o.http_recent, "requests kept for --http-listen (at most 256 MiB of messages)")
+      ->capture_default_str()->group(ops);
 }
 
 }  // namespace
@@ -133,6 +139,10 @@ int main(int argc, char** argv) {
     const unsigned threads =
         options.threads > 0 ? static_cast<unsigned>(options.threads) : std::max(1u, std::thread::hardware_concurrency());
     std::fprintf(stderr, "chasles-server: security: %s\n", server.security_description().c_str());
+    if (server.http_port() != 0) {
+      std::fprintf(stderr, "chasles-server: viewer of recent requests on http://%s (port %d)/\n",
+                   options.http_listen.c_str(), server.http_port());
+    }
     if (server.metrics_port() != 0) {
       std::fprintf(stderr, "chasles-server: metrics on %s (port %d) at /metrics\n", options.metrics_listen.c_str(),
                    server.metrics_port());

@@ -5,15 +5,37 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
+
+#include <google/protobuf/util/json_util.h>
 
 #include "chasles/collision/shape_spheres.h"
 #include "chasles/robot/attached_objects.h"
 #include "chasles/robot/error.h"
 #include "chasles/server/content_hash.h"
 #include "chasles/server/convert.h"
+#include "chasles/server/default_assets.h"
 #include "chasles/server/heap_tracking.h"
 
 namespace chasles {
+
+v1::RobotModel DefaultRobotProto() {
+  v1::RobotModel robot;
+  robot.set_name("panda");
+  robot.mutable_urdf()->set_urdf(std::string(kDefaultRobotUrdf));
+  robot.mutable_urdf()->set_srdf(std::string(kDefaultRobotSrdf));
+  return robot;
+}
+
+v1::Scene DefaultSceneProto() {
+  v1::Scene scene;
+  const auto status = google::protobuf::util::JsonStringToMessage(std::string(kDefaultSceneJson), &scene);
+  if (!status.ok()) {
+    throw std::runtime_error("embedded default scene (examples/scenes/table.json) does not parse: " +
+                             status.ToString());
+  }
+  return scene;
+}
 namespace {
 
 /// Bytes malloc holds for the whole process (heap blocks in use plus mmapped blocks).

@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <utility>
 
 #include <google/protobuf/util/json_util.h>
@@ -42,6 +43,7 @@
 #include "chasles/server/security.h"
 #include "chasles/server/status.h"
 #include "chasles/server/thread_pool.h"
+#include "chasles/server/view_server.h"
 #include "chasles/server/workcells.h"
 #include "chasles/v1/chasles.grpc.pb.h"
 
@@ -61,24 +63,6 @@ Clock::time_point SteadyDeadline(const grpc::CallbackServerContext& context) {
   const auto far = std::chrono::hours(24 * 365);
   if (deadline >= system_now + far) return Clock::now() + far;
   return Clock::now() + std::chrono::duration_cast<Clock::duration>(deadline - system_now);
-}
-
-v1::RobotModel DefaultRobotProto() {
-  v1::RobotModel robot;
-  robot.set_name("panda");
-  robot.mutable_urdf()->set_urdf(std::string(kDefaultRobotUrdf));
-  robot.mutable_urdf()->set_srdf(std::string(kDefaultRobotSrdf));
-  return robot;
-}
-
-v1::Scene DefaultSceneProto() {
-  v1::Scene scene;
-  const auto status = google::protobuf::util::JsonStringToMessage(std::string(kDefaultSceneJson), &scene);
-  if (!status.ok()) {
-    throw std::runtime_error("embedded default scene (examples/scenes/table.json) does not parse: " +
-                             status.ToString());
-  }
-  return scene;
 }
 
 std::string IdPrefix(const std::string& id) { return id.empty() ? "-" : id.substr(0, 8); }
@@ -262,6 +246,7 @@ struct ServiceContext {
   const AccessControl* access = nullptr;  ///< tokens and roles (the credentials checked them already)
   const ServerOptions* options = nullptr;
   ServerMetrics* metrics = nullptr;  ///< counts every call; never null
+  RecentExchanges* recent = nullptr;  ///< kept for the viewer (--http-listen); null = none kept
 };
 
 class PlanningService final : public RawService {
@@ -1454,7 +1439,7 @@ class PlanningService final : public RawService {
     for (const auto& [field, seconds] : budgets) {
       if (seconds > options_.long_budget) ticket.long_running = true;
     }
-    auto job = [this, call, work = std::move(work)]() mutable {
+    auto job = [this, rpc, call, work = std::move(work)]() mutable {
       call->record.queue_seconds = SecondsSince(call->arrival);
       if (call->cancelled()) {
         call->Complete(grpc::Status(grpc::StatusCode::CANCELLED, "cancelled before it started"));
@@ -1463,6 +1448,7 @@ class PlanningService final : public RawService {
       std::uint64_t peak = 0;
       grpc::Status status = RunCapped([&] { work(*call); }, &peak);
       if (status.ok() && call->cancelled()) status = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled by the client");
+      if (status.ok()) Remember(rpc, *call);
       call->record.peak_heap_bytes = peak;
       call->Complete(status);  // OnDone gives a large call's free heap back to the system
     };
@@ -1531,6 +1517,24 @@ class PlanningService final : public RawService {
       std::fprintf(stderr, "%s\n", line.c_str());
     }
     services_.metrics->RequestFinished(record);
+  }
+
+  /// Keeps a finished Plan, Optimize or Coordinate exchange for the viewer (--http-listen).
+  template <typename Call>
+  void Remember(const char* rpc, const Call& call) {
+    using Request = std::decay_t<decltype(call.request)>;
+    if constexpr (std::is_same_v<Request, v1::PlanRequest> || std::is_same_v<Request, v1::OptimizeRequest> ||
+                  std::is_same_v<Request, v1::CoordinateRequest>) {
+      if (services_.recent == nullptr || call.record.request_id.empty()) return;
+      Exchange exchange;
+      exchange.rpc = rpc;
+      exchange.request_id = call.record.request_id;
+      call.request.SerializeToString(&exchange.request);
+      call.response.SerializeToString(&exchange.response);
+      exchange.unix_time = workcells_->Now();
+      exchange.outcome = v1::PlanOutcome_Name(call.response.outcome());
+      services_.recent->Add(std::move(exchange));
+    }
   }
 
   /// A Plan call's work. `Call` is a UnaryCall or a ReplanStream's PlanJob: request, response,
@@ -1806,6 +1810,16 @@ void ServerOptions::Validate() const {
   }
   limits.Validate();
   if (log_field_max < 16) ThrowInvalid("--log-field-max = " + std::to_string(log_field_max) + " must be >= 16");
+  if (http_recent < 1 || http_recent > 10000) {
+    ThrowInvalid("--http-recent = " + std::to_string(http_recent) + " must be within [1, 10000]");
+  }
+  if (!http_listen.empty()) {
+    if (http_listen.rfind(':') == std::string::npos) ThrowInvalid("--http-listen = '" + http_listen + "' must be HOST:PORT");
+    if (security.tokens() && !IsLoopbackAddress(http_listen)) {
+      ThrowInvalid("--http-listen " + http_listen + " serves plain HTTP, where bearer tokens (--tokens) travel "
+                   "readable: listen on a loopback address (e.g. 127.0.0.1:8080) and put a TLS proxy in front");
+    }
+  }
 }
 
 struct PlanningServer::Impl {
@@ -1818,6 +1832,8 @@ struct PlanningServer::Impl {
   std::unique_ptr<ServerMetrics> metrics;
   std::unique_ptr<PlanningService> service;
   std::unique_ptr<grpc::Server> server;
+  std::unique_ptr<RecentExchanges> recent;  ///< with --http-listen
+  std::unique_ptr<ViewServer> views;
   int port = 0;
   std::once_flag shutdown_once;
 };
@@ -1864,6 +1880,10 @@ PlanningServer::PlanningServer(const ServerOptions& options) : impl_(std::make_u
   services.access = impl_->access.get();
   services.metrics = impl_->metrics.get();
   services.options = &impl_->options;
+  if (!options.http_listen.empty()) {
+    impl_->recent = std::make_unique<RecentExchanges>(static_cast<std::size_t>(options.http_recent), 256ull << 20);
+    services.recent = impl_->recent.get();
+  }
   impl_->service = std::make_unique<PlanningService>(services);
   if (shared) impl_->service->UseSharedFleets(std::make_shared<RedisClient>(*shared));
 
@@ -1883,6 +1903,14 @@ PlanningServer::PlanningServer(const ServerOptions& options) : impl_(std::make_u
     health->SetServingStatus(true);
     health->SetServingStatus("chasles.v1.Planning", true);
   }
+  if (impl_->recent) {
+    const AccessControl* access = impl_->access.get();
+    impl_->views = std::make_unique<ViewServer>(
+        options.http_listen, impl_->recent.get(), impl_->store.get(), [access](const std::optional<std::string>& authorization) {
+          const grpc::Status status = access->AuthorizeHeader(authorization, "View");
+          return status.ok() ? std::string() : status.error_message();
+        });
+  }
 }
 
 PlanningServer::~PlanningServer() {
@@ -1894,6 +1922,8 @@ PlanningServer::~PlanningServer() {
 int PlanningServer::port() const { return impl_->port; }
 
 int PlanningServer::metrics_port() const { return impl_->metrics->port(); }
+
+int PlanningServer::http_port() const { return impl_->views ? impl_->views->port() : 0; }
 
 std::string PlanningServer::security_description() const { return impl_->access->Describe(); }
 

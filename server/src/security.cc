@@ -334,7 +334,8 @@ Permission RequiredPermission(std::string_view rpc) {
   if (method.rfind(kPlanningService, 0) == 0) method.remove_prefix(kPlanningService.size());
   static constexpr std::string_view kPlanMethods[] = {
       "Plan",        "Optimize",    "InverseKinematics", "CartesianPath", "ListPlanners", "UploadRobot",
-      "UploadScene", "UpdateScene", "Coordinate",        "Benchmark",     "StopBenchmark", "Replan"};
+      "UploadScene", "UpdateScene", "Coordinate",        "Benchmark",     "StopBenchmark", "Replan",
+      "View"};  // View: the viewer pages over HTTP (--http-listen)
   for (std::string_view plan : kPlanMethods) {
     if (method == plan) return Permission::kPlan;
   }
@@ -410,6 +411,14 @@ grpc::Status AccessControl::Authorize(const grpc::ServerContextBase& context, st
   const bool sent = FindAuthorization(context, &authorization);
   const TokenTable::Entry* entry = nullptr;
   return tokens_->Check(rpc, sent ? &authorization : nullptr, &entry);
+}
+
+grpc::Status AccessControl::AuthorizeHeader(const std::optional<std::string>& authorization, std::string_view rpc) const {
+  if (!tokens_) return grpc::Status::OK;
+  const TokenTable::Entry* entry = nullptr;
+  if (!authorization) return tokens_->Check(rpc, nullptr, &entry);
+  const std::string_view value = *authorization;
+  return tokens_->Check(rpc, &value, &entry);
 }
 
 std::string AccessControl::Describe() const {

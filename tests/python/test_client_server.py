@@ -340,6 +340,18 @@ class ServerTest(unittest.TestCase):
         walkers = walkers[:1]
         self.assertGreater(clearance(answers[2].plan, offset=1.0), 0.0)
 
+    def test_save_a_plan_as_a_viewer_page(self) -> None:
+        example = json.loads((ROOT / "examples/requests/panda_shelf.json").read_text(encoding="utf-8"))
+        result = self.client.plan_request(example)
+        self.assertTrue(result.success, result.message)
+        with tempfile.TemporaryDirectory() as tmp:
+            page = result.save_html(Path(tmp) / "view.html")
+            text = page.read_text(encoding="utf-8")
+            self.assertIn("const CHASLES_VIEW = {", text)
+            self.assertIn("shelf_board", text)       # the request's scene, not the default table
+            self.assertIn('var REVISION="111"', text)  # three.js inlined: the page needs no network
+            self.assertNotIn('src="http', text)
+
     def test_coordinate_a_fleet_and_sample_its_knots(self) -> None:
         request = ROOT / "examples/requests/coordinate_fleet.json"
         response = self.client.coordinate(str(request))

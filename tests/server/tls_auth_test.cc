@@ -216,7 +216,7 @@ TEST_F(SecurityTest, TokensFileErrorsNameTheLineAndNeverTheToken) {
 
 TEST(Security, PermissionsOfEveryRpc) {
   for (const char* rpc : {"Plan", "Optimize", "InverseKinematics", "ListPlanners", "UploadRobot", "UploadScene",
-                          "UpdateScene", "Coordinate", "Benchmark", "StopBenchmark", "Replan",
+                          "UpdateScene", "Coordinate", "Benchmark", "StopBenchmark", "Replan", "View",
                           "/chasles.v1.Planning/Plan"}) {
     EXPECT_EQ(RequiredPermission(rpc), Permission::kPlan) << rpc;
   }

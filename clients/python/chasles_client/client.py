@@ -369,7 +369,9 @@ class Client:
         response = self._call("Plan", message, timeout)
         velocity, acceleration = limits_used(message.trajectory if message.HasField("trajectory") else None,
                                              self._model_velocity(response.robot_id))
-        return PlanResult.from_response(response, velocity, acceleration)
+        result = PlanResult.from_response(response, velocity, acceleration)
+        result.request = message
+        return result
 
     def optimize(self, path: Any, *, robot: Any = None, robot_id: Optional[str] = None, scene: Any = None,
                  scene_id: Optional[str] = None, post_processing: Union[str, int, None] = None,
@@ -421,7 +423,9 @@ class Client:
         response = self._call("Optimize", message, timeout)
         velocity, acceleration = limits_used(message.options if message.HasField("options") else None,
                                              self._model_velocity(response.robot_id))
-        return OptimizeResult.from_response(response, velocity, acceleration)
+        result = OptimizeResult.from_response(response, velocity, acceleration)
+        result.request = message
+        return result
 
     def cartesian_path(self, start: Any, waypoints: Sequence[Any], link: str = "", *, robot: Any = None,
                        robot_id: Optional[str] = None, scene: Any = None, scene_id: Optional[str] = None,

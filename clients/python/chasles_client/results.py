@@ -185,6 +185,18 @@ class PlanResult:
     warnings: List[str] = field(default_factory=list)
     repair: Optional[Dict[str, Any]] = None
     response: pb.PlanResponse = field(default_factory=pb.PlanResponse, repr=False)
+    request: Optional[pb.PlanRequest] = field(default=None, repr=False)  # set by Client.plan / plan_request
+
+    def save_html(self, path: Any) -> Any:
+        """Writes the 3-D viewer page (self-contained; opens offline) of this plan: the robot moving
+        through the scene, its trail, waypoints, limit plots and closest approach. Returns the path."""
+        from .view import write_view  # noqa: PLC0415
+        return write_view(self.response, self.request, path)
+
+    def show(self) -> Any:
+        """The viewer page inline in a notebook, else opened in the browser."""
+        from .view import show_view  # noqa: PLC0415
+        return show_view(self.response, self.request)
 
     @classmethod
     def from_response(cls, response: pb.PlanResponse, velocity_limits: Optional[np.ndarray] = None,
@@ -252,6 +264,17 @@ class OptimizeResult:
     velocity_limits: Optional[np.ndarray] = None
     acceleration_limits: Optional[np.ndarray] = None
     response: pb.OptimizeResponse = field(default_factory=pb.OptimizeResponse, repr=False)
+    request: Optional[pb.OptimizeRequest] = field(default=None, repr=False)  # set by Client.optimize
+
+    def save_html(self, path: Any) -> Any:
+        """Writes the 3-D viewer page of this optimised trajectory (see PlanResult.save_html)."""
+        from .view import write_view  # noqa: PLC0415
+        return write_view(self.response, self.request, path)
+
+    def show(self) -> Any:
+        """The viewer page inline in a notebook, else opened in the browser."""
+        from .view import show_view  # noqa: PLC0415
+        return show_view(self.response, self.request)
 
     @classmethod
     def from_response(cls, response: pb.OptimizeResponse, velocity_limits: Optional[np.ndarray] = None,

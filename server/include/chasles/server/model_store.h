@@ -38,6 +38,11 @@ struct StoredScene {
   std::shared_ptr<const Scene> scene;
 };
 
+/// The default robot (examples/robots/panda.urdf/.srdf) and scene (examples/scenes/table.json),
+/// embedded at build time, as messages. \throws std::runtime_error if the scene does not parse.
+v1::RobotModel DefaultRobotProto();
+v1::Scene DefaultSceneProto();
+
 class ModelStore {
  public:
   /// Parses the default robot and scene (used when a request names none); they are never

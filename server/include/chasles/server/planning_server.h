@@ -40,6 +40,11 @@ struct ServerOptions {
   /// Prometheus endpoint "HOST:PORT" (or "PORT" = 127.0.0.1:PORT, loopback by default; port 0
   /// picks a free port) serving /metrics; "" = no endpoint. See ServerMetrics.
   std::string metrics_listen;
+  /// The viewer over HTTP "HOST:PORT" (port 0 picks a free port): an index of the most recent
+  /// Plan, Optimize and Coordinate requests at / and each one's viewer page at /view/<request_id>
+  /// (view_server.h); "" = off. With tokens it must be a loopback address (plain HTTP).
+  std::string http_listen;
+  int http_recent = 32;  ///< exchanges kept for it, in [1, 10000] (and at most 256 MiB of messages)
   /// Where uploaded robots and scenes, workcells and reservations live: "memory" (this process
   /// only) or "redis://HOST[:PORT][/DB]" (shared by every replica pointed at the same Redis,
   /// surviving restarts as far as Redis persists; see workcells.h and model_store.h).
@@ -66,6 +71,8 @@ class PlanningServer {
   int port() const;
   /// The bound port of the Prometheus endpoint (--metrics-listen), 0 when there is none.
   int metrics_port() const;
+  /// The bound port of the viewer (--http-listen), 0 when there is none.
+  int http_port() const;
   /// One line on transport security and authentication, e.g. "TLS with client certificates, 3 bearer tokens".
   std::string security_description() const;
   /// Drains, then stops: health turns NOT_SERVING and new calls are refused with UNAVAILABLE

@@ -17,6 +17,7 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -96,6 +97,9 @@ class AccessControl {
   grpc::Status Authorize(const grpc::ServerContextBase& context, std::string_view rpc) const;
 
   /// One line for the startup log, e.g. "TLS with client certificates, 3 bearer tokens".
+  /// The same check for a request that is not a gRPC call (the viewer over HTTP): the value of
+  /// its Authorization header (nullopt = none sent) for `rpc`.
+  grpc::Status AuthorizeHeader(const std::optional<std::string>& authorization, std::string_view rpc) const;
   std::string Describe() const;
 
   bool tokens_enabled() const;
