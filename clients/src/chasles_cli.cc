@@ -79,8 +79,9 @@ const char kUsage[] =
     "                                  optimize, coordinate) with the request it answers (robot and scene;\n"
     "                                  none = the default robot and scene): the robot moving through the\n"
     "                                  scene, its trail and waypoints, limit plots, the closest approach\n"
-    "                                  --moveit-yaml F / --ros-json F instead write the trajectory as\n"
+    "                                  --moveit-yaml F / --ros-json F write the trajectory as\n"
     "                                  moveit_msgs/RobotTrajectory YAML / trajectory_msgs/JointTrajectory JSON\n"
+    "                                  (a team: F for the first robot, F's stem + _<robot> for the others)\n"
     "  upload-robot FILE.urdf [--srdf FILE.srdf [--strict-srdf]] [--mesh NAME=FILE]... [--exact-meshes]\n"
     "  upload-robot --dh FILE.json | --poe FILE.json\n"
     "                                  store a robot (URDF, or a chasles.v1.DhRobot / PoeRobot in\n"
@@ -664,15 +665,27 @@ int View(const Options& options) {
       return kExitUsage;
     }
     if (!options.moveit_yaml.empty() || !options.ros_json.empty()) {
+      // One file per robot: the planning robot's (or a team's first) as named, every other
+      // robot of a team as <stem>_<robot><extension>. Moving obstacles are not exported.
+      const auto named = [](const std::string& file, const std::string& robot, bool first) {
+        if (first) return file;
+        const std::size_t dot = file.rfind('.');
+        const std::size_t slash = file.rfind('/');
+        const bool extension = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+        return extension ? file.substr(0, dot) + "_" + robot + file.substr(dot) : file + "_" + robot;
+      };
+      bool first = true;
       for (const chasles::ViewRobot& robot : view.robots) {
-        if (robot.samples.empty()) continue;
-        if (!options.moveit_yaml.empty()) {
-          if (!WriteText(options.moveit_yaml, chasles::MoveItTrajectoryYaml(*robot.robot.model, robot.samples))) return kExitFailed;
+        if (robot.samples.empty() || !robot.measure_clearance) continue;
+        if (!options.moveit_yaml.empty() &&
+            !WriteText(named(options.moveit_yaml, robot.name, first), chasles::MoveItTrajectoryYaml(*robot.robot.model, robot.samples))) {
+          return kExitFailed;
         }
-        if (!options.ros_json.empty()) {
-          if (!WriteText(options.ros_json, chasles::RosTrajectoryJson(*robot.robot.model, robot.samples))) return kExitFailed;
+        if (!options.ros_json.empty() &&
+            !WriteText(named(options.ros_json, robot.name, first), chasles::RosTrajectoryJson(*robot.robot.model, robot.samples))) {
+          return kExitFailed;
         }
-        break;  // the first robot (the planning robot; Coordinate: the first of the team)
+        first = false;
       }
     }
     if (!options.out.empty()) {

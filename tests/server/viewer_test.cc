@@ -191,6 +191,17 @@ TEST_F(Viewer, ATeamAndMovingObstaclesAreDrawnEveryOne) {
                            ExamplePath("requests/coordinate_corridor.json") + " --out " + page);
   ASSERT_EQ(view.exit_code, 0) << view.output;
   ExpectClean(PageState(page, ArtifactDir() + "/viewer_team.png"), team.robots_size());
+  // Every robot's trajectory exported: the first as named, the others with their name added.
+  const std::string exported = ::testing::TempDir() + "/chasles_view_team_ros.json";
+  view = Shell(Cli() + " view " + ::testing::TempDir() + "/chasles_view_team_response.json " +
+               ExamplePath("requests/coordinate_corridor.json") + " --ros-json " + exported);
+  ASSERT_EQ(view.exit_code, 0) << view.output;
+  for (int k = 0; k < coordinated.robots_size(); ++k) {
+    const std::string file =
+        k == 0 ? exported : ::testing::TempDir() + "/chasles_view_team_ros_" + coordinated.robots(k).name() + ".json";
+    const v1::JointTrajectory read = moveit::ImportJointTrajectory(ReadText(file), file);
+    EXPECT_EQ(read.points_size(), coordinated.robots(k).trajectory().points_size()) << file;
+  }
 
   // The base among walkers: the base and both walkers are robots of the page.
   const v1::PlanRequest walkers = LoadRequest("base_crossing_people");
