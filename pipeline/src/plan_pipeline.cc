@@ -174,6 +174,7 @@ std::optional<PlanOutcomeCode> PlanFailure(PlanStatus status) {
     case PlanStatus::kInvalidGoal: return PlanOutcomeCode::kGoalInCollision;
     case PlanStatus::kNoSolution: return PlanOutcomeCode::kNoPathWithinBudget;
     case PlanStatus::kLocalMinimum: return PlanOutcomeCode::kLocalMinimum;
+    case PlanStatus::kLatticeExhausted: return PlanOutcomeCode::kNoPathOnLattice;
   }
   return PlanOutcomeCode::kNoPathWithinBudget;
 }
@@ -290,6 +291,7 @@ const char* ToString(PlanOutcomeCode code) {
     case PlanOutcomeCode::kCancelled: return "CANCELLED";
     case PlanOutcomeCode::kDeadlineExceeded: return "DEADLINE_EXCEEDED";
     case PlanOutcomeCode::kLocalMinimum: return "LOCAL_MINIMUM";
+    case PlanOutcomeCode::kNoPathOnLattice: return "NO_PATH_ON_LATTICE";
     case PlanOutcomeCode::kInfeasibleLimits: return "INFEASIBLE_LIMITS";
   }
   return "UNKNOWN";

@@ -405,7 +405,7 @@ PlannerResult WavefrontPlanner::Solve(const Termination& termination) {
                        " grid cells";
       break;
     case Outcome::kNotConnected:
-      result.status = PlanStatus::kNoSolution;
+      result.status = PlanStatus::kLatticeExhausted;
       result.message = spec_.id + ": the start is not connected to the goal on the grid at resolution " +
                        grid_.Resolution() + " (" + grid_.shape + " cells" +
                        (widened.empty() ? std::string() : "; also with " + widened + " released") +

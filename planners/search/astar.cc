@@ -99,6 +99,16 @@ std::string FormatResolution(const Eigen::VectorXd& res) {
   return out + ")";
 }
 
+/// "m" when every coordinate is a length (prismatic joints: a base's x, y), "rad" when every one
+/// is an angle, else "m or rad" (per joint type).
+std::string ResolutionUnit(const RobotModel& robot) {
+  bool lengths = false, angles = false;
+  for (int i = 0; i < robot.num_dofs(); ++i) {
+    (robot.joints()[robot.dof_joint(i)].type == JointType::kPrismatic ? lengths : angles) = true;
+  }
+  return lengths && angles ? "m for prismatic coordinates, rad for revolute ones" : lengths ? "m" : "rad";
+}
+
 /// Why q is not a valid state: outside a joint limit, or the first contact found.
 std::string DescribeInvalid(const CollisionChecker& checker, const Eigen::VectorXd& q) {
   const RobotModel& robot = checker.robot();
@@ -180,9 +190,9 @@ class LatticeSearch {
       result->graph_states = table_.size();
       return;
     }
-    result->status = PlanStatus::kNoSolution;
+    result->status = PlanStatus::kLatticeExhausted;
     result->message = std::string(kId) + " found no path on the lattice at resolution " +
-                      FormatResolution(settings_.resolution) + " [rad or m] with " +
+                      FormatResolution(settings_.resolution) + " [" + ResolutionUnit(checker_.robot()) + "] with " +
                       (settings_.full ? "full" : "axis") + " moves: all " + std::to_string(expansions) +
                       " reachable nodes were expanded; a finer resolution may find a way through";
     result->graph_states = table_.size();

@@ -77,6 +77,7 @@ const char* ToString(PlanStatus status) {
     case PlanStatus::kCancelled: return "cancelled";
     case PlanStatus::kDeadlineExceeded: return "deadline exceeded";
     case PlanStatus::kLocalMinimum: return "local minimum";
+    case PlanStatus::kLatticeExhausted: return "no path on the lattice";
   }
   return "unknown";
 }

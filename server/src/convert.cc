@@ -1106,6 +1106,7 @@ v1::PlanOutcome OutcomeToProto(PlanOutcomeCode code) {
     case PlanOutcomeCode::kVerificationFailed: return v1::VERIFICATION_FAILED;
     case PlanOutcomeCode::kApproximateOnly: return v1::APPROXIMATE_ONLY;
     case PlanOutcomeCode::kLocalMinimum: return v1::LOCAL_MINIMUM;
+    case PlanOutcomeCode::kNoPathOnLattice: return v1::NO_PATH_ON_LATTICE;
     case PlanOutcomeCode::kInfeasibleLimits: return v1::INFEASIBLE_LIMITS;
     case PlanOutcomeCode::kCancelled:
     case PlanOutcomeCode::kDeadlineExceeded: return v1::PLAN_OUTCOME_UNSPECIFIED;

@@ -307,8 +307,8 @@ TEST(AstarTest, CostEqualsAnEagerDijkstraOnObstacleScenes) {
             Problem(checker, start, goal, {{"resolution", res}, {"connectivity", connectivity}});
         const double optimal = EagerDijkstra(p, {goal}, res, connectivity == 2);
         const PlannerResult r = Plan(p);
-        if (optimal == kInf) {
-          EXPECT_EQ(r.status, PlanStatus::kNoSolution) << r.message;
+        if (optimal == kInf) {  // the independent Dijkstra proves the lattice disconnected
+          EXPECT_EQ(r.status, PlanStatus::kLatticeExhausted) << r.message;
           continue;
         }
         ExpectValidPath(r, p, goal);
@@ -340,8 +340,8 @@ TEST(AstarTest, CostEqualsAnEagerDijkstraForRandomQueries) {
         const PlanningProblem p = Problem(checker, start, goal, {{"resolution", 0.45}, {"connectivity", connectivity}});
         const double optimal = EagerDijkstra(p, {goal}, 0.45, connectivity == 2);
         const PlannerResult r = Plan(p);
-        if (optimal == kInf) {
-          EXPECT_EQ(r.status, PlanStatus::kNoSolution) << r.message;
+        if (optimal == kInf) {  // the independent Dijkstra proves the lattice disconnected
+          EXPECT_EQ(r.status, PlanStatus::kLatticeExhausted) << r.message;
           continue;
         }
         ExpectValidPath(r, p, goal);
@@ -394,12 +394,14 @@ std::vector<SceneObject> Room() {
           Wall("east", 9.2, 6.5, 9.5, 9.5)};
 }
 
-TEST(AstarTest, WalledOffGoalIsNoSolution) {
+TEST(AstarTest, WalledOffGoalExhaustsTheLattice) {
   const auto checker = PlaneChecker(Room());
   const Eigen::Vector2d start(1.0, 1.0), goal(8.0, 8.1);
   ASSERT_TRUE(checker->IsValid(goal));
   const PlannerResult r = Plan(Problem(checker, start, goal, {{"resolution", 0.5}}));
-  EXPECT_EQ(r.status, PlanStatus::kNoSolution);
+  // Not "out of time": every reachable node was expanded.
+  EXPECT_EQ(r.status, PlanStatus::kLatticeExhausted);
+  EXPECT_NE(r.message.find("reachable nodes were expanded"), std::string::npos) << r.message;
   EXPECT_NE(r.message.find("no path on the lattice at resolution 0.5"), std::string::npos) << r.message;
   EXPECT_TRUE(r.path.empty());
 }

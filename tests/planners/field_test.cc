@@ -340,7 +340,7 @@ void FieldPlannerTest::ExpectWavefrontMatchesBfs(const PlanningProblem& p, doubl
   if (reachable) {
     ExpectValidPath(result, p);
   } else {
-    EXPECT_EQ(result.status, PlanStatus::kNoSolution) << result.message;
+    EXPECT_EQ(result.status, PlanStatus::kLatticeExhausted) << result.message;
     EXPECT_TRUE(result.path.empty());
     EXPECT_NE(result.message.find("the start is not connected to the goal on the grid at resolution 0.1"),
               std::string::npos)

@@ -104,6 +104,56 @@ TEST_F(MobileRobots, PoseGoalsNeedAnArm) {
   EXPECT_NE(status.error_message().find("reeds_shepp_car"), std::string::npos) << status.error_message();
 }
 
+// Issue 22, item 2: a goal enclosed by walls. The search planners search everything they can
+// reach at their resolution and say so (NO_PATH_ON_LATTICE, with the nodes and the resolution in
+// metres); a sampling planner runs out of its budget (NO_PATH_WITHIN_BUDGET, or APPROXIMATE_ONLY
+// with a path that ends short): a client can tell
+// "there is no way at this resolution" from "ran out of time".
+TEST_F(MobileRobots, AnEnclosedGoalExhaustsTheLatticeRatherThanTheBudget) {
+  v1::PlanRequest request;
+  *request.mutable_robot() = LoadMobile("mobile_base");
+  const auto wall = [&](const char* name, double x, double y, double sx, double sy) {
+    v1::Box* box = request.mutable_scene()->add_boxes();
+    box->set_name(name);
+    box->mutable_size()->set_x(sx);
+    box->mutable_size()->set_y(sy);
+    box->mutable_size()->set_z(1.0);
+    box->mutable_pose()->mutable_position()->set_x(x);
+    box->mutable_pose()->mutable_position()->set_y(y);
+    box->mutable_pose()->mutable_position()->set_z(0.5);
+  };
+  // A closed 2 × 2 m pen around (9, 4), walls 0.2 m thick.
+  wall("pen_south", 9.0, 2.9, 2.4, 0.2);
+  wall("pen_north", 9.0, 5.1, 2.4, 0.2);
+  wall("pen_west", 7.9, 4.0, 0.2, 2.4);
+  wall("pen_east", 10.1, 4.0, 0.2, 2.4);
+  for (double q : {2.0, 4.0, 0.0}) request.mutable_start()->add_positions(q);
+  for (double q : {9.0, 4.0, 0.0}) request.mutable_goal()->add_positions(q);
+  request.set_time_budget(10.0);
+  for (const char* planner : {"astar", "wavefront"}) {
+    request.mutable_planner()->set_planner_id(planner);
+    (*request.mutable_planner()->mutable_parameters())["resolution"].set_double_value(0.25);
+    v1::PlanResponse response;
+    ASSERT_TRUE(server_->Plan(request, &response).ok());
+    EXPECT_EQ(response.outcome(), v1::NO_PATH_ON_LATTICE) << planner << ": " << response.message();
+    EXPECT_NE(response.message().find("0.25"), std::string::npos) << response.message();
+  }
+  v1::PlanResponse astar;
+  request.mutable_planner()->set_planner_id("astar");
+  ASSERT_TRUE(server_->Plan(request, &astar).ok());
+  EXPECT_NE(astar.message().find("reachable nodes were expanded"), std::string::npos) << astar.message();
+  EXPECT_NE(astar.message().find("[m for prismatic coordinates, rad for revolute ones]"), std::string::npos)
+      << astar.message();
+  request.mutable_planner()->set_planner_id("rrt_connect");
+  request.mutable_planner()->clear_parameters();
+  request.set_time_budget(0.3);
+  v1::PlanResponse sampled;
+  ASSERT_TRUE(server_->Plan(request, &sampled).ok());
+  // It proves nothing: out of time, with at best a path that ends short of the goal.
+  EXPECT_TRUE(sampled.outcome() == v1::NO_PATH_WITHIN_BUDGET || sampled.outcome() == v1::APPROXIMATE_ONLY)
+      << v1::PlanOutcome_Name(sampled.outcome()) << ": " << sampled.message();
+}
+
 TEST_F(MobileRobots, MalformedMobileDescriptionsNameTheField) {
   const auto expect = [](const v1::PlanRequest& request, const std::string& message) {
     v1::PlanResponse response;

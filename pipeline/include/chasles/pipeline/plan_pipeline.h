@@ -91,6 +91,7 @@ enum class PlanOutcomeCode {
   kInfeasibleLimits,  ///< the trajectory limits cannot be met (max_effort below what gravity needs)
   kStartViolatesConstraints,  ///< the start breaks a path constraint of the checker
   kGoalViolatesConstraints,   ///< the joint goal breaks a path constraint of the checker
+  kNoPathOnLattice,  ///< a search planner exhausted its lattice: no path at this resolution
 };
 const char* ToString(PlanOutcomeCode code);
 

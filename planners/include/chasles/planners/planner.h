@@ -88,6 +88,9 @@ enum class PlanStatus {
   kDeadlineExceeded,
   kLocalMinimum,         ///< a descent planner stopped in a local minimum of its potential;
                          ///< `path` is empty (no wrong path is returned), the message says where
+  kLatticeExhausted,     ///< a search planner (A*, wavefront) searched every lattice node it can
+                         ///< reach from the start without reaching the goal: no path at this
+                         ///< resolution (not "out of time"); the message gives nodes and resolution
 };
 const char* ToString(PlanStatus status);
 
