@@ -316,21 +316,6 @@ void WriteFile(const fs::path& path, const std::string& text) {
   if (!out) throw ConfigError{"cannot write '" + path.string() + "': " + std::strerror(errno)};
 }
 
-/// `text` safe inside HTML text and attribute values.
-std::string HtmlEscaped(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
 /// --views: DIR/views/<problem>-<config>-<run>.html for every solved run with knots (the
 /// viewer page, three.js shared in DIR/views/three.js) and DIR/views/index.html linking each
 /// run of the table. Returns the number of pages.

@@ -824,16 +824,19 @@ class PlanningService final : public RawService {
     fleet_sessions_.Assign(name, request, now, termination, response);
   }
 
-  /// One StreamFleetSession call: a message is read, answered on the pool as AssignFleetGoals
-  /// answers it (fair queue, per-request heap cap), the answer written, and only then the next
-  /// message read — so answers come in order and a client cannot queue more than one message.
-  /// An error ends the stream with its status, the message index in front; the client's
-  /// half-close ends it with OK. One RequestRecord for the whole stream.
-  class FleetStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
+  /// A bidirectional stream answered in order (StreamFleetSession, Replan): a message is read,
+  /// answered on the pool (fair queue, per-request heap cap) by Respond, the answer written, and
+  /// only then the next message read — so answers come in order, a stream holds at most one
+  /// worker and a client cannot queue more than one message. An error ends the stream with its
+  /// status, the message index in front; the client's half-close ends it with OK. One
+  /// RequestRecord for the whole stream.
+  template <typename Request, typename Response>
+  class OrderedStream : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
    public:
-    FleetStream(PlanningService* service, grpc::CallbackServerContext* context)
-        : service_(service), arrival_(Clock::now()), deadline_(SteadyDeadline(*context)) {
-      record_.rpc = "StreamFleetSession";
+    /// `reopen`: what a client should do when the server drains mid-stream.
+    OrderedStream(PlanningService* service, grpc::CallbackServerContext* context, const char* rpc, std::string reopen)
+        : service_(service), deadline_(SteadyDeadline(*context)), arrival_(Clock::now()), reopen_(std::move(reopen)) {
+      record_.rpc = rpc;
       record_.client = service_->ClientOf(*context);
       service_->services_.metrics->RequestStarted(record_.rpc);
       service_->in_flight_.fetch_add(1);
@@ -855,27 +858,19 @@ class PlanningService final : public RawService {
         return;
       }
       if (service_->draining_.load()) {
-        End(grpc::Status(grpc::StatusCode::UNAVAILABLE, Prefix() + "this server is shutting down; reopen the "
-                                                                   "stream on another replica (the session is shared "
-                                                                   "with --store redis://…)"));
+        End(grpc::Status(grpc::StatusCode::UNAVAILABLE, Prefix() + "this server is shutting down; " + reopen_));
         return;
       }
       request_.Clear();
       grpc::ProtoBufferReader reader(&in_);
       if (!request_.ParseFromZeroCopyStream(&reader)) {
         End(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                         Prefix() + "not a valid chasles.v1.AssignFleetGoalsRequest message (" +
+                         Prefix() + "not a valid " + Request::descriptor()->full_name() + " message (" +
                              std::to_string(in_.Length()) + " bytes); check that the client and server use the "
                              "same chasles.v1 proto"));
         return;
       }
-      if (name_.empty()) name_ = request_.name();
-      if (!request_.name().empty() && request_.name() != name_) {
-        End(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                         Prefix() + "name = '" + request_.name() + "' differs from the stream's session '" + name_ +
-                             "'; one stream serves one session"));
-        return;
-      }
+      if (!Accept()) return;
       JobTicket ticket;
       ticket.client = record_.client;
       switch (service_->pool_->TrySubmit([this] { Answer(); }, ticket)) {
@@ -903,44 +898,22 @@ class PlanningService final : public RawService {
     void OnCancel() override { cancellation_.Cancel(); }
 
     void OnDone() override {
-      record_.fields = {{"session", name_},
-                        {"messages", std::to_string(answered_)},
-                        {"goals", std::to_string(goals_)},
-                        {"states", std::to_string(states_)}};
+      record_.fields = Fields();
       record_.total_seconds = SecondsSince(arrival_);
       service_->Record(record_);
       service_->in_flight_.fetch_sub(1);
       delete this;
     }
 
-   private:
-    std::string Prefix() const { return "message " + std::to_string(answered_) + ": "; }
+   protected:
+    /// After a message parsed: false ends the stream (the override has called End).
+    virtual bool Accept() { return true; }
+    /// On a worker: answers request_ (throws Error / StatusError / DeadlineError to end the stream).
+    virtual void Respond(Response* response) = 0;
+    /// The stream's log fields.
+    virtual std::vector<std::pair<std::string, std::string>> Fields() const = 0;
 
-    /// On a worker: answers request_ into out_ and writes it, or ends the stream.
-    void Answer() {
-      v1::AssignFleetGoalsResponse response;
-      std::uint64_t peak = 0;
-      const grpc::Status status = service_->RunCapped(
-          [&] {
-            const Termination termination = cancellation_.Start(BudgetEnd(30.0, deadline_), deadline_);
-            service_->AssignFleetGoalsBatch(name_, request_, termination, &response);
-          },
-          &peak);
-      record_.peak_heap_bytes = std::max(record_.peak_heap_bytes, peak);
-      if (!status.ok()) {
-        End(grpc::Status(status.error_code(), Prefix() + status.error_message()));
-        return;
-      }
-      goals_ += static_cast<std::uint64_t>(request_.goals_size());
-      states_ += static_cast<std::uint64_t>(request_.states_size());
-      out_.Clear();
-      grpc::ProtoBufferWriter writer(&out_, grpc::kProtoBufferWriterMaxBufferLength, response.ByteSizeLong());
-      if (!response.SerializeToZeroCopyStream(&writer)) {
-        End(grpc::Status(grpc::StatusCode::INTERNAL, Prefix() + "the answer could not be serialised"));
-        return;
-      }
-      StartWrite(&out_);
-    }
+    std::string Prefix() const { return "message " + std::to_string(answered_) + ": "; }
 
     /// Finishes the stream once, recording its status.
     void End(const grpc::Status& status) {
@@ -951,14 +924,70 @@ class PlanningService final : public RawService {
     }
 
     PlanningService* const service_;
-    const Clock::time_point arrival_;
     const Clock::time_point deadline_;
+    Request request_;
+    std::uint64_t answered_ = 0;
+    CallCancellation cancellation_;
+
+   private:
+    /// On a worker: Respond, then the answer written, or the stream ended.
+    void Answer() {
+      Response response;
+      std::uint64_t peak = 0;
+      const grpc::Status status = service_->RunCapped([&] { Respond(&response); }, &peak);
+      record_.peak_heap_bytes = std::max(record_.peak_heap_bytes, peak);
+      if (!status.ok()) {
+        End(grpc::Status(status.error_code(), Prefix() + status.error_message()));
+        return;
+      }
+      out_.Clear();
+      grpc::ProtoBufferWriter writer(&out_, grpc::kProtoBufferWriterMaxBufferLength, response.ByteSizeLong());
+      if (!response.SerializeToZeroCopyStream(&writer)) {
+        End(grpc::Status(grpc::StatusCode::INTERNAL, Prefix() + "the answer could not be serialised"));
+        return;
+      }
+      StartWrite(&out_);
+    }
+
+    const Clock::time_point arrival_;
+    const std::string reopen_;
     RequestRecord record_;
     grpc::ByteBuffer in_, out_;
-    v1::AssignFleetGoalsRequest request_;
+  };
+
+  /// One StreamFleetSession call: each message answered as AssignFleetGoals answers it.
+  class FleetStream final : public OrderedStream<v1::AssignFleetGoalsRequest, v1::AssignFleetGoalsResponse> {
+   public:
+    FleetStream(PlanningService* service, grpc::CallbackServerContext* context)
+        : OrderedStream(service, context, "StreamFleetSession",
+                        "reopen the stream on another replica (the session is shared with --store redis://…)") {}
+
+   private:
+    bool Accept() override {
+      if (name_.empty()) name_ = request_.name();
+      if (!request_.name().empty() && request_.name() != name_) {
+        End(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                         Prefix() + "name = '" + request_.name() + "' differs from the stream's session '" + name_ +
+                             "'; one stream serves one session"));
+        return false;
+      }
+      return true;
+    }
+    void Respond(v1::AssignFleetGoalsResponse* response) override {
+      const Termination termination = cancellation_.Start(BudgetEnd(30.0, deadline_), deadline_);
+      service_->AssignFleetGoalsBatch(name_, request_, termination, response);
+      goals_ += static_cast<std::uint64_t>(request_.goals_size());
+      states_ += static_cast<std::uint64_t>(request_.states_size());
+    }
+    std::vector<std::pair<std::string, std::string>> Fields() const override {
+      return {{"session", name_},
+              {"messages", std::to_string(answered_)},
+              {"goals", std::to_string(goals_)},
+              {"states", std::to_string(states_)}};
+    }
+
     std::string name_;
-    std::uint64_t answered_ = 0, goals_ = 0, states_ = 0;
-    CallCancellation cancellation_;
+    std::uint64_t goals_ = 0, states_ = 0;
   };
 
   /// One answer's plan inside a Replan stream: what RunPlan needs of a call.
@@ -983,108 +1012,26 @@ class PlanningService final : public RawService {
   static void KeepTrajectory(UnaryCall<v1::PlanRequest, v1::PlanResponse>&, const TimedTrajectory&) {}
   static void KeepTrajectory(PlanJob& job, const TimedTrajectory& trajectory) { job.trajectory = trajectory; }
 
-  /// One Replan call (see ReplanRequest): a message is read, answered on the pool, the answer
-  /// written, then the next message read, as FleetStream does. The stream keeps its problem, its
-  /// scene (changed by the messages), its moving obstacles on the stream's clock and the current
-  /// trajectory (stream time current_begin_ is its t = 0). An invalid message ends the stream
-  /// with INVALID_ARGUMENT naming the message, field and rule; expected failures are outcomes.
-  class ReplanStream final : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer> {
+  /// One Replan call (see ReplanRequest), answered in order as OrderedStream does. The stream
+  /// keeps its problem, its scene (changed by the messages), its moving obstacles on the stream's
+  /// clock and the current trajectory (stream time current_begin_ is its t = 0). An invalid
+  /// message ends the stream with INVALID_ARGUMENT naming the message, field and rule; expected
+  /// failures are outcomes.
+  class ReplanStream final : public OrderedStream<v1::ReplanRequest, v1::ReplanResponse> {
    public:
     ReplanStream(PlanningService* service, grpc::CallbackServerContext* context)
-        : service_(service), arrival_(Clock::now()), deadline_(SteadyDeadline(*context)) {
-      record_.rpc = "Replan";
-      record_.client = service_->ClientOf(*context);
-      service_->services_.metrics->RequestStarted(record_.rpc);
-      service_->in_flight_.fetch_add(1);
-      if (service_->draining_.load()) {
-        End(grpc::Status(grpc::StatusCode::UNAVAILABLE,
-                         "this server is shutting down and takes no new calls; send it to another replica"));
-        return;
-      }
-      if (grpc::Status refused = service_->access_->Authorize(*context, record_.rpc); !refused.ok()) {
-        End(refused);
-        return;
-      }
-      StartRead(&in_);
-    }
-
-    void OnReadDone(bool ok) override {
-      if (!ok) {
-        End(grpc::Status::OK);
-        return;
-      }
-      if (service_->draining_.load()) {
-        End(grpc::Status(grpc::StatusCode::UNAVAILABLE, Prefix() + "this server is shutting down; reopen the stream "
-                                                                   "on another replica with the problem and the state"));
-        return;
-      }
-      request_.Clear();
-      grpc::ProtoBufferReader reader(&in_);
-      if (!request_.ParseFromZeroCopyStream(&reader)) {
-        End(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                         Prefix() + "not a valid chasles.v1.ReplanRequest message (" + std::to_string(in_.Length()) +
-                             " bytes); check that the client and server use the same chasles.v1 proto"));
-        return;
-      }
-      JobTicket ticket;
-      ticket.client = record_.client;
-      switch (service_->pool_->TrySubmit([this] { Answer(); }, ticket)) {
-        case SubmitResult::kQueued: return;
-        case SubmitResult::kClientQueueFull:
-        case SubmitResult::kQueueFull:
-          End(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                           Prefix() + "the server's work queue is full; reopen the stream later"));
-          return;
-        case SubmitResult::kStopping:
-          End(grpc::Status(grpc::StatusCode::UNAVAILABLE, Prefix() + "the server is shutting down"));
-          return;
-      }
-    }
-
-    void OnWriteDone(bool ok) override {
-      if (!ok) {
-        End(grpc::Status(grpc::StatusCode::CANCELLED, "the stream ended before an answer was delivered"));
-        return;
-      }
-      ++answered_;
-      StartRead(&in_);
-    }
-
-    void OnCancel() override { cancellation_.Cancel(); }
-
-    void OnDone() override {
-      record_.fields = {{"messages", std::to_string(answered_)},
-                        {"planned", std::to_string(planned_)},
-                        {"kept", std::to_string(kept_)}};
-      record_.total_seconds = SecondsSince(arrival_);
-      service_->Record(record_);
-      service_->in_flight_.fetch_sub(1);
-      delete this;
-    }
+        : OrderedStream(service, context, "Replan", "reopen the stream on another replica with the problem and the state") {}
 
    private:
-    std::string Prefix() const { return "message " + std::to_string(answered_) + ": "; }
+    std::vector<std::pair<std::string, std::string>> Fields() const override {
+      return {{"messages", std::to_string(answered_)}, {"planned", std::to_string(planned_)}, {"kept", std::to_string(kept_)}};
+    }
 
-    /// On a worker: answers request_ and writes it, or ends the stream.
-    void Answer() {
+    void Respond(v1::ReplanResponse* response) override {
       const Clock::time_point started = Clock::now();
-      v1::ReplanResponse response;
-      std::uint64_t peak = 0;
-      const grpc::Status status = service_->RunCapped([&] { Respond(&response); }, &peak);
-      record_.peak_heap_bytes = std::max(record_.peak_heap_bytes, peak);
-      if (!status.ok()) {
-        End(grpc::Status(status.error_code(), Prefix() + status.error_message()));
-        return;
-      }
-      response.set_sequence(answered_);
-      response.set_seconds(SecondsSince(started));
-      out_.Clear();
-      grpc::ProtoBufferWriter writer(&out_, grpc::kProtoBufferWriterMaxBufferLength, response.ByteSizeLong());
-      if (!response.SerializeToZeroCopyStream(&writer)) {
-        End(grpc::Status(grpc::StatusCode::INTERNAL, Prefix() + "the answer could not be serialised"));
-        return;
-      }
-      StartWrite(&out_);
+      Work(response);
+      response->set_sequence(answered_);
+      response->set_seconds(SecondsSince(started));
     }
 
     /// The robot the problem plans for, with what it carries (as RunPlan resolves it).
@@ -1095,7 +1042,7 @@ class PlanningService final : public RawService {
     }
 
     /// The work of one message (throws Error / StatusError for invalid input).
-    void Respond(v1::ReplanResponse* response) {
+    void Work(v1::ReplanResponse* response) {
       const bool first = answered_ == 0;
       // 1. The problem (first message, or a new one) and the time.
       if (first && !request_.has_plan()) {
@@ -1350,25 +1297,10 @@ class PlanningService final : public RawService {
       }
     }
 
-    /// Finishes the stream once, recording its status.
-    void End(const grpc::Status& status) {
-      const grpc::Status sent(status.error_code(), StatusMessage(status.error_message()));
-      record_.status_code = static_cast<int>(sent.error_code());
-      record_.status_message = sent.error_message();
-      Finish(sent);
-    }
-
     static constexpr double kStateTolerance = 1e-3;     ///< [rad or m] state off the trajectory
     static constexpr double kVelocityTolerance = 1e-2;  ///< [rad/s or m/s]
 
-    PlanningService* const service_;
-    const Clock::time_point arrival_;
-    const Clock::time_point deadline_;
-    RequestRecord record_;
-    grpc::ByteBuffer in_, out_;
-    v1::ReplanRequest request_;
-    std::uint64_t answered_ = 0, planned_ = 0, kept_ = 0;
-    CallCancellation cancellation_;
+    std::uint64_t planned_ = 0, kept_ = 0;
     v1::PlanRequest problem_;
     StoredScene scene_;
     google::protobuf::RepeatedPtrField<v1::MovingObstacle> obstacles_;  ///< on the stream's clock

@@ -342,6 +342,20 @@ std::string ViewDataJson(const ViewInput& input) {
   return json.str();
 }
 
+std::string HtmlEscaped(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '&': out += "&amp;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
 std::string ViewerLibraryJs() { return std::string(kThreeJs) + "\n" + std::string(kOrbitControlsJs) + "\n"; }
 
 std::string ViewPageHtml(const std::string& data_json, const std::string& library_src) {

@@ -69,20 +69,6 @@ std::string ViewPageOf(const Exchange& exchange, ModelStore& store) {
 
 namespace {
 
-std::string Escaped(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
 /// Percent-encoding of a request id for a link (ids are client text).
 std::string UrlEncoded(const std::string& text) {
   std::string out;
@@ -137,8 +123,8 @@ ViewServer::ViewServer(const std::string& listen, RecentExchanges* recent, Model
     for (const Exchange& e : recent->List()) {
       char when[32];
       std::snprintf(when, sizeof when, "%.3f", e.unix_time);
-      page += "<tr><td><a href=\"/view/" + UrlEncoded(e.request_id) + token + "\">" + Escaped(e.request_id) +
-              "</a></td><td>" + e.rpc + "</td><td>" + Escaped(e.outcome) + "</td><td>" + when + "</td></tr>";
+      page += "<tr><td><a href=\"/view/" + UrlEncoded(e.request_id) + token + "\">" + HtmlEscaped(e.request_id) +
+              "</a></td><td>" + e.rpc + "</td><td>" + HtmlEscaped(e.outcome) + "</td><td>" + when + "</td></tr>";
     }
     page += "</table></body></html>";
     response.set_content(page, "text/html; charset=utf-8");

@@ -54,6 +54,9 @@ std::string ViewPageHtml(const std::string& data_json, const std::string& librar
 /// three.js and OrbitControls, for `library_src`.
 std::string ViewerLibraryJs();
 
+/// `text` safe in HTML text and attribute values (& < > " escaped): for the pages that link views.
+std::string HtmlEscaped(const std::string& text);
+
 /// The view of a Plan (its request gives robot and scene; none = the store's defaults),
 /// Optimize or Coordinate exchange. Robots and scenes are resolved through `store` as the server
 /// resolves them. \throws Error naming the field when the request and response do not fit
