@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <iterator>
 #include <limits>
 #include <memory>
@@ -256,7 +257,14 @@ bool CollisionChecker::Impl::FastCollide(const Frame* frames, CollisionResult* r
       if (L.end - L.begin > 1 && !grid.SphereHits(c, L.br)) continue;
       place(li);
       for (int k = L.begin; k < L.end; ++k) {
-        if (grid.SphereHits(&w[3 * k], sr[k])) return hit(L.link, g.name, false);
+        int voxel[3];
+        if (grid.SphereHits(&w[3 * k], sr[k], voxel)) {
+          if (report != nullptr) {
+            report->has_voxel = true;
+            report->voxel = grid.VoxelCentre(voxel);
+          }
+          return hit(L.link, g.name, false);
+        }
       }
     }
   }
@@ -780,6 +788,14 @@ bool CollisionChecker::IsMotionValid(const Eigen::VectorXd& a, const Eigen::Vect
 }
 
 const CollisionOptions& CollisionChecker::options() const { return impl_->options; }
+
+std::string VoxelText(const CollisionResult& contact) {
+  if (!contact.has_voxel) return "";
+  char text[128];
+  std::snprintf(text, sizeof text, " (the voxel centred at (%.4g, %.4g, %.4g) m)", contact.voxel.x(), contact.voxel.y(),
+                contact.voxel.z());
+  return text;
+}
 
 }  // namespace chasles
 

@@ -118,6 +118,16 @@ class OccupancyGrid {
     return Status::kBuilt;
   }
 
+  /// The world centre of voxel (i, j, k) of SphereHits: the middle of its FCL box, placed by the
+  /// map's pose.
+  Eigen::Vector3d VoxelCentre(const int* voxel) const {
+    double c[3];
+    for (int a = 0; a < 3; ++a) c[a] = 0.5 * (bnd_[a][voxel[a]] + bnd_[a][voxel[a] + 1]);
+    // rt_ is the map's rotation transposed: world = rtᵀ c + p.
+    return {rt_[0] * c[0] + rt_[3] * c[1] + rt_[6] * c[2] + p_[0], rt_[1] * c[0] + rt_[4] * c[1] + rt_[7] * c[2] + p_[1],
+            rt_[2] * c[0] + rt_[5] * c[1] + rt_[8] * c[2] + p_[2]};
+  }
+
   /// World bounding sphere of every obstacle voxel.
   const Eigen::Vector3d& center() const { return center_; }
   double radius() const { return radius_; }
@@ -125,7 +135,8 @@ class OccupancyGrid {
 
   /// True when the sphere (world centre x, radius r >= 0) touches or overlaps an obstacle
   /// voxel: squared distance from the centre to the voxel box <= r², as FCL's sphere–box test.
-  bool SphereHits(const double* x, double r) const {
+  /// With `voxel`, the first voxel found touching it (per-axis indices, for VoxelCentre).
+  bool SphereHits(const double* x, double r, int* voxel = nullptr) const {
     if (blocks_.empty()) return false;
     const double d0 = x[0] - p_[0], d1 = x[1] - p_[1], d2 = x[2] - p_[2];
     const double c[3] = {rt_[0] * d0 + rt_[1] * d1 + rt_[2] * d2, rt_[3] * d0 + rt_[4] * d1 + rt_[5] * d2,
@@ -199,7 +210,14 @@ class OccupancyGrid {
               while (bits != 0) {
                 const int x = 8 * bx + __builtin_ctzll(bits);
                 bits &= bits - 1;
-                if (eyz + ex[x - lo[0]] <= r2) return true;
+                if (eyz + ex[x - lo[0]] <= r2) {
+                  if (voxel != nullptr) {
+                    voxel[0] = x;
+                    voxel[1] = y;
+                    voxel[2] = z;
+                  }
+                  return true;
+                }
               }
             }
           }

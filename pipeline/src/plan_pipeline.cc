@@ -28,7 +28,7 @@ double SecondsSince(Clock::time_point t0) {
 std::string DescribeContact(const CollisionResult& c) {
   if (!c.violation.empty()) return "it breaks " + c.violation;
   return c.self_collision ? "link '" + c.link_a + "' touches link '" + c.other + "'"
-                          : "link '" + c.link_a + "' touches '" + c.other + "'";
+                          : "link '" + c.link_a + "' touches '" + c.other + "'" + VoxelText(c);
 }
 
 /// Indices k of the segments path[k] → path[k + 1] that are not free: certified when the checker

@@ -143,7 +143,8 @@ std::string FindTrajectoryCollision(const CollisionChecker& checker, const Timed
     const CollisionResult contact = checker.Check(trajectory.Evaluate(t).q);
     std::string text = "at t = " + FormatNumber(t) + " s";
     if (contact.in_collision) {
-      text += " ('" + contact.link_a + "' " + (contact.violation.empty() ? "touches '" + contact.other + "'" : contact.violation) + ")";
+      text += " ('" + contact.link_a + "' " +
+              (contact.violation.empty() ? "touches '" + contact.other + "'" + VoxelText(contact) : contact.violation) + ")";
     }
     return text;
   };

@@ -335,3 +335,42 @@ TEST(OccupancyGrid, MapsTooLargeToGridStayOnFcl) {
 
 }  // namespace
 }  // namespace chasles
+
+namespace chasles {
+namespace {
+
+// Issue 22, item 2: a contact with a map names the voxel. A ball touching one of two voxels of a
+// posed map reports the centre octomap itself gives that voxel (keyToCoord of coordToKey), placed
+// by the map's pose; the messages carry it, in metres.
+TEST(OccupancyGrid, AContactNamesTheVoxelItTouches) {
+  auto tree = std::make_shared<octomap::OcTree>(0.1);
+  const octomap::point3d a(1.03f, 2.07f, 0.42f), b(-0.55f, 0.31f, 0.12f);
+  tree->setNodeValue(a, 2.0f);
+  tree->setNodeValue(b, 2.0f);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  pose.translation() << 0.5, -0.2, 0.1;
+  auto scene = std::make_shared<Scene>();
+  scene->AddOccupancyMap({"sensed", tree, pose});
+  const CollisionChecker checker(BallRobot(0.02), scene);
+  ASSERT_EQ(checker.num_gridded_occupancy_maps(), 1);
+  for (const octomap::point3d& p : {a, b}) {
+    const octomap::point3d centre = tree->keyToCoord(tree->coordToKey(p));
+    const Eigen::Vector3d world = pose * Eigen::Vector3d(centre.x(), centre.y(), centre.z());
+    const CollisionResult contact = checker.Check(world);  // the ball's centre at the voxel's
+    ASSERT_TRUE(contact.in_collision);
+    EXPECT_EQ(contact.other, "sensed");
+    ASSERT_TRUE(contact.has_voxel);
+    // octomap's coordinates are floats (point3d): equal to its rounding (~1e-7 at 2 m).
+    EXPECT_LT((contact.voxel - world).norm(), 1e-6);
+    char expected[96];
+    std::snprintf(expected, sizeof expected, "(the voxel centred at (%.4g, %.4g, %.4g) m)", world.x(), world.y(), world.z());
+    EXPECT_NE(VoxelText(contact).find(expected), std::string::npos) << VoxelText(contact);
+  }
+  // Primitives and free states carry none.
+  EXPECT_FALSE(checker.Check(At(5.0, 5.0, 5.0)).has_voxel);
+  EXPECT_EQ(VoxelText(checker.Check(At(5.0, 5.0, 5.0))), "");
+}
+
+}  // namespace
+}  // namespace chasles

@@ -93,6 +93,9 @@ TEST_F(UpdateSceneTest, PointsOnTheArmMakeTheStartCollideInPlanByTheNewId) {
   const grpc::Status planned = server_->Plan(plan, &after);
   ASSERT_TRUE(planned.ok()) << planned.error_message();
   EXPECT_EQ(after.outcome(), v1::START_IN_COLLISION) << after.message();
+  // The message names the voxel the arm touches, in metres (issue 22, item 2).
+  EXPECT_NE(after.message().find("touches 'points' (the voxel centred at ("), std::string::npos) << after.message();
+  EXPECT_NE(after.message().find(" m)"), std::string::npos) << after.message();
   EXPECT_EQ(after.scene_id(), response.scene_id());
   EXPECT_NE(after.scene_id(), before.scene_id());
 }

@@ -89,7 +89,7 @@ KinematicLimits ResolveRobotLimits(const TeamRobotSpec& robot, int index) {
 }
 
 std::string Describe(const CollisionResult& contact) {
-  return "'" + contact.link_a + "' touches '" + contact.other + "'";
+  return "'" + contact.link_a + "' touches '" + contact.other + "'" + VoxelText(contact);
 }
 
 Eigen::VectorXd Concat(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {

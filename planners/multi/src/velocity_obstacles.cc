@@ -366,7 +366,7 @@ class VelocityObstaclePlanner {
     std::string text = field + " (x, y, theta) = (" + Rounded(q.x()) + ", " + Rounded(q.y()) + ", " + Rounded(q.z()) +
                        ") is not valid";
     if (contact.in_collision) {
-      text += contact.violation.empty() ? ": link '" + contact.link_a + "' touches '" + contact.other + "'"
+      text += contact.violation.empty() ? ": link '" + contact.link_a + "' touches '" + contact.other + "'" + VoxelText(contact)
                                         : ": " + contact.violation;
     } else {
       text += ": outside the joint limits";

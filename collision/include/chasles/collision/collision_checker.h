@@ -51,7 +51,15 @@ struct CollisionResult {
   /// made by WithPathConstraints: PathConstraints::Violation (which constraint, error and
   /// tolerance); link_a is then the constrained link and `other` is empty.
   std::string violation;
+  /// A contact with an OctoMap checked on its voxel grid (the certified sphere path): the centre
+  /// of the voxel touched, world frame [m].
+  bool has_voxel = false;
+  Eigen::Vector3d voxel = Eigen::Vector3d::Zero();
 };
+
+/// " (the voxel centred at (x, y, z) m)" for a contact with an OctoMap voxel, else "": for the
+/// messages that name a contact.
+std::string VoxelText(const CollisionResult& contact);
 
 /// Per-caller counters (not shared between threads, so no contention).
 struct CheckCounters {
