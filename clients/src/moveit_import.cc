@@ -228,19 +228,6 @@ Eigen::Isometry3d ReadTransform(const Value& value) {
   return pose;
 }
 
-void PoseToProto(const Eigen::Isometry3d& pose, v1::Pose* out) {
-  out->mutable_position()->set_x(pose.translation().x());
-  out->mutable_position()->set_y(pose.translation().y());
-  out->mutable_position()->set_z(pose.translation().z());
-  Eigen::Quaterniond q(pose.rotation());
-  q.normalize();
-  if (q.w() < 0) q.coeffs() *= -1.0;  // one of the two equal quaternions, for stable output
-  out->mutable_orientation()->set_x(q.x());
-  out->mutable_orientation()->set_y(q.y());
-  out->mutable_orientation()->set_z(q.z());
-  out->mutable_orientation()->set_w(q.w());
-}
-
 /// A header's frame id ("world" when there is no header, as Robowflex writes it).
 std::string FrameOf(const Value& holder) {
   auto header = holder.Find("header");

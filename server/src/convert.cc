@@ -70,11 +70,6 @@ std::string ObjectName(const std::string& name, const char* kind, int index) {
   return name.empty() ? std::string(kind) + "[" + std::to_string(index) + "]" : name;
 }
 
-void ToProto(const Eigen::VectorXd& v, google::protobuf::RepeatedField<double>* out) {
-  out->Reserve(static_cast<int>(v.size()));
-  for (Eigen::Index i = 0; i < v.size(); ++i) out->Add(v[i]);
-}
-
 
 JointType JointTypeFromProto(v1::JointKind kind, const std::string& field) {
   switch (kind) {
@@ -227,6 +222,30 @@ double DefaultedInRange(double value, double fallback, double lo_exclusive, doub
 }
 
 }  // namespace
+
+void ToProto(const Eigen::VectorXd& v, google::protobuf::RepeatedField<double>* out) {
+  out->Reserve(out->size() + static_cast<int>(v.size()));
+  for (Eigen::Index i = 0; i < v.size(); ++i) out->Add(v[i]);
+}
+
+void PoseToProto(const Eigen::Isometry3d& pose, v1::Pose* out) {
+  out->mutable_position()->set_x(pose.translation().x());
+  out->mutable_position()->set_y(pose.translation().y());
+  out->mutable_position()->set_z(pose.translation().z());
+  Eigen::Quaterniond q(pose.rotation());
+  q.normalize();
+  if (q.w() < 0) q.coeffs() *= -1.0;  // one of the two equal quaternions, for stable output
+  out->mutable_orientation()->set_x(q.x());
+  out->mutable_orientation()->set_y(q.y());
+  out->mutable_orientation()->set_z(q.z());
+  out->mutable_orientation()->set_w(q.w());
+}
+
+Eigen::VectorXd JointValuesFromProto(const google::protobuf::RepeatedField<double>& values, const RobotModel& robot,
+                                     const std::string& field) {
+  RequireJointCount(values.size(), robot, field);
+  return PositionsFromProto(values, field);
+}
 
 std::string ProtoContentId(const google::protobuf::Message& message) {
   std::string bytes;
@@ -1008,14 +1027,12 @@ OptimizeQuery OptimizeQueryFromProto(const v1::OptimizeRequest& request, std::sh
   query.trajectory = TrajectorySpecFromProto(request.options(), robot, "options");
   if (request.has_gravity()) query.trajectory.gravity = VectorFromProto(request.gravity(), "gravity");
   if (request.start_velocity_size() > 0) {
-    RequireJointCount(request.start_velocity_size(), robot, "start_velocity");
-    query.trajectory.start_velocity = PositionsFromProto(request.start_velocity(), "start_velocity");
+    query.trajectory.start_velocity = JointValuesFromProto(request.start_velocity(), robot, "start_velocity");
   } else if (first_velocity.size() > 0 && !first_velocity.isZero(0.0)) {
     query.trajectory.start_velocity = first_velocity;
   }
   if (request.end_velocity_size() > 0) {
-    RequireJointCount(request.end_velocity_size(), robot, "end_velocity");
-    query.trajectory.end_velocity = PositionsFromProto(request.end_velocity(), "end_velocity");
+    query.trajectory.end_velocity = JointValuesFromProto(request.end_velocity(), robot, "end_velocity");
   } else if (last_velocity.size() > 0 && !last_velocity.isZero(0.0)) {
     query.trajectory.end_velocity = last_velocity;
   }

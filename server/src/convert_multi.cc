@@ -28,10 +28,6 @@ double Defaulted(double value, double fallback, double lo, double hi, const std:
   return value;
 }
 
-void ToProto(const Eigen::VectorXd& v, google::protobuf::RepeatedField<double>* out) {
-  for (Eigen::Index i = 0; i < v.size(); ++i) out->Add(v[i]);
-}
-
 }  // namespace
 
 void CheckTeamSize(const v1::CoordinateRequest& request, int max_robots) {

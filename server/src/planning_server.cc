@@ -1101,9 +1101,6 @@ class PlanningService final : public RawService {
       // 3. The state at `time`.
       Eigen::VectorXd q, v;
       const bool on_trajectory = has_current_ && request_.state().positions_size() == 0 && !first;
-      if (first || new_problem) {
-        // A new problem starts from its start (first message) or the reported state.
-      }
       if (request_.state().positions_size() > 0) {
         q = ConfigurationFromProto(request_.state().positions(), model, "state.positions", 1e-6, nullptr);
       } else if (on_trajectory) {
@@ -1116,15 +1113,7 @@ class PlanningService final : public RawService {
                      "send the robot's joint positions");
       }
       if (request_.velocities_size() > 0) {
-        if (request_.velocities_size() != model.num_dofs()) {
-          ThrowInvalid("velocities has " + std::to_string(request_.velocities_size()) + " values, robot '" +
-                       model.name() + "' has " + std::to_string(model.num_dofs()) + " joints (or send none)");
-        }
-        v.resize(model.num_dofs());
-        for (int i = 0; i < model.num_dofs(); ++i) {
-          v[i] = request_.velocities(i);
-          if (!std::isfinite(v[i])) ThrowInvalid("velocities[" + std::to_string(i) + "] = " + FormatNumber(v[i]) + " must be finite");
-        }
+        v = JointValuesFromProto(request_.velocities(), model, "velocities");
       } else if (on_trajectory) {
         v = current_.Evaluate(time - current_begin_).qd;
       } else {
@@ -1165,7 +1154,7 @@ class PlanningService final : public RawService {
       PlanJob job;
       job.request = problem_;
       job.request.mutable_start()->clear_positions();
-      for (int i = 0; i < rest.size(); ++i) job.request.mutable_start()->add_positions(rest[i]);
+      ToProto(rest, job.request.mutable_start()->mutable_positions());
       *job.request.mutable_moving_obstacles() = ShiftedMovingObstacles(obstacles_, time + stop);
       if (request_.time_budget() != 0.0) job.request.set_time_budget(request_.time_budget());
       job.arrival = Clock::now();
@@ -1291,10 +1280,7 @@ class PlanningService final : public RawService {
         SamplesToProto(current_.Sample(period), model, plan->mutable_trajectory());
       }
       plan->clear_path();
-      for (const Eigen::VectorXd& q : current_.Waypoints()) {
-        google::protobuf::RepeatedField<double>* positions = plan->add_path()->mutable_positions();
-        positions->Add(q.data(), q.data() + q.size());
-      }
+      for (const Eigen::VectorXd& q : current_.Waypoints()) ToProto(q, plan->add_path()->mutable_positions());
     }
 
     static constexpr double kStateTolerance = 1e-3;     ///< [rad or m] state off the trajectory

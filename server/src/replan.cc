@@ -7,21 +7,11 @@
 
 #include "chasles/multi/moving_obstacles.h"
 #include "chasles/robot/error.h"
+#include "chasles/server/convert.h"
 #include "chasles/server/convert_multi.h"
 
 namespace chasles {
 namespace {
-
-void PoseToProto(const Eigen::Isometry3d& pose, v1::Pose* out) {
-  out->mutable_position()->set_x(pose.translation().x());
-  out->mutable_position()->set_y(pose.translation().y());
-  out->mutable_position()->set_z(pose.translation().z());
-  const Eigen::Quaterniond q(pose.linear());
-  out->mutable_orientation()->set_w(q.w());
-  out->mutable_orientation()->set_x(q.x());
-  out->mutable_orientation()->set_y(q.y());
-  out->mutable_orientation()->set_z(q.z());
-}
 
 /// Binomial coefficient C(n, k) for the small n of trajectory pieces.
 double Binomial(int n, int k) {

@@ -251,11 +251,12 @@ std::string ViewDataJson(const ViewInput& input) {
     json.Key("t").Open('[');
     for (std::size_t i : points) json.Value(r.samples[i].t);
     json.Close(']');
-    for (const char* series : {"q", "qd", "qdd"}) {
-      json.Key(series).Open('[');
+    const std::pair<const char*, Eigen::VectorXd TrajectorySample::*> series[] = {
+        {"q", &TrajectorySample::q}, {"qd", &TrajectorySample::qd}, {"qdd", &TrajectorySample::qdd}};
+    for (const auto& [key, member] : series) {
+      json.Key(key).Open('[');
       for (std::size_t i : points) {
-        const TrajectorySample& s = r.samples[i];
-        const Eigen::VectorXd& v = series[1] == '\0' ? s.q : series[2] == '\0' ? s.qd : s.qdd;
+        const Eigen::VectorXd& v = r.samples[i].*member;
         json.Vector(v.size() == model.num_dofs() ? v : Eigen::VectorXd::Zero(model.num_dofs()));
       }
       json.Close(']');
@@ -405,67 +406,75 @@ std::vector<TrajectorySample> SamplesOf(const v1::JointTrajectory& trajectory, c
     }
     return index;
   };
-  std::vector<TrajectorySample> samples;
+  // The samples over the trajectory's own joints: its points, or its knots as the exact
+  // constant-acceleration trajectory they describe, sampled at 10 ms.
+  std::vector<TrajectorySample> own;
+  std::vector<int> index;
   if (trajectory.points_size() > 0) {
-    const std::vector<int> index = index_of(trajectory.joint_names());
+    index = index_of(trajectory.joint_names());
     for (const v1::TrajectoryPoint& p : trajectory.points()) {
       if (p.positions_size() != static_cast<int>(index.size())) {
         ThrowInvalid("trajectory point at t = " + FormatNumber(p.time_from_start()) + " has " +
                      std::to_string(p.positions_size()) + " positions for " + std::to_string(index.size()) + " joints");
       }
+      const auto values = [&p](const google::protobuf::RepeatedField<double>& field) {
+        Eigen::VectorXd v = Eigen::VectorXd::Zero(p.positions_size());
+        if (field.size() == p.positions_size()) v = Eigen::Map<const Eigen::VectorXd>(field.data(), field.size());
+        return v;
+      };
       TrajectorySample s;
       s.t = p.time_from_start();
-      s.q = base;
-      s.qd = Eigen::VectorXd::Zero(n);
-      s.qdd = Eigen::VectorXd::Zero(n);
-      for (std::size_t j = 0; j < index.size(); ++j) {
-        s.q[index[j]] = p.positions(static_cast<int>(j));
-        if (p.velocities_size() == p.positions_size()) s.qd[index[j]] = p.velocities(static_cast<int>(j));
-        if (p.accelerations_size() == p.positions_size()) s.qdd[index[j]] = p.accelerations(static_cast<int>(j));
-      }
-      samples.push_back(std::move(s));
+      s.q = values(p.positions());
+      s.qd = values(p.velocities());
+      s.qdd = values(p.accelerations());
+      own.push_back(std::move(s));
     }
-    return samples;
-  }
-  if (knots.times_size() == 0) return samples;
-  // Knots: constant acceleration between consecutive knots, sampled at 10 ms.
-  const std::vector<int> index = index_of(knots.joint_names());
-  const int m = static_cast<int>(index.size());
-  const auto at = [&](int k) {
-    Eigen::VectorXd q(m), v(m);
-    for (int j = 0; j < m; ++j) {
-      q[j] = knots.positions(k * m + j);
-      v[j] = knots.velocities(k * m + j);
+  } else if (knots.times_size() > 0) {
+    index = index_of(knots.joint_names());
+    const int m = static_cast<int>(index.size());
+    if (knots.positions_size() != knots.times_size() * m || knots.velocities_size() != knots.times_size() * m) {
+      ThrowInvalid("knots: " + std::to_string(knots.times_size()) + " times for " + std::to_string(knots.positions_size()) +
+                   " positions and " + std::to_string(knots.velocities_size()) + " velocities of " + std::to_string(m) +
+                   " joints");
     }
-    return std::make_pair(q, v);
-  };
-  if (knots.positions_size() != knots.times_size() * m || knots.velocities_size() != knots.times_size() * m) {
-    ThrowInvalid("knots: " + std::to_string(knots.times_size()) + " times for " + std::to_string(knots.positions_size()) +
-                 " positions and " + std::to_string(knots.velocities_size()) + " velocities of " + std::to_string(m) +
-                 " joints");
+    const auto knot = [&](const google::protobuf::RepeatedField<double>& values, int k) {
+      return Eigen::Map<const Eigen::VectorXd>(values.data() + static_cast<std::ptrdiff_t>(k) * m, m).eval();
+    };
+    std::vector<TimedTrajectory::Piece> pieces;
+    for (int k = 0; k + 1 < knots.times_size(); ++k) {
+      TimedTrajectory::Piece piece;
+      piece.t0 = knots.times(k);
+      piece.duration = knots.times(k + 1) - knots.times(k);
+      piece.coefficients.resize(m, 3);
+      piece.coefficients.col(0) = knot(knots.positions(), k);
+      piece.coefficients.col(1) = knot(knots.velocities(), k);
+      piece.coefficients.col(2) = piece.duration > 0.0
+                                      ? ((knot(knots.velocities(), k + 1) - knot(knots.velocities(), k)) / (2.0 * piece.duration)).eval()
+                                      : Eigen::VectorXd::Zero(m);
+      pieces.push_back(std::move(piece));
+    }
+    const Eigen::VectorXd end = knot(knots.positions(), knots.times_size() - 1);
+    if (pieces.empty()) {
+      TimedTrajectory::Piece stand;
+      stand.coefficients = end;
+      pieces.push_back(std::move(stand));
+    }
+    own = TimedTrajectory(std::move(pieces), end).Sample(0.01);
   }
-  const double end = knots.times(knots.times_size() - 1);
-  int k = 0;
-  for (double t = 0.0;; t = std::min(end, t + 0.01)) {
-    while (k + 2 < knots.times_size() && knots.times(k + 1) <= t) ++k;
-    const auto [q0, v0] = at(k);
-    const int k1 = std::min(k + 1, knots.times_size() - 1);
-    const auto [q1, v1] = at(k1);
-    const double h = knots.times(k1) - knots.times(k);
-    const Eigen::VectorXd a = h > 0.0 ? ((v1 - v0) / h).eval() : Eigen::VectorXd::Zero(m);
-    const double tau = std::clamp(t - knots.times(k), 0.0, std::max(h, 0.0));
+  // Onto the model's joints, the others held.
+  std::vector<TrajectorySample> samples;
+  for (const TrajectorySample& o : own) {
     TrajectorySample s;
-    s.t = t;
+    s.t = o.t;
     s.q = base;
     s.qd = Eigen::VectorXd::Zero(n);
     s.qdd = Eigen::VectorXd::Zero(n);
-    for (int j = 0; j < m; ++j) {
-      s.q[index[j]] = q0[j] + v0[j] * tau + 0.5 * a[j] * tau * tau;
-      s.qd[index[j]] = v0[j] + a[j] * tau;
-      s.qdd[index[j]] = a[j];
+    for (std::size_t j = 0; j < index.size(); ++j) {
+      s.q[index[j]] = o.q[static_cast<Eigen::Index>(j)];
+      s.qd[index[j]] = o.qd[static_cast<Eigen::Index>(j)];
+      s.qdd[index[j]] = o.qdd[static_cast<Eigen::Index>(j)];
     }
     samples.push_back(std::move(s));
-    if (t >= end) break;
   }
   return samples;
 }

@@ -38,29 +38,29 @@ std::optional<Exchange> RecentExchanges::Find(const std::string& request_id) con
   return std::nullopt;
 }
 
+namespace {
+
+/// The view of an exchange of these message types, by `view` (ViewOfPlan, …).
+template <typename Request, typename Response, typename View>
+ViewInput ViewOfExchange(const Exchange& exchange, ModelStore& store, View view) {
+  Request request;
+  Response response;
+  if (!request.ParseFromString(exchange.request) || !response.ParseFromString(exchange.response)) {
+    throw std::runtime_error(exchange.rpc + " exchange '" + exchange.request_id + "' does not parse");
+  }
+  return view(store, request, response);
+}
+
+}  // namespace
+
 std::string ViewPageOf(const Exchange& exchange, ModelStore& store) {
-  const auto parse = [&](google::protobuf::Message* message, const std::string& bytes, const char* what) {
-    if (!message->ParseFromString(bytes)) throw std::runtime_error(exchange.rpc + " " + what + " does not parse");
-  };
   ViewInput view;
   if (exchange.rpc == "Plan") {
-    v1::PlanRequest request;
-    v1::PlanResponse response;
-    parse(&request, exchange.request, "request");
-    parse(&response, exchange.response, "response");
-    view = ViewOfPlan(store, request, response);
+    view = ViewOfExchange<v1::PlanRequest, v1::PlanResponse>(exchange, store, ViewOfPlan);
   } else if (exchange.rpc == "Optimize") {
-    v1::OptimizeRequest request;
-    v1::OptimizeResponse response;
-    parse(&request, exchange.request, "request");
-    parse(&response, exchange.response, "response");
-    view = ViewOfOptimize(store, request, response);
+    view = ViewOfExchange<v1::OptimizeRequest, v1::OptimizeResponse>(exchange, store, ViewOfOptimize);
   } else if (exchange.rpc == "Coordinate") {
-    v1::CoordinateRequest request;
-    v1::CoordinateResponse response;
-    parse(&request, exchange.request, "request");
-    parse(&response, exchange.response, "response");
-    view = ViewOfCoordinate(store, request, response);
+    view = ViewOfExchange<v1::CoordinateRequest, v1::CoordinateResponse>(exchange, store, ViewOfCoordinate);
   } else {
     throw Error(ErrorCode::kInvalidArgument, "no view for rpc " + exchange.rpc);
   }

@@ -27,6 +27,14 @@ std::string ProtoContentId(const google::protobuf::Message& message);
 /// Pose → isometry. An all-zero quaternion is identity; others must have norm 1 (±1e-3, then
 /// normalised); every number must be finite.
 Eigen::Isometry3d PoseFromProto(const v1::Pose& pose, const std::string& field);
+/// The reverse (unit quaternion with w >= 0, for stable output).
+void PoseToProto(const Eigen::Isometry3d& pose, v1::Pose* out);
+/// Appends the values (joint positions, velocities) to `out`.
+void ToProto(const Eigen::VectorXd& values, google::protobuf::RepeatedField<double>* out);
+/// One value per joint of `robot`, each finite: errors name `field` (`velocities has 2 values,
+/// robot 'x' has 3 joints`, `velocities[1] = nan must be finite`). No limits are checked.
+Eigen::VectorXd JointValuesFromProto(const google::protobuf::RepeatedField<double>& values, const RobotModel& robot,
+                                     const std::string& field);
 /// A unit quaternion (norm 1 within 1e-3, normalised); all zero = identity.
 /// \throws Error(kInvalidArgument) naming `field` (and .x/.y/.z/.w).
 Eigen::Quaterniond QuaternionFromProto(const v1::Quaternion& q, const std::string& field);
