@@ -407,6 +407,24 @@ TEST_F(Replan, InvalidMessagesEndTheStreamNamingThem) {
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_THAT(status.error_message(), HasSubstr("message 1: state.positions has 2 values"));
 
+  v1::ReplanRequest bad_velocities = At(1.0);
+  for (double v : {0.5, 0.0}) bad_velocities.add_velocities(v);
+  answers = Run({first, bad_velocities}, &status);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(status.error_message(), HasSubstr("message 1: velocities has 2 values, robot 'mobile_base' has 3 joints"));
+
+  v1::ReplanRequest bad_budget = At(1.0);
+  bad_budget.set_time_budget(-1.0);
+  answers = Run({first, bad_budget}, &status);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(status.error_message(), HasSubstr("message 1: time_budget = -1 must be within (0, 600] s (0 = the plan's)"));
+
+  v1::ReplanRequest grouped = first;
+  grouped.mutable_plan()->set_group("arm");
+  answers = Run({grouped}, &status);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(status.error_message(), HasSubstr("message 0: plan.group is not supported in Replan"));
+
   v1::ReplanRequest workcell = first;
   workcell.mutable_plan()->mutable_workcell()->set_name("cell");
   answers = Run({workcell}, &status);
